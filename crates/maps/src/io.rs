@@ -1,0 +1,400 @@
+//! Reading photos and maps (PNG, TIFF, EXR) under size limits, and writing them atomically.
+//!
+//! Readers come in pairs: `read_*(path)` opens the file and calls `decode_*(bytes)`-style
+//! functions, so tests can feed bytes. Every writer goes through [`write_atomic`]: the data lands in
+//! a temporary file in the destination folder and is renamed over the target only when complete,
+//! so an interrupted run never leaves a half-written output and never touches an input.
+
+use std::fs::File;
+use std::io::{BufWriter, Cursor, Read, Write};
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use image::{DynamicImage, ImageDecoder, ImageReader};
+
+use crate::encoding::{linear_to_srgb, NormalEncoding};
+use crate::{Channels, ColorMap, Error, Grid, NormalMap, Photo, Result, Samples, ScalarMap};
+
+/// Upper bounds checked before any large allocation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest accepted `width * height`.
+    pub max_pixels: u64,
+}
+
+impl Default for Limits {
+    /// 16384 x 16384 pixels: four times a 4096x4096 photo stack's largest sensible member.
+    fn default() -> Self {
+        Limits { max_pixels: 16384 * 16384 }
+    }
+}
+
+impl Limits {
+    fn check(&self, path: &Path, width: u64, height: u64) -> Result<()> {
+        if width == 0 || height == 0 {
+            return Err(Error::decode(path, format!("image has zero size ({width}x{height})")));
+        }
+        if width.saturating_mul(height) > self.max_pixels {
+            return Err(Error::TooLarge { path: path.to_owned(), width, height, max_pixels: self.max_pixels });
+        }
+        Ok(())
+    }
+}
+
+/// The lowercase extension of `path`, or "".
+fn extension(path: &Path) -> String {
+    path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
+}
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    File::open(path).and_then(|mut f| f.read_to_end(&mut bytes)).map_err(|e| Error::io(path, e))?;
+    Ok(bytes)
+}
+
+/// Reads a PNG, TIFF or EXR photo, grey or RGB (alpha dropped), 8/16-bit or float, kept in its
+/// native sample type with a linear transfer (see [`Photo::with_transfer`] for sRGB photos).
+///
+/// # Errors
+/// When the file cannot be read, is not a supported image, or exceeds `limits`.
+pub fn read_photo(path: &Path, limits: &Limits) -> Result<Photo> {
+    if extension(path) == "exr" {
+        let (w, h, data) = read_exr_rgb(path, limits)?;
+        let samples = data.into_iter().flatten().collect();
+        return Photo::new(w, h, Channels::Rgb, Samples::F32(samples));
+    }
+    decode_photo(path, Cursor::new(read_bytes(path)?), limits)
+}
+
+/// Decodes a PNG or TIFF photo from `reader`; `path` names it in errors.
+///
+/// # Errors
+/// As [`read_photo`].
+pub fn decode_photo(path: &Path, reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<Photo> {
+    let image = decode_dynamic(path, reader, limits)?;
+    photo_from_dynamic(path, image)
+}
+
+fn decode_dynamic(path: &Path, reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<DynamicImage> {
+    let reader = ImageReader::new(reader).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    if reader.format().is_none() {
+        return Err(Error::decode(path, "unrecognised file signature (expected PNG, TIFF or EXR)"));
+    }
+    let decoder = reader.into_decoder().map_err(|e| Error::decode(path, e))?;
+    let (w, h) = decoder.dimensions();
+    limits.check(path, w as u64, h as u64)?;
+    DynamicImage::from_decoder(decoder).map_err(|e| Error::decode(path, e))
+}
+
+fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let (channels, samples) = match image {
+        DynamicImage::ImageLuma8(b) => (Channels::Gray, Samples::U8(b.into_raw())),
+        DynamicImage::ImageLuma16(b) => (Channels::Gray, Samples::U16(b.into_raw())),
+        DynamicImage::ImageRgb8(b) => (Channels::Rgb, Samples::U8(b.into_raw())),
+        DynamicImage::ImageRgb16(b) => (Channels::Rgb, Samples::U16(b.into_raw())),
+        DynamicImage::ImageRgb32F(b) => (Channels::Rgb, Samples::F32(b.into_raw())),
+        i @ DynamicImage::ImageLumaA8(_) => (Channels::Gray, Samples::U8(i.into_luma8().into_raw())),
+        i @ DynamicImage::ImageLumaA16(_) => (Channels::Gray, Samples::U16(i.into_luma16().into_raw())),
+        i @ DynamicImage::ImageRgba8(_) => (Channels::Rgb, Samples::U8(i.into_rgb8().into_raw())),
+        i @ DynamicImage::ImageRgba16(_) => (Channels::Rgb, Samples::U16(i.into_rgb16().into_raw())),
+        i @ DynamicImage::ImageRgba32F(_) => (Channels::Rgb, Samples::F32(i.into_rgb32f().into_raw())),
+        other => {
+            return Err(Error::Unsupported { path: path.to_owned(), reason: format!("pixel layout {:?}", other.color()) });
+        }
+    };
+    Photo::new(w, h, channels, samples)
+}
+
+/// Reads a normal map from PNG/TIFF (8- or 16-bit RGB, `encoding` tells green up or down) or EXR
+/// (float, the same green convention). All-zero texels and NaN become invalid texels.
+///
+/// # Errors
+/// When the file cannot be read or decoded, is not RGB, or exceeds `limits`.
+pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -> Result<NormalMap> {
+    if extension(path) == "exr" {
+        let (w, h, data) = read_exr_rgb(path, limits)?;
+        let normals = data.into_iter().map(|c| encoding.decode_float(c)).collect();
+        return NormalMap::from_unit_grid(Grid::from_vec(w, h, normals)?);
+    }
+    let photo = decode_photo(path, Cursor::new(read_bytes(path)?), limits)?;
+    if photo.channels() != Channels::Rgb {
+        return Err(Error::Unsupported { path: path.to_owned(), reason: "a normal map needs three channels (RGB)".into() });
+    }
+    let (w, h) = (photo.width(), photo.height());
+    let normals: Vec<Vec3> = match photo.samples() {
+        Samples::U8(s) => s.chunks_exact(3).map(|c| encoding.decode([c[0] as u32, c[1] as u32, c[2] as u32], 255)).collect(),
+        Samples::U16(s) => s.chunks_exact(3).map(|c| encoding.decode([c[0] as u32, c[1] as u32, c[2] as u32], 65535)).collect(),
+        Samples::F32(s) => s.chunks_exact(3).map(|c| encoding.decode_float([c[0], c[1], c[2]])).collect(),
+    };
+    NormalMap::from_unit_grid(Grid::from_vec(w, h, normals)?)
+}
+
+/// Reads the first RGB(A) layer of an EXR file as float triples (alpha ignored, missing channels 0).
+fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
+    use exr::prelude::read_first_rgba_layer_from_file;
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::decode(path, e))?;
+    let header = meta.headers.first().ok_or_else(|| Error::decode(path, "no layer"))?;
+    let size = header.layer_size;
+    limits.check(path, size.width() as u64, size.height() as u64)?;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.width() * resolution.height()]),
+        |(w, data), pos, (r, g, b, _a): (f32, f32, f32, f32)| data[pos.y() * *w + pos.x()] = [r, g, b],
+    )
+    .map_err(|e| Error::decode(path, e))?;
+    let size = image.layer_data.size;
+    Ok((size.width(), size.height(), image.layer_data.channel_data.pixels.1))
+}
+
+/// Writes a file atomically: `write` fills a temporary file beside `path`, which then replaces it.
+///
+/// # Errors
+/// When the folder is not writable, `write` fails, or the rename fails; the target is untouched.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("output");
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map_err(|e| Error::io(&dir, e))?;
+    {
+        let mut writer = BufWriter::with_capacity(1 << 20, tmp.as_file());
+        write(&mut writer)?;
+        writer.flush().map_err(|e| Error::io(path, e))?;
+    }
+    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    Ok(())
+}
+
+/// Pixel layouts [`write_png`] accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PngLayout {
+    Gray8,
+    Gray16,
+    Rgb8,
+    Rgb16,
+}
+
+/// Writes a PNG from samples (`u16` for 16-bit layouts, values `<= 255` for 8-bit ones),
+/// atomically, with fast compression (outputs here are large; size matters less than time).
+///
+/// # Errors
+/// When the sample count is wrong or writing fails.
+pub fn write_png(path: &Path, width: usize, height: usize, layout: PngLayout, samples: &[u16]) -> Result<()> {
+    let (color, depth, channels) = match layout {
+        PngLayout::Gray8 => (png::ColorType::Grayscale, png::BitDepth::Eight, 1),
+        PngLayout::Gray16 => (png::ColorType::Grayscale, png::BitDepth::Sixteen, 1),
+        PngLayout::Rgb8 => (png::ColorType::Rgb, png::BitDepth::Eight, 3),
+        PngLayout::Rgb16 => (png::ColorType::Rgb, png::BitDepth::Sixteen, 3),
+    };
+    if samples.len() != width * height * channels {
+        return Err(Error::InvalidParameter(format!("{}: {} samples for a {width}x{height} image", path.display(), samples.len())));
+    }
+    let encode_err = |e: png::EncodingError| Error::Encode { path: path.to_owned(), reason: e.to_string() };
+    write_atomic(path, |out| {
+        let mut encoder = png::Encoder::new(out, width as u32, height as u32);
+        encoder.set_color(color);
+        encoder.set_depth(depth);
+        encoder.set_compression(png::Compression::Fast);
+        let mut writer = encoder.write_header().map_err(encode_err)?;
+        let mut stream = writer.stream_writer().map_err(encode_err)?;
+        let row_len = width * channels;
+        let mut bytes = Vec::with_capacity(row_len * 2);
+        for row in samples.chunks_exact(row_len.max(1)) {
+            bytes.clear();
+            match depth {
+                png::BitDepth::Sixteen => row.iter().for_each(|v| bytes.extend_from_slice(&v.to_be_bytes())),
+                _ => row.iter().for_each(|&v| bytes.push(v.min(255) as u8)),
+            }
+            stream.write_all(&bytes).map_err(|e| Error::io(path, e))?;
+        }
+        stream.finish().map_err(encode_err)?;
+        Ok(())
+    })
+}
+
+/// Writes float RGB triples to an EXR file (ZIP compression, lossless), atomically.
+///
+/// # Errors
+/// When writing fails.
+pub fn write_exr_rgb(path: &Path, width: usize, height: usize, pixel: impl Fn(usize, usize) -> [f32; 3] + Sync) -> Result<()> {
+    use exr::prelude::{Encoding, Image, Layer, LayerAttributes, SpecificChannels, Vec2, WritableImage};
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let [r, g, b] = pixel(pos.x(), pos.y());
+        (r, g, b)
+    });
+    let layer = Layer::new((width, height), LayerAttributes::default(), Encoding::FAST_LOSSLESS, channels);
+    let image = Image::from_layer(layer);
+    write_atomic(path, |out| {
+        image.write().to_buffered(out).map_err(|e| Error::Encode { path: path.to_owned(), reason: e.to_string() })
+    })
+}
+
+/// Writes a normal map: `.exr` as float, `.png` as 16-bit (or 8-bit with `bits == 8`) RGB, with
+/// invalid texels as all-zero pixels.
+///
+/// # Errors
+/// When the extension is not `png` or `exr`, or writing fails.
+pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, bits: u32) -> Result<()> {
+    let (w, h) = map.size();
+    match extension(path).as_str() {
+        "exr" => write_exr_rgb(path, w, h, |x, y| encoding.encode_float(map.get(x, y))),
+        "png" => {
+            let (max, layout) = if bits == 8 { (255, PngLayout::Rgb8) } else { (65535, PngLayout::Rgb16) };
+            let samples: Vec<u16> = map.as_slice().iter().flat_map(|&n| encoding.encode(n, max).map(|c| c as u16)).collect();
+            write_png(path, w, h, layout, &samples)
+        }
+        other => Err(Error::InvalidParameter(format!("{}: cannot write a normal map as `.{other}` (use .png or .exr)", path.display()))),
+    }
+}
+
+/// Writes a linear colour map: 8-bit sRGB PNG when `bits == 8`, else 16-bit linear PNG; values
+/// clamped to `[0, 1]`. `.exr` keeps floats unclamped.
+///
+/// # Errors
+/// When writing fails or the extension is unknown.
+pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
+    let (w, h) = map.size();
+    match extension(path).as_str() {
+        "exr" => write_exr_rgb(path, w, h, |x, y| map.get(x, y).to_array()),
+        "png" => {
+            let samples: Vec<u16> = if bits == 8 {
+                map.as_slice().iter().flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0).round() as u16)).collect()
+            } else {
+                map.as_slice().iter().flat_map(|c| c.to_array().map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)).collect()
+            };
+            write_png(path, w, h, if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 }, &samples)
+        }
+        other => Err(Error::InvalidParameter(format!("{}: cannot write a colour map as `.{other}`", path.display()))),
+    }
+}
+
+/// Writes a scalar map as a grey PNG, mapping `[0, 1]` to full scale (8 or 16 bits), clamped.
+///
+/// # Errors
+/// When writing fails.
+pub fn write_scalar_png(path: &Path, map: &ScalarMap, bits: u32) -> Result<()> {
+    let (w, h) = map.size();
+    let (max, layout) = if bits == 8 { (255.0, PngLayout::Gray8) } else { (65535.0, PngLayout::Gray16) };
+    let samples: Vec<u16> = map.as_slice().iter().map(|v| (v.clamp(0.0, 1.0) * max).round() as u16).collect();
+    write_png(path, w, h, layout, &samples)
+}
+
+/// Reads a grey (or RGB, luminance taken) image as a linear scalar map in `[0, 1]`.
+///
+/// # Errors
+/// As [`read_photo`].
+pub fn read_scalar_map(path: &Path, limits: &Limits) -> Result<ScalarMap> {
+    let photo = read_photo(path, limits)?;
+    Grid::from_vec(photo.width(), photo.height(), photo.luminance())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_map() -> NormalMap {
+        let g = Grid::from_fn(7, 5, |x, y| Vec3::new(x as f32 * 0.1 - 0.3, 0.2 - y as f32 * 0.1, 1.0));
+        let mut m = NormalMap::from_grid(g);
+        m.set(3, 2, Vec3::ZERO);
+        m
+    }
+
+    #[test]
+    fn normal_map_round_trips_png16_png8_exr() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = sample_map();
+        for (name, bits, tol) in [("n.png", 16, 0.01), ("n8.png", 8, 0.5), ("n.exr", 32, 1e-5)] {
+            for green in [crate::GreenAxis::Up, crate::GreenAxis::Down] {
+                let enc = NormalEncoding { green };
+                let path = dir.path().join(name);
+                write_normal_map(&path, &m, enc, bits).unwrap();
+                let back = read_normal_map(&path, enc, &Limits::default()).unwrap();
+                assert_eq!(back.size(), m.size());
+                assert!(!back.is_valid(3, 2), "{name}: invalid texel survives");
+                let err = back.angular_error(&m, None).unwrap();
+                assert_eq!(err.count, 34);
+                assert!(err.max < tol, "{name} {green:?}: {err:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn green_down_file_differs_from_green_up() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = sample_map();
+        let path = dir.path().join("n.png");
+        write_normal_map(&path, &m, NormalEncoding { green: crate::GreenAxis::Down }, 16).unwrap();
+        let misread = read_normal_map(&path, NormalEncoding::default(), &Limits::default()).unwrap();
+        assert!((misread.get(0, 0).y + m.get(0, 0).y).abs() < 1e-3);
+    }
+
+    #[test]
+    fn photos_keep_native_depth() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.png");
+        write_png(&path, 2, 2, PngLayout::Gray16, &[0, 1000, 40000, 65535]).unwrap();
+        let p = read_photo(&path, &Limits::default()).unwrap();
+        assert_eq!(p.samples(), &Samples::U16(vec![0, 1000, 40000, 65535]));
+        write_png(&path, 1, 2, PngLayout::Rgb8, &[1, 2, 3, 4, 5, 6]).unwrap();
+        let p = read_photo(&path, &Limits::default()).unwrap();
+        assert_eq!((p.channels(), p.samples()), (Channels::Rgb, &Samples::U8(vec![1, 2, 3, 4, 5, 6])));
+    }
+
+    #[test]
+    fn tiff_photos_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.tiff");
+        let buf: image::ImageBuffer<image::Luma<u16>, Vec<u16>> = image::ImageBuffer::from_raw(2, 1, vec![7u16, 65000]).unwrap();
+        buf.save(&path).unwrap();
+        let p = read_photo(&path, &Limits::default()).unwrap();
+        assert_eq!(p.samples(), &Samples::U16(vec![7, 65000]));
+    }
+
+    #[test]
+    fn bad_files_name_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = dir.path().join("text.png");
+        std::fs::write(&text, "hello, not a png").unwrap();
+        let e = read_photo(&text, &Limits::default()).unwrap_err().to_string();
+        assert!(e.contains("text.png"), "{e}");
+
+        let good = dir.path().join("good.png");
+        write_png(&good, 64, 64, PngLayout::Gray16, &vec![1234; 64 * 64]).unwrap();
+        let bytes = std::fs::read(&good).unwrap();
+        let cut = dir.path().join("cut.png");
+        std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+        let e = read_photo(&cut, &Limits::default()).unwrap_err().to_string();
+        assert!(e.contains("cut.png"), "{e}");
+
+        let e = read_photo(&good, &Limits { max_pixels: 100 }).unwrap_err().to_string();
+        assert!(e.contains("exceeds"), "{e}");
+        assert!(read_photo(&dir.path().join("missing.png"), &Limits::default()).is_err());
+    }
+
+    #[test]
+    fn nan_in_exr_becomes_invalid() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("nan.exr");
+        write_exr_rgb(&path, 2, 1, |x, _| if x == 0 { [f32::NAN, 0.0, 1.0] } else { [0.0, 0.0, 1.0] }).unwrap();
+        let m = read_normal_map(&path, NormalEncoding::default(), &Limits::default()).unwrap();
+        assert!(!m.is_valid(0, 0));
+        assert_eq!(m.get(1, 0), Vec3::Z);
+    }
+
+    #[test]
+    fn failed_write_leaves_target_untouched() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("keep.txt");
+        std::fs::write(&path, "old").unwrap();
+        let r = write_atomic(&path, |_| Err(Error::InvalidParameter("boom".into())));
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "temporary file left behind");
+    }
+}

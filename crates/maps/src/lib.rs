@@ -1,0 +1,29 @@
+//! Core map types and image IO shared by every skinkit stage.
+//!
+//! * [`Grid`] is a row-major 2-D array; [`ScalarMap`] and [`ColorMap`] are grids of `f32` and
+//!   linear RGB.
+//! * [`NormalMap`] holds unit vectors in the camera/tangent frame (x right, y up, z toward the
+//!   viewer); `(0, 0, 0)` marks an invalid texel. Encodings only exist at the IO boundary
+//!   ([`encoding`]).
+//! * [`Photo`] is a decoded photograph kept in its native sample type (8-bit, 16-bit or float), so
+//!   a stack of large 16-bit photos costs two bytes a sample, not four.
+//! * [`io`] reads PNG, TIFF and EXR under [`Limits`] and writes every output atomically.
+//!
+//! Image rows grow downward, against +y: row 0 is the top of the picture. UV origin: skinkit puts
+//! texture coordinate (0, 0) at the top-left texel (as glTF and wgpu do); loaders of bottom-left
+//! formats (OBJ) flip v.
+
+pub mod encoding;
+pub mod error;
+pub mod grid;
+pub mod io;
+pub mod normal;
+pub mod photo;
+
+pub use encoding::{GreenAxis, NormalEncoding};
+pub use error::{Error, Result};
+pub use glam::Vec3;
+pub use grid::{ColorMap, Grid, ScalarMap};
+pub use io::Limits;
+pub use normal::NormalMap;
+pub use photo::{Channels, Photo, Samples, Transfer};

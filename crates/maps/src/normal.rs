@@ -1,0 +1,183 @@
+//! [`NormalMap`]: unit normals on a grid, with `(0, 0, 0)` for invalid texels.
+
+use glam::Vec3;
+
+use crate::encoding::{is_valid_normal, normalize_or_invalid};
+use crate::{Error, Grid, Result};
+
+/// A grid of unit normals (x right, y up, z out of the map). Invalid texels hold `Vec3::ZERO`.
+///
+/// Construction normalises every texel and turns non-finite or zero vectors into the invalid
+/// marker, so a `NormalMap` never holds NaN.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalMap {
+    grid: Grid<Vec3>,
+}
+
+impl NormalMap {
+    /// A map of `+Z` normals (a flat surface).
+    pub fn flat(width: usize, height: usize) -> Self {
+        NormalMap { grid: Grid::filled(width, height, Vec3::Z) }
+    }
+
+    /// Wraps a grid of vectors, normalising each and marking non-finite or zero ones invalid.
+    pub fn from_grid(mut grid: Grid<Vec3>) -> Self {
+        use rayon::prelude::*;
+        grid.as_mut_slice().par_iter_mut().for_each(|n| *n = normalize_or_invalid(*n));
+        NormalMap { grid }
+    }
+
+    /// Wraps row-major vectors (see [`NormalMap::from_grid`]).
+    ///
+    /// # Errors
+    /// When `data.len() != width * height`.
+    pub fn from_vec(width: usize, height: usize, data: Vec<Vec3>) -> Result<Self> {
+        Ok(Self::from_grid(Grid::from_vec(width, height, data)?))
+    }
+
+    /// Wraps a grid whose texels are already unit vectors or `Vec3::ZERO` (no pass over the data).
+    ///
+    /// # Errors
+    /// In debug builds only: when a texel is neither (a cheap sample of texels is checked).
+    pub fn from_unit_grid(grid: Grid<Vec3>) -> Result<Self> {
+        let step = (grid.len() / 1024).max(1);
+        for (i, n) in grid.as_slice().iter().enumerate().step_by(step) {
+            let ok = *n == Vec3::ZERO || (n.is_finite() && (n.length() - 1.0).abs() < 1e-3);
+            if !ok {
+                return Err(Error::InvalidParameter(format!("texel {i} is not a unit normal: {n}")));
+            }
+        }
+        Ok(NormalMap { grid })
+    }
+
+    pub fn width(&self) -> usize {
+        self.grid.width()
+    }
+    pub fn height(&self) -> usize {
+        self.grid.height()
+    }
+    pub fn size(&self) -> (usize, usize) {
+        self.grid.size()
+    }
+    pub fn grid(&self) -> &Grid<Vec3> {
+        &self.grid
+    }
+    pub fn into_grid(self) -> Grid<Vec3> {
+        self.grid
+    }
+    pub fn as_slice(&self) -> &[Vec3] {
+        self.grid.as_slice()
+    }
+    /// The normal at `(x, y)` (`Vec3::ZERO` if invalid).
+    pub fn get(&self, x: usize, y: usize) -> Vec3 {
+        *self.grid.get(x, y)
+    }
+    /// Sets the texel at `(x, y)`, normalising `n` (or marking it invalid).
+    pub fn set(&mut self, x: usize, y: usize, n: Vec3) {
+        *self.grid.get_mut(x, y) = normalize_or_invalid(n);
+    }
+    /// Whether the texel at `(x, y)` holds a normal.
+    pub fn is_valid(&self, x: usize, y: usize) -> bool {
+        is_valid_normal(self.get(x, y))
+    }
+    /// Number of valid texels.
+    pub fn valid_count(&self) -> usize {
+        self.grid.as_slice().iter().filter(|n| is_valid_normal(**n)).count()
+    }
+
+    /// Angular differences in degrees to `other`, over texels valid in both (and in `mask`, when
+    /// given: nonzero mask texels count).
+    ///
+    /// # Errors
+    /// When the sizes differ.
+    pub fn angular_error(&self, other: &NormalMap, mask: Option<&Grid<bool>>) -> Result<AngularStats> {
+        if self.size() != other.size() || mask.is_some_and(|m| m.size() != self.size()) {
+            return Err(Error::InvalidParameter(format!(
+                "cannot compare a {}x{} normal map with a {}x{} one",
+                self.width(),
+                self.height(),
+                other.width(),
+                other.height()
+            )));
+        }
+        let degrees: Vec<f32> = self
+            .as_slice()
+            .iter()
+            .zip(other.as_slice())
+            .enumerate()
+            .filter(|(i, (a, b))| is_valid_normal(**a) && is_valid_normal(**b) && mask.is_none_or(|m| m.as_slice()[*i]))
+            .map(|(_, (a, b))| angle_degrees(*a, *b))
+            .collect();
+        Ok(AngularStats::from_degrees(degrees))
+    }
+}
+
+/// Angle between two unit vectors in degrees, accurate for tiny angles (atan2 of the cross and dot
+/// products, not acos of the dot).
+pub fn angle_degrees(a: Vec3, b: Vec3) -> f32 {
+    let (a, b) = (a.as_dvec3(), b.as_dvec3());
+    a.cross(b).length().atan2(a.dot(b)).to_degrees() as f32
+}
+
+/// Summary of angular differences, in degrees.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AngularStats {
+    /// Number of texels compared.
+    pub count: usize,
+    pub mean: f32,
+    pub rms: f32,
+    pub median: f32,
+    pub p95: f32,
+    pub max: f32,
+}
+
+impl AngularStats {
+    /// Statistics of a list of angles in degrees (all zero for an empty list).
+    pub fn from_degrees(mut degrees: Vec<f32>) -> Self {
+        let count = degrees.len();
+        if count == 0 {
+            return AngularStats::default();
+        }
+        degrees.sort_by(f32::total_cmp);
+        let sum: f64 = degrees.iter().map(|&d| d as f64).sum();
+        let sum_sq: f64 = degrees.iter().map(|&d| (d as f64) * (d as f64)).sum();
+        let at = |q: f64| degrees[((count - 1) as f64 * q).round() as usize];
+        AngularStats {
+            count,
+            mean: (sum / count as f64) as f32,
+            rms: (sum_sq / count as f64).sqrt() as f32,
+            median: at(0.5),
+            p95: at(0.95),
+            max: degrees[count - 1],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn construction_never_keeps_nan() {
+        let m = NormalMap::from_vec(3, 1, vec![Vec3::new(0.0, 0.0, 2.0), Vec3::NAN, Vec3::ZERO]).unwrap();
+        assert_eq!(m.get(0, 0), Vec3::Z);
+        assert_eq!(m.get(1, 0), Vec3::ZERO);
+        assert_eq!(m.valid_count(), 1);
+    }
+
+    #[test]
+    fn small_angles_are_accurate() {
+        let a = Vec3::Z;
+        let b = Vec3::new(1e-4, 0.0, 1.0).normalize();
+        assert!((angle_degrees(a, b) - 1e-4f32.to_degrees()).abs() < 1e-7);
+    }
+
+    #[test]
+    fn stats_of_known_values() {
+        let s = AngularStats::from_degrees(vec![1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(s.count, 4);
+        assert!((s.mean - 2.5).abs() < 1e-6);
+        assert!((s.rms - 7.5f32.sqrt()).abs() < 1e-6);
+        assert_eq!(s.max, 4.0);
+    }
+}
