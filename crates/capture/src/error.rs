@@ -1,0 +1,31 @@
+//! The error type of the `capture` crate, grouped by who is at fault.
+
+use std::path::PathBuf;
+
+/// Errors from rigs, calibration and solving.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A rig or light file that cannot be parsed or has an invalid field. `location` names the
+    /// file and, where known, the light or line (`rig.toml: light 5`).
+    #[error("{location}: {reason}")]
+    BadFile { location: String, reason: String },
+    /// A rig whose lights cannot determine a normal (coplanar, rank-deficient, too few).
+    #[error("{0}")]
+    BadRig(String),
+    /// Inputs that do not fit together (photo count, sizes) or a parameter out of range.
+    #[error("{0}")]
+    InvalidInput(String),
+    /// A calibration that could not find what it looks for (no sphere, no highlight).
+    #[error("{0}")]
+    Calibration(String),
+    /// Image IO, from the `maps` crate.
+    #[error(transparent)]
+    Maps(#[from] skinkit_maps::Error),
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, #[source] source: std::io::Error },
+}
+
+/// Result alias for the `capture` crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
