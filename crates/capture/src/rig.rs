@@ -1,8 +1,51 @@
-//! Light rigs: per light a direction, an intensity and optionally a near-light position.
+//! Light rigs: per light a direction, an intensity and optionally a near-light position, plus the
+//! checks that a rig can determine a normal at all (Haro et al. 2001, section 3: a mold is
+//! photographed under k >= 3 lights of known direction).
 //!
-//! (Skeleton: the data types; parsing, validation and conditioning are filled in by the rig work.)
+//! # Frame
+//! Camera frame: x right, y up, +z toward the camera. A light direction is the unit vector from
+//! the surface toward the light, so every usable light has `z > 0` (a light below the mold plane
+//! cannot light it).
+//!
+//! # Rig files
+//! A rig is a TOML file:
+//! ```toml
+//! name = "turntable-8"                 # optional
+//! description = "one lamp, 8 positions" # optional
+//! mm_per_pixel = 0.02                  # optional, size of a photo pixel on the mold
+//! ambient = "ambient.png"              # optional all-lights-off frame, relative to this file
+//!
+//! [[light]]                            # one table per light, in photo order
+//! direction = [0.7071, 0.0, 0.7071]    # camera frame; normalised on load
+//! intensity = 1.0                      # optional (default 1.0), or [r, g, b], linear
+//! position = [150.0, 0.0, 150.0]       # optional, mm, a near point light
+//! ```
+//! Unknown keys are errors. Errors name the file and the light, numbered from 1 in file order
+//! (`rig.toml: light 5: direction has zero length`); TOML syntax errors keep toml's line and
+//! column. A rig needs at least 3 lights with finite values, non-zero directions with `z > 0`
+//! and finite intensities `> 0`.
+//!
+//! # Conditioning
+//! Before any pixel is solved the rig is checked ([`Rig::check`]): with `L` the k x 3 matrix of
+//! directions, the least-squares scaled normal `g = albedo * n` has covariance
+//! `sigma^2 (L^T L)^-1` for pixel noise `sigma` (equal intensities), so coplanar lights (rank 2)
+//! cannot determine a normal and a large condition number amplifies noise. For k lights evenly on
+//! a ring at angle theta from the camera axis the rms tilt error of a flat patch is
+//! `(sigma / albedo) sqrt(4 / (k sin^2 theta))`, and the condition number is 1 at
+//! theta = 54.74 deg (REFERENCE.md, capture).
+
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use nalgebra::{DMatrix, Matrix3};
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// Smallest ratio of smallest to largest singular value of the light matrix accepted as rank 3.
+pub const COPLANAR_RATIO: f64 = 1e-3;
+/// Condition number above which [`Conditioning::warning`] speaks up.
+pub const WARN_CONDITION: f64 = 5.0;
 
 /// One light of a rig, in the camera frame (x right, y up, +z toward the camera).
 #[derive(Clone, Debug, PartialEq)]
@@ -26,4 +69,454 @@ pub struct Rig {
     pub ambient: Option<std::path::PathBuf>,
     /// Size of a photo pixel on the mold, in millimetres, when known.
     pub mm_per_pixel: Option<f32>,
+}
+
+/// How well a rig's light directions determine a normal (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conditioning {
+    /// Largest over smallest singular value of the k x 3 direction matrix `L` (infinite when the
+    /// smallest is 0).
+    pub condition_number: f64,
+    /// `sqrt(trace((L^T L)^-1))`: the rms error of the scaled normal `g = albedo * n` per unit
+    /// pixel noise sigma (lights of unit intensity). Infinite for a rank-deficient rig.
+    pub noise_amplification: f64,
+    /// `sqrt([(L^T L)^-1]_xx + [(L^T L)^-1]_yy)`: rms tilt error in radians of a flat patch
+    /// (normal +z) per unit `sigma / albedo`.
+    pub tilt_amplification: f64,
+    /// Number of singular values above [`COPLANAR_RATIO`] times the largest.
+    pub rank: usize,
+}
+
+impl Conditioning {
+    /// A warning for a poorly conditioned rig (condition number above [`WARN_CONDITION`]).
+    pub fn warning(&self) -> Option<String> {
+        (self.condition_number > WARN_CONDITION).then(|| {
+            format!(
+                "poorly conditioned rig: condition number {:.1}; pixel noise is amplified {:.1}x in the normal",
+                self.condition_number, self.noise_amplification
+            )
+        })
+    }
+}
+
+impl Light {
+    /// A validated light: `direction` is normalised; `intensity` is linear RGB.
+    ///
+    /// # Errors
+    /// A reason (without location) when a value is not finite, the direction has zero length or
+    /// points below the mold plane (`z <= 0`), or an intensity channel is not `> 0`.
+    pub fn new(direction: Vec3, intensity: Vec3, position: Option<Vec3>) -> Result<Light, String> {
+        let direction = unit_direction(direction)?;
+        check_intensity(intensity)?;
+        if let Some(p) = position {
+            if !p.is_finite() {
+                return Err(format!("position {} is not finite", show(p)));
+            }
+        }
+        Ok(Light { direction, intensity, position })
+    }
+
+    /// Mean of the RGB intensity, for grey solves.
+    pub fn scalar_intensity(&self) -> f32 {
+        (self.intensity.x + self.intensity.y + self.intensity.z) / 3.0
+    }
+}
+
+fn unit_direction(d: Vec3) -> Result<Vec3, String> {
+    if !d.is_finite() {
+        return Err(format!("direction {} is not finite", show(d)));
+    }
+    let len = d.length();
+    if len == 0.0 || !len.is_normal() {
+        return Err("direction has zero length".into());
+    }
+    // A direction already unit to f32 precision is kept bit for bit, so saved rigs round-trip.
+    let unit = if (len - 1.0).abs() <= 2e-6 { d } else { d / len };
+    if unit.z <= 0.0 {
+        return Err(format!(
+            "direction {} points below the mold plane (z <= 0): such a light cannot light the mold",
+            show(d)
+        ));
+    }
+    Ok(unit)
+}
+
+fn check_intensity(e: Vec3) -> Result<(), String> {
+    if !e.is_finite() || e.min_element() <= 0.0 {
+        return Err(format!("intensity {} must be finite and > 0", show(e)));
+    }
+    Ok(())
+}
+
+fn show(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+impl Rig {
+    /// A rig from validated lights (metadata empty).
+    ///
+    /// # Errors
+    /// [`Error::BadFile`] for fewer than 3 lights or an invalid light (`origin: light i: ...`).
+    pub fn new(lights: Vec<Light>, origin: &str) -> Result<Rig> {
+        let rig = Rig { lights, ..Rig::default() };
+        rig.validate(origin)?;
+        Ok(rig)
+    }
+
+    /// Checks every field as the file loader does; `origin` names the rig in messages.
+    ///
+    /// # Errors
+    /// [`Error::BadFile`] naming `origin` and the light (numbered from 1).
+    pub fn validate(&self, origin: &str) -> Result<()> {
+        if self.lights.len() < 3 {
+            return Err(bad(origin, too_few(self.lights.len())));
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            Light::new(l.direction, l.intensity, l.position)
+                .map_err(|reason| bad(&format!("{origin}: light {}", i + 1), reason))?;
+            if (l.direction.length() - 1.0).abs() > 1e-4 {
+                return Err(bad(&format!("{origin}: light {}", i + 1), "direction is not a unit vector".into()));
+            }
+        }
+        if let Some(mm) = self.mm_per_pixel {
+            if !(mm.is_finite() && mm > 0.0) {
+                return Err(bad(origin, format!("mm_per_pixel {mm} must be finite and > 0")));
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads a rig file; the ambient frame path is resolved relative to the file's folder.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the file cannot be read; [`Error::BadFile`] as [`Rig::parse`].
+    pub fn load(path: &Path) -> Result<Rig> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
+        let mut rig = Rig::parse(&text, &path.display().to_string())?;
+        if let Some(ambient) = rig.ambient.take() {
+            let folder = path.parent().unwrap_or(Path::new(""));
+            rig.ambient = Some(folder.join(ambient));
+        }
+        Ok(rig)
+    }
+
+    /// Parses rig TOML; `origin` names the text in messages (usually the file name).
+    ///
+    /// # Errors
+    /// [`Error::BadFile`] for TOML syntax, unknown or missing keys, and invalid values.
+    pub fn parse(text: &str, origin: &str) -> Result<Rig> {
+        let file: RigFile = toml::from_str(text).map_err(|e| bad(origin, e.to_string().trim_end().to_owned()))?;
+        file.into_rig(origin)
+    }
+
+    /// The rig as TOML text that [`Rig::parse`] reads back to an equal rig.
+    pub fn to_toml_string(&self) -> String {
+        self.to_toml_relative(None)
+    }
+
+    fn to_toml_relative(&self, folder: Option<&Path>) -> String {
+        let ambient = self.ambient.as_ref().map(|a| {
+            let rel = folder.and_then(|f| a.strip_prefix(f).ok()).unwrap_or(a);
+            rel.to_string_lossy().into_owned()
+        });
+        let out = RigOut {
+            name: self.name.clone(),
+            description: self.description.clone(),
+            mm_per_pixel: self.mm_per_pixel.map(f32_to_f64),
+            ambient,
+            light: self.lights.iter().map(LightOut::from_light).collect(),
+        };
+        toml::to_string(&out).expect("a rig always serialises to TOML")
+    }
+
+    /// Writes the rig atomically; an ambient path inside the target folder is written relative.
+    ///
+    /// # Errors
+    /// [`Error::Maps`] when the file cannot be written.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let text = self.to_toml_relative(path.parent());
+        skinkit_maps::io::write_atomic(path, |w| {
+            use std::io::Write;
+            w.write_all(text.as_bytes()).map_err(|source| skinkit_maps::Error::Io { path: path.to_owned(), source })
+        })?;
+        Ok(())
+    }
+
+    /// `count` lights evenly on a ring: azimuth `360 i / count` degrees from +x, counter-clockwise
+    /// seen from the camera; `elevation_deg` above the mold plane (90 is the camera axis).
+    ///
+    /// # Panics
+    /// Never; invalid arguments give a rig that [`Rig::validate`] refuses.
+    pub fn turntable(count: usize, elevation_deg: f64, intensity: f32) -> Rig {
+        let e = elevation_deg.to_radians();
+        let lights = (0..count)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / count as f64;
+                let d = [e.cos() * a.cos(), e.cos() * a.sin(), e.sin()];
+                Light {
+                    direction: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32),
+                    intensity: Vec3::splat(intensity),
+                    position: None,
+                }
+            })
+            .collect();
+        Rig {
+            name: Some(format!("turntable-{count}")),
+            description: Some(format!("{count} lights evenly on a ring at elevation {elevation_deg} deg")),
+            lights,
+            ambient: None,
+            mm_per_pixel: None,
+        }
+    }
+
+    /// Unit light directions in photo order.
+    pub fn directions(&self) -> Vec<Vec3> {
+        self.lights.iter().map(|l| l.direction).collect()
+    }
+
+    /// RGB light intensities in photo order.
+    pub fn intensities(&self) -> Vec<Vec3> {
+        self.lights.iter().map(|l| l.intensity).collect()
+    }
+
+    /// The k x 3 matrix of light directions, one row per light, in f64.
+    pub fn directions_matrix(&self) -> DMatrix<f64> {
+        DMatrix::from_fn(self.lights.len(), 3, |r, c| self.lights[r].direction[c] as f64)
+    }
+
+    /// Condition number, noise amplification and rank of the direction matrix (module docs).
+    pub fn conditioning(&self) -> Conditioning {
+        let l = self.directions_matrix();
+        if l.nrows() == 0 {
+            return Conditioning {
+                condition_number: f64::INFINITY,
+                noise_amplification: f64::INFINITY,
+                tilt_amplification: f64::INFINITY,
+                rank: 0,
+            };
+        }
+        let s = l.clone().svd(false, false).singular_values;
+        let (max, min) = (s.max(), if s.len() < 3 { 0.0 } else { s.min() });
+        let rank = s.iter().filter(|&&v| v > COPLANAR_RATIO * max).count();
+        let noise = s.iter().map(|v| 1.0 / (v * v)).sum::<f64>() + if s.len() < 3 { f64::INFINITY } else { 0.0 };
+        Conditioning {
+            condition_number: if min > 0.0 { max / min } else { f64::INFINITY },
+            noise_amplification: noise.sqrt(),
+            tilt_amplification: tilt_amplification(&l),
+            rank,
+        }
+    }
+
+    /// Conditioning of a rig that can determine a normal.
+    ///
+    /// # Errors
+    /// [`Error::BadRig`] for fewer than 3 lights or coplanar / rank-deficient directions.
+    pub fn check(&self) -> Result<Conditioning> {
+        if self.lights.len() < 3 {
+            return Err(Error::BadRig(too_few(self.lights.len())));
+        }
+        let c = self.conditioning();
+        if c.rank < 3 {
+            return Err(Error::BadRig(format!(
+                "rig lights are coplanar (condition number {:.1e}): they cannot determine a normal; move some lights to another elevation",
+                c.condition_number
+            )));
+        }
+        Ok(c)
+    }
+
+    /// The rig seen in a frame whose y axis points down (image rows): negates every direction's
+    /// and position's y. For light files written in image coordinates.
+    pub fn flip_y(&mut self) {
+        for l in &mut self.lights {
+            l.direction.y = -l.direction.y;
+            if let Some(p) = &mut l.position {
+                p.y = -p.y;
+            }
+        }
+    }
+}
+
+/// `sqrt` of the x and y diagonal of `(L^T L)^-1`; infinite when `L^T L` is singular.
+fn tilt_amplification(l: &DMatrix<f64>) -> f64 {
+    let ltl = l.transpose() * l;
+    let m = Matrix3::from_fn(|r, c| ltl[(r, c)]);
+    match m.try_inverse() {
+        Some(inv) if inv[(0, 0)] >= 0.0 && inv[(1, 1)] >= 0.0 => (inv[(0, 0)] + inv[(1, 1)]).sqrt(),
+        _ => f64::INFINITY,
+    }
+}
+
+fn too_few(k: usize) -> String {
+    format!("rig has {k} light{}; photometric stereo needs at least 3", if k == 1 { "" } else { "s" })
+}
+
+fn bad(location: &str, reason: String) -> Error {
+    Error::BadFile { location: location.to_owned(), reason }
+}
+
+/// Shortest decimal of an f32, as f64, so saved files read `0.70710677`, not `0.7071067690849304`.
+fn f32_to_f64(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(v as f64)
+}
+
+fn vec_out(v: Vec3) -> [f64; 3] {
+    [f32_to_f64(v.x), f32_to_f64(v.y), f32_to_f64(v.z)]
+}
+
+/// The file layout as read.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RigFile {
+    name: Option<String>,
+    description: Option<String>,
+    mm_per_pixel: Option<f64>,
+    ambient: Option<String>,
+    #[serde(default)]
+    light: Vec<LightFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightFile {
+    direction: [f64; 3],
+    intensity: Option<toml::Value>,
+    position: Option<[f64; 3]>,
+}
+
+impl RigFile {
+    fn into_rig(self, origin: &str) -> Result<Rig> {
+        let lights = self
+            .light
+            .into_iter()
+            .enumerate()
+            .map(|(i, l)| l.into_light().map_err(|reason| bad(&format!("{origin}: light {}", i + 1), reason)))
+            .collect::<Result<Vec<_>>>()?;
+        let rig = Rig {
+            name: self.name,
+            description: self.description,
+            lights,
+            ambient: self.ambient.map(PathBuf::from),
+            mm_per_pixel: self.mm_per_pixel.map(|v| v as f32),
+        };
+        rig.validate(origin)?;
+        Ok(rig)
+    }
+}
+
+impl LightFile {
+    fn into_light(self) -> Result<Light, String> {
+        let intensity = match &self.intensity {
+            None => Vec3::ONE,
+            Some(v) => intensity_value(v)?,
+        };
+        Light::new(vec3(self.direction), intensity, self.position.map(vec3))
+    }
+}
+
+fn vec3(v: [f64; 3]) -> Vec3 {
+    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
+}
+
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+fn intensity_value(v: &toml::Value) -> Result<Vec3, String> {
+    let wrong = || format!("intensity must be a number or [r, g, b], got {v}");
+    if let Some(s) = number(v) {
+        return Ok(Vec3::splat(s as f32));
+    }
+    let arr = v.as_array().ok_or_else(wrong)?;
+    let rgb: Vec<f64> = arr.iter().map(number).collect::<Option<_>>().ok_or_else(wrong)?;
+    match rgb.as_slice() {
+        [r, g, b] => Ok(Vec3::new(*r as f32, *g as f32, *b as f32)),
+        _ => Err(wrong()),
+    }
+}
+
+/// The file layout as written.
+#[derive(Serialize)]
+struct RigOut {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    name: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    description: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mm_per_pixel: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ambient: Option<String>,
+    light: Vec<LightOut>,
+}
+
+#[derive(Serialize)]
+struct LightOut {
+    direction: [f64; 3],
+    intensity: IntensityOut,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    position: Option<[f64; 3]>,
+}
+
+#[derive(Serialize)]
+#[serde(untagged)]
+enum IntensityOut {
+    Scalar(f64),
+    Rgb([f64; 3]),
+}
+
+impl LightOut {
+    fn from_light(l: &Light) -> LightOut {
+        let e = l.intensity;
+        let intensity = if e.x == e.y && e.y == e.z {
+            IntensityOut::Scalar(f32_to_f64(e.x))
+        } else {
+            IntensityOut::Rgb(vec_out(e))
+        };
+        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+name = "test"
+mm_per_pixel = 0.02
+ambient = "ambient.png"
+[[light]]
+direction = [1, 0, 1]
+intensity = 2.0
+[[light]]
+direction = [0.0, 1.0, 1.0]
+intensity = [1.0, 0.5, 0.25]
+position = [0.0, 150.0, 150.0]
+[[light]]
+direction = [-1.0, -1.0, 1.0]
+"#;
+
+    #[test]
+    fn parses_and_normalises() {
+        let rig = Rig::parse(GOOD, "rig.toml").unwrap();
+        assert_eq!(rig.lights.len(), 3);
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((rig.lights[0].direction - Vec3::new(s, 0.0, s)).length() < 1e-6);
+        assert_eq!(rig.lights[0].intensity, Vec3::splat(2.0));
+        assert_eq!(rig.lights[1].intensity, Vec3::new(1.0, 0.5, 0.25));
+        assert_eq!(rig.lights[1].position, Some(Vec3::new(0.0, 150.0, 150.0)));
+        assert_eq!(rig.lights[2].intensity, Vec3::ONE);
+        assert_eq!(rig.ambient, Some(PathBuf::from("ambient.png")));
+        assert_eq!(rig.mm_per_pixel, Some(0.02));
+    }
+
+    #[test]
+    fn toml_round_trip_is_exact() {
+        let rig = Rig::parse(GOOD, "rig.toml").unwrap();
+        let again = Rig::parse(&rig.to_toml_string(), "again").unwrap();
+        assert_eq!(rig, again);
+    }
 }

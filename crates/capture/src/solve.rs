@@ -1,1 +1,1096 @@
-//! (in progress)
+//! Per-pixel photometric-stereo solves (Haro et al. 2001, section 3, equation 1).
+//!
+//! Each pixel seen under k >= 3 lights gives `albedo * E_i * (n . L_i) = I_i`. Writing
+//! `g = albedo * n` and `r_i = I_i / E_i` (the reading divided by the light's intensity, after
+//! ambient subtraction, as a fraction of full scale), the readings are linear in `g`: `L g = r`.
+//!
+//! * [`Method::LeastSquares`] is the paper's solve: one 3 x k pseudo-inverse `P = (L^T L)^-1 L^T`
+//!   serves every pixel. It is computed once in f64 and applied in f32, with the per-light
+//!   intensity division and the integer-to-linear scale folded into it (`P'_ji = P_ji / (full_scale
+//!   * E_i)`), so the kernel is a 3 x k matrix-vector product on the raw samples. Pixels are
+//!   processed in bands of rows in parallel and, within a row, in chunks of [`CHUNK`] pixels laid
+//!   out structure-of-arrays so the loops vectorise.
+//! * [`Method::Robust`] (the default) drops, per pixel, the readings that are shadowed or
+//!   saturated and solves from the remaining lights with the pseudo-inverse of that subset.
+//!   A reading is *shadowed* when `r_i < max(shadow_abs, shadow_rel * max_j r_j)`: below an
+//!   absolute floor and also below a fraction of the pixel's own brightest reading (a cast shadow
+//!   on a bright pixel is far above the noise floor but far below its neighbours in the stack). A
+//!   reading is *saturated* when its raw stored value is at or above `saturation * full_scale`
+//!   (any channel, before ambient subtraction). Subset pseudo-inverses are cached per bitmask:
+//!   a dense lazily filled table for k <= [`DENSE_MAX_LIGHTS`], a per-worker map capped at
+//!   [`SolveConfig::cache_capacity`] entries (cleared when full) above that. Entries are pure
+//!   functions of the bitmask, so results never depend on the cache or the thread count.
+//!   Pixels with all readings usable take the vectorised least-squares result unchanged.
+//!
+//! RGB photos: the normal comes from the luminance-weighted (Rec. 709) sum of the
+//! intensity-divided channels; then each channel's albedo is the least-squares fit
+//! `sum_i r_ci (n . L_i) / sum_i (n . L_i)^2` over the lights used. Grey photos give `|g|` as the
+//! albedo, splatted to RGB (a grey photo is divided by the luminance of each light's intensity).
+//!
+//! Confidence, in [0, 1], is 0 for invalid pixels and otherwise the product of
+//! * the fraction of the rig's lights used,
+//! * `min(1, cond(L_all) / cond(L_used))`, how much worse the used subset is conditioned, and
+//! * `1 / (1 + (rho / 0.1)^2)` with `rho` the relative residual `|r - L g| / |r|` over the lights
+//!   used (a Lambertian, noise-free pixel has `rho = 0`; 10% residual halves the confidence).
+//!
+//! With least squares the first two factors are 1.
+
+use std::collections::HashMap;
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::Vec3;
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+use skinkit_maps::{Channels, ColorMap, Grid, NormalMap, Photo, Samples, ScalarMap, Transfer};
+
+use crate::{Error, Result, Rig};
+
+/// Pixels per structure-of-arrays chunk in the kernels.
+pub const CHUNK: usize = 64;
+/// Most lights a rig may have (subsets are `u128` bitmasks).
+pub const MAX_LIGHTS: usize = 128;
+/// Rigs with at most this many lights cache every subset in a dense `2^k` table.
+pub const DENSE_MAX_LIGHTS: usize = 12;
+/// Rows per parallel work item.
+const BAND_ROWS: usize = 8;
+/// Smallest `|g|` (albedo as a fraction of full scale) that still defines a normal.
+const MIN_ALBEDO: f32 = 1e-6;
+/// Relative residual at which the residual factor of the confidence is 1/2.
+const RESIDUAL_SCALE: f32 = 0.1;
+/// Rec. 709 luminance weights.
+const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// Photos taken in rig order, validated to share one size and one sample format.
+#[derive(Clone, Debug)]
+pub struct PhotoStack {
+    photos: Vec<Photo>,
+    names: Vec<String>,
+    ambient: Option<Photo>,
+    mask: Option<Grid<bool>>,
+}
+
+impl PhotoStack {
+    /// Wraps `photos` (in rig order) with display `names` (usually file names) used in messages.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when there are no photos, the name count differs, the photos are
+    /// empty, or a photo differs from the first in size, channels, bit depth or transfer curve.
+    pub fn new(photos: Vec<Photo>, names: Vec<String>) -> Result<Self> {
+        if photos.is_empty() {
+            return Err(Error::InvalidInput("no photos were given".into()));
+        }
+        if names.len() != photos.len() {
+            return Err(Error::InvalidInput(format!("{} photos but {} names were given", photos.len(), names.len())));
+        }
+        if photos[0].pixel_count() == 0 {
+            return Err(Error::InvalidInput(format!("photo 1 ({}) has no pixels", names[0])));
+        }
+        for (i, photo) in photos.iter().enumerate().skip(1) {
+            check_same(photo, &format!("photo {} ({})", i + 1, names[i]), &photos[0], &names[0])?;
+        }
+        Ok(PhotoStack { photos, names, ambient: None, mask: None })
+    }
+
+    /// Adds an ambient frame (all rig lights off), subtracted from every photo.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when it differs from the photos in size or format.
+    pub fn with_ambient(mut self, ambient: Photo, name: &str) -> Result<Self> {
+        check_same(&ambient, &format!("ambient photo ({name})"), &self.photos[0], &self.names[0])?;
+        self.ambient = Some(ambient);
+        Ok(self)
+    }
+
+    /// Restricts the solve to texels where `mask` is true; the others come out invalid.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the mask's size differs from the photos'.
+    pub fn with_mask(mut self, mask: Grid<bool>) -> Result<Self> {
+        if mask.size() != self.size() {
+            return Err(Error::InvalidInput(format!(
+                "mask is {}x{} but photo 1 ({}) is {}x{}",
+                mask.width(),
+                mask.height(),
+                self.names[0],
+                self.width(),
+                self.height()
+            )));
+        }
+        self.mask = Some(mask);
+        Ok(self)
+    }
+
+    pub fn len(&self) -> usize {
+        self.photos.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.photos.is_empty()
+    }
+    pub fn width(&self) -> usize {
+        self.photos[0].width()
+    }
+    pub fn height(&self) -> usize {
+        self.photos[0].height()
+    }
+    /// `(width, height)`.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width(), self.height())
+    }
+    pub fn channels(&self) -> Channels {
+        self.photos[0].channels()
+    }
+    pub fn photos(&self) -> &[Photo] {
+        &self.photos
+    }
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+    pub fn ambient(&self) -> Option<&Photo> {
+        self.ambient.as_ref()
+    }
+    pub fn mask(&self) -> Option<&Grid<bool>> {
+        self.mask.as_ref()
+    }
+}
+
+/// `8-bit rgb srgb`-style description of a photo's format.
+fn format_of(p: &Photo) -> String {
+    let channels = match p.channels() {
+        Channels::Gray => "grey",
+        Channels::Rgb => "rgb",
+    };
+    let transfer = match p.transfer() {
+        Transfer::Linear => "linear",
+        Transfer::Srgb => "srgb",
+    };
+    format!("{}-bit {channels} {transfer}", p.bit_depth())
+}
+
+/// Checks that `photo` (described by `what`) matches the first photo in size and format.
+fn check_same(photo: &Photo, what: &str, first: &Photo, first_name: &str) -> Result<()> {
+    if (photo.width(), photo.height()) != (first.width(), first.height()) {
+        return Err(Error::InvalidInput(format!(
+            "{what} is {}x{} but photo 1 ({first_name}) is {}x{}",
+            photo.width(),
+            photo.height(),
+            first.width(),
+            first.height()
+        )));
+    }
+    let (a, b) = (format_of(photo), format_of(first));
+    if a != b {
+        return Err(Error::InvalidInput(format!(
+            "{what} is {a} but photo 1 ({first_name}) is {b}; convert the photos to one format"
+        )));
+    }
+    Ok(())
+}
+
+/// Which per-pixel solve to run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    /// One least-squares solve over all lights (the paper).
+    LeastSquares,
+    /// Drop shadowed and saturated readings per pixel, solve from the rest.
+    #[default]
+    Robust,
+}
+
+/// Parameters of [`solve`]; see the module docs for how the thresholds are applied.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolveConfig {
+    pub method: Method,
+    /// Absolute shadow floor, as a fraction of full scale after ambient subtraction and division
+    /// by the light's intensity.
+    pub shadow_abs: f32,
+    /// Shadow threshold relative to the pixel's own brightest (intensity-divided) reading.
+    pub shadow_rel: f32,
+    /// Fraction of full scale at or above which a raw reading is saturated.
+    pub saturation: f32,
+    /// Fewest usable lights for a valid pixel (at least 3).
+    pub min_lights: usize,
+    /// Largest condition number `sigma_max / sigma_min` of the used lights' direction matrix.
+    pub max_condition: f64,
+    /// Subset pseudo-inverses kept per worker for rigs of more than [`DENSE_MAX_LIGHTS`] lights.
+    pub cache_capacity: usize,
+}
+
+impl Default for SolveConfig {
+    fn default() -> Self {
+        SolveConfig {
+            method: Method::Robust,
+            shadow_abs: 0.005,
+            shadow_rel: 0.05,
+            saturation: 0.995,
+            min_lights: 3,
+            max_condition: 50.0,
+            cache_capacity: 4096,
+        }
+    }
+}
+
+impl SolveConfig {
+    /// Checks every field's range.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the field and its value.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |field: &str, value: String, want: &str| {
+            Err(Error::InvalidInput(format!("solve config: {field} = {value} must be {want}")))
+        };
+        if !(0.0..1.0).contains(&self.shadow_abs) {
+            return bad("shadow_abs", self.shadow_abs.to_string(), "in [0, 1)");
+        }
+        if !(0.0..1.0).contains(&self.shadow_rel) {
+            return bad("shadow_rel", self.shadow_rel.to_string(), "in [0, 1)");
+        }
+        if !(self.saturation > 0.0 && self.saturation <= 1.0) {
+            return bad("saturation", self.saturation.to_string(), "in (0, 1]");
+        }
+        if self.min_lights < 3 {
+            return bad("min_lights", self.min_lights.to_string(), "at least 3");
+        }
+        if self.max_condition.is_nan() || self.max_condition < 1.0 {
+            return bad("max_condition", self.max_condition.to_string(), "at least 1");
+        }
+        if self.cache_capacity == 0 {
+            return bad("cache_capacity", "0".into(), "at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// Receives the fraction of the solve done, in [0, 1], from worker threads.
+pub trait Progress: Sync {
+    fn report(&self, done: f32);
+}
+
+impl<F: Fn(f32) + Sync> Progress for F {
+    fn report(&self, done: f32) {
+        self(done)
+    }
+}
+
+/// A progress sink that ignores reports.
+pub fn no_progress(_done: f32) {}
+
+/// Counts gathered during a solve.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SolveStats {
+    /// Texels in the map.
+    pub pixels: usize,
+    /// Texels with no normal (masked out, too few lights, ill-conditioned, black).
+    pub invalid_count: usize,
+    /// Texels outside the mask.
+    pub masked_count: usize,
+    /// `lights_used[m]`: unmasked texels with `m` usable readings (`len = k + 1`).
+    pub lights_used: Vec<usize>,
+}
+
+impl SolveStats {
+    fn empty(k: usize) -> Self {
+        SolveStats { lights_used: vec![0; k + 1], ..SolveStats::default() }
+    }
+    fn merge(mut self, other: SolveStats) -> Self {
+        self.pixels += other.pixels;
+        self.invalid_count += other.invalid_count;
+        self.masked_count += other.masked_count;
+        for (a, b) in self.lights_used.iter_mut().zip(other.lights_used) {
+            *a += b;
+        }
+        self
+    }
+}
+
+/// The result of [`solve`].
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// Unit normals, `(0, 0, 0)` where invalid.
+    pub normals: NormalMap,
+    /// Linear albedo as a fraction of full scale per unit light intensity; zero where invalid.
+    pub albedo: ColorMap,
+    /// Confidence in [0, 1] (see the module docs); 0 where invalid.
+    pub confidence: ScalarMap,
+    pub stats: SolveStats,
+}
+
+/// The pseudo-inverse of one subset of lights, with what the confidence needs.
+#[derive(Clone, Debug)]
+struct SubsetSolve {
+    /// Column of `P` for each light in the subset, in light order.
+    cols: Vec<[f32; 3]>,
+    /// `L^T L` of the subset: xx, xy, xz, yy, yz, zz.
+    gram: [f32; 6],
+    /// `sigma_max / sigma_min` of the subset's direction matrix (infinite when singular).
+    condition: f64,
+    /// Whether the subset may be used (condition within bounds).
+    usable: bool,
+}
+
+impl SubsetSolve {
+    /// Solves for the subset `bits` of `lights` (f64, then stored as f32).
+    fn new(lights: &[Vec3], bits: u128, max_condition: f64) -> Self {
+        let used: Vec<Vector3<f64>> = lights
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| bits >> i & 1 == 1)
+            .map(|(_, l)| Vector3::new(l.x as f64, l.y as f64, l.z as f64))
+            .collect();
+        let gram: Matrix3<f64> = used.iter().map(|l| l * l.transpose()).sum();
+        let condition = condition_of(&gram);
+        let usable = used.len() >= 3 && condition.is_finite() && condition <= max_condition;
+        let inverse = gram.try_inverse().filter(|_| usable);
+        let cols = match inverse {
+            Some(inv) => used.iter().map(|l| (inv * l).map(|v| v as f32).into()).collect(),
+            None => Vec::new(),
+        };
+        let g = gram.map(|v| v as f32);
+        let gram = [g[(0, 0)], g[(0, 1)], g[(0, 2)], g[(1, 1)], g[(1, 2)], g[(2, 2)]];
+        SubsetSolve { cols, gram, condition, usable: inverse.is_some() }
+    }
+
+    /// `g^T (L^T L) g`, the squared norm of the fitted readings.
+    #[inline]
+    fn fitted_sq(&self, g: [f32; 3]) -> f32 {
+        gram_form(&self.gram, g)
+    }
+}
+
+/// `g^T G g` for the symmetric 3x3 `G` stored as xx, xy, xz, yy, yz, zz.
+#[inline(always)]
+fn gram_form(m: &[f32; 6], g: [f32; 3]) -> f32 {
+    let [x, y, z] = g;
+    m[0] * x * x + m[3] * y * y + m[5] * z * z + 2.0 * (m[1] * x * y + m[2] * x * z + m[4] * y * z)
+}
+
+/// `sigma_max / sigma_min` of a direction matrix `L` from its Gram matrix `L^T L`.
+fn condition_of(gram: &Matrix3<f64>) -> f64 {
+    let eig = gram.symmetric_eigenvalues();
+    let (lo, hi) = (eig.min(), eig.max());
+    if lo > hi * 1e-15 && lo > 0.0 { (hi / lo).sqrt() } else { f64::INFINITY }
+}
+
+/// Subset pseudo-inverses shared by all workers (dense table) or kept per worker (bounded map).
+struct Subsets<'a> {
+    lights: &'a [Vec3],
+    max_condition: f64,
+    dense: Vec<OnceLock<SubsetSolve>>,
+    capacity: usize,
+}
+
+impl<'a> Subsets<'a> {
+    fn new(lights: &'a [Vec3], max_condition: f64, capacity: usize) -> Self {
+        let dense = if lights.len() <= DENSE_MAX_LIGHTS { (0..1usize << lights.len()).map(|_| OnceLock::new()).collect() } else { Vec::new() };
+        Subsets { lights, max_condition, dense, capacity }
+    }
+
+    /// The solve for subset `bits`, from the dense table or the worker's `local` map.
+    fn get<'s>(&'s self, bits: u128, local: &'s mut HashMap<u128, SubsetSolve>) -> &'s SubsetSolve {
+        if !self.dense.is_empty() {
+            return self.dense[bits as usize].get_or_init(|| SubsetSolve::new(self.lights, bits, self.max_condition));
+        }
+        if local.len() >= self.capacity && !local.contains_key(&bits) {
+            local.clear();
+        }
+        local.entry(bits).or_insert_with(|| SubsetSolve::new(self.lights, bits, self.max_condition))
+    }
+}
+
+/// A photo's samples as a typed slice.
+#[derive(Clone, Copy)]
+enum Raw<'a> {
+    U8(&'a [u8]),
+    U16(&'a [u16]),
+    F32(&'a [f32]),
+}
+
+impl<'a> Raw<'a> {
+    fn of(photo: &'a Photo) -> Self {
+        match photo.samples() {
+            Samples::U8(v) => Raw::U8(v),
+            Samples::U16(v) => Raw::U16(v),
+            Samples::F32(v) => Raw::F32(v),
+        }
+    }
+}
+
+/// A stored sample type.
+trait Sample: Copy + Sync {
+    fn value(self) -> f32;
+}
+impl Sample for u8 {
+    #[inline]
+    fn value(self) -> f32 {
+        self as f32
+    }
+}
+impl Sample for u16 {
+    #[inline]
+    fn value(self) -> f32 {
+        self as f32
+    }
+}
+impl Sample for f32 {
+    #[inline]
+    fn value(self) -> f32 {
+        self
+    }
+}
+
+/// Stored value to linear value: identity (scale folded elsewhere), a table, or the sRGB curve.
+#[derive(Clone, Copy)]
+enum Linearise<'a> {
+    Identity,
+    Table(&'a [f32]),
+    SrgbCurve,
+}
+
+impl Linearise<'_> {
+    #[inline]
+    fn apply(self, v: f32) -> f32 {
+        match self {
+            Linearise::Identity => v,
+            Linearise::Table(t) => t[v as usize],
+            Linearise::SrgbCurve => skinkit_maps::encoding::srgb_to_linear(v),
+        }
+    }
+}
+
+/// One light's photo and how its samples become intensity-divided linear readings.
+struct Source<'a> {
+    raw: Raw<'a>,
+    ambient: Option<Raw<'a>>,
+    /// Per channel: linearised stored value times this = reading `r` (full scale 1, unit light).
+    scale: [f32; 3],
+    /// The same for grey photos (divided by the luminance of the light's intensity).
+    gray_scale: f32,
+    /// Raw stored values at or above this are saturated.
+    saturated_at: f32,
+}
+
+/// Everything a worker needs, built once per solve.
+struct Plan<'a> {
+    width: usize,
+    k: usize,
+    rgb: bool,
+    robust: bool,
+    config: &'a SolveConfig,
+    lights: Vec<Vec3>,
+    sources: Vec<Source<'a>>,
+    linearise: Linearise<'a>,
+    full: SubsetSolve,
+    /// `full.cols[i] * sources[i].gray_scale`: the folded pseudo-inverse of the fast path.
+    folded: Vec<[f32; 3]>,
+    /// Per light, the scale from raw values to readings (fast path), and ones.
+    gray_scales: Vec<f32>,
+    ones: Vec<f32>,
+    fast_ls: bool,
+    mask: Option<&'a [bool]>,
+}
+
+/// Per-worker scratch buffers, structure-of-arrays over one chunk.
+struct Scratch {
+    r: Vec<f32>,
+    rgb: Vec<[f32; 3]>,
+    sat: Vec<u8>,
+    gx: [f32; CHUNK],
+    gy: [f32; CHUNK],
+    gz: [f32; CHUNK],
+    rr: [f32; CHUNK],
+    top: [f32; CHUNK],
+    len: [f32; CHUNK],
+    conf: [f32; CHUNK],
+    dropped: [u32; CHUNK],
+    cache: HashMap<u128, SubsetSolve>,
+}
+
+impl Scratch {
+    fn new(k: usize, rgb: bool) -> Self {
+        Scratch {
+            r: vec![0.0; k * CHUNK],
+            rgb: if rgb { vec![[0.0; 3]; k * CHUNK] } else { Vec::new() },
+            sat: vec![0; k * CHUNK],
+            gx: [0.0; CHUNK],
+            gy: [0.0; CHUNK],
+            gz: [0.0; CHUNK],
+            rr: [0.0; CHUNK],
+            top: [0.0; CHUNK],
+            len: [0.0; CHUNK],
+            conf: [0.0; CHUNK],
+            dropped: [0; CHUNK],
+            cache: HashMap::new(),
+        }
+    }
+    fn clear_sums(&mut self) {
+        self.gx = [0.0; CHUNK];
+        self.gy = [0.0; CHUNK];
+        self.gz = [0.0; CHUNK];
+        self.rr = [0.0; CHUNK];
+    }
+}
+
+/// Output slices of one chunk.
+struct Out<'o> {
+    normals: &'o mut [Vec3],
+    albedo: &'o mut [Vec3],
+    confidence: &'o mut [f32],
+}
+
+/// Solves for normals, albedo and confidence from `stack` lit by `rig`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the photo count differs from the rig's light count, the rig has
+/// more than [`MAX_LIGHTS`] lights, or `config` is out of range; [`Error::BadRig`] when a light has
+/// a zero direction or a non-positive intensity, or the lights cannot determine a normal (fewer
+/// than 3, coplanar, or a condition number above `config.max_condition`).
+pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig, progress: &dyn Progress) -> Result<Solution> {
+    let (w, h) = stack.size();
+    let mut solution = Solution {
+        normals: NormalMap::from_unit_grid(Grid::from_vec(w, h, zeroed(w * h, Vec3::ZERO)).expect("sized"))
+            .expect("zero normals are valid"),
+        albedo: Grid::from_vec(w, h, zeroed(w * h, Vec3::ZERO)).expect("sized"),
+        confidence: Grid::from_vec(w, h, zeroed(w * h, 0.0)).expect("sized"),
+        stats: SolveStats::default(),
+    };
+    solve_into(stack, rig, config, progress, &mut solution)?;
+    Ok(solution)
+}
+
+/// [`solve`] into an existing solution, reusing its maps when they have the stack's size (for
+/// repeated solves of large stacks: fresh maps cost a page fault per 4 KiB written).
+///
+/// # Errors
+/// As [`solve`]; `out` is unchanged on error.
+pub fn solve_into(stack: &PhotoStack, rig: &Rig, config: &SolveConfig, progress: &dyn Progress, out: &mut Solution) -> Result<()> {
+    config.validate()?;
+    let lights = check_rig(stack, rig)?;
+    let table = srgb_table(stack);
+    let plan = Plan::new(stack, rig, config, lights, table.as_deref())?;
+    plan.run(stack, progress, out);
+    Ok(())
+}
+
+/// Unit light directions of `rig`, after checking it against the stack and the config.
+fn check_rig(stack: &PhotoStack, rig: &Rig) -> Result<Vec<Vec3>> {
+    let k = rig.lights.len();
+    if k != stack.len() {
+        return Err(Error::InvalidInput(format!("rig has {k} lights but {} photos were given", stack.len())));
+    }
+    if k > MAX_LIGHTS {
+        return Err(Error::InvalidInput(format!("rig has {k} lights; at most {MAX_LIGHTS} are supported")));
+    }
+    if k < 3 {
+        return Err(Error::BadRig(format!("rig has {k} lights; a normal needs at least 3")));
+    }
+    rig.lights
+        .iter()
+        .enumerate()
+        .map(|(i, light)| {
+            let d = light.direction.normalize_or_zero();
+            if d == Vec3::ZERO || !d.is_finite() {
+                return Err(Error::BadRig(format!("rig light {}: direction {} has zero length", i + 1, light.direction)));
+            }
+            if !(light.intensity.min_element() > 0.0 && light.intensity.is_finite()) {
+                return Err(Error::BadRig(format!("rig light {}: intensity {} must be positive", i + 1, light.intensity)));
+            }
+            Ok(d)
+        })
+        .collect()
+}
+
+/// A stored-value to linear table for 8- and 16-bit sRGB photos.
+fn srgb_table(stack: &PhotoStack) -> Option<Vec<f32>> {
+    let first = &stack.photos()[0];
+    if first.transfer() != Transfer::Srgb || first.bit_depth() == 32 {
+        return None;
+    }
+    let full = first.samples().full_scale();
+    Some((0..=full as usize).map(|v| skinkit_maps::encoding::srgb_to_linear(v as f32 / full)).collect())
+}
+
+impl<'a> Plan<'a> {
+    fn new(stack: &'a PhotoStack, rig: &Rig, config: &'a SolveConfig, lights: Vec<Vec3>, table: Option<&'a [f32]>) -> Result<Self> {
+        let full_bits = if lights.len() == 128 { u128::MAX } else { (1u128 << lights.len()) - 1 };
+        let full = SubsetSolve::new(&lights, full_bits, config.max_condition);
+        if !full.usable {
+            return Err(Error::BadRig(format!(
+                "the rig's {} lights cannot determine a normal (coplanar or nearly so): condition number {:.4} exceeds max_condition {}",
+                lights.len(),
+                full.condition,
+                config.max_condition
+            )));
+        }
+        let first = &stack.photos()[0];
+        let linearise = match (first.transfer(), table) {
+            (Transfer::Linear, _) => Linearise::Identity,
+            (Transfer::Srgb, Some(t)) => Linearise::Table(t),
+            (Transfer::Srgb, None) => Linearise::SrgbCurve,
+        };
+        let sources: Vec<Source> = stack.photos().iter().zip(&rig.lights).map(|(p, l)| Source::new(p, stack.ambient(), l.intensity, config)).collect();
+        let k = lights.len();
+        let sources_scales = sources.iter().map(|s| s.gray_scale).collect();
+        let folded = full.cols.iter().zip(&sources).map(|(c, s)| c.map(|v| v * s.gray_scale)).collect();
+        let rgb = first.channels() == Channels::Rgb;
+        let robust = config.method == Method::Robust;
+        Ok(Plan {
+            width: stack.width(),
+            k: lights.len(),
+            rgb,
+            robust,
+            config,
+            lights,
+            sources,
+            linearise,
+            full,
+            folded,
+            gray_scales: sources_scales,
+            ones: vec![1.0; k],
+            fast_ls: !robust && !rgb && first.transfer() == Transfer::Linear,
+            mask: stack.mask().map(|m| m.as_slice()),
+        })
+    }
+
+    /// Solves every band of rows in parallel and assembles the maps.
+    fn run(&self, stack: &PhotoStack, progress: &dyn Progress, out: &mut Solution) {
+        let (w, h) = stack.size();
+        let mut normals = take_sized(std::mem::replace(&mut out.normals, NormalMap::flat(0, 0)).into_grid(), w, h, Vec3::ZERO);
+        let mut albedo = take_sized(std::mem::replace(&mut out.albedo, Grid::filled(0, 0, Vec3::ZERO)), w, h, Vec3::ZERO);
+        let mut confidence = take_sized(std::mem::replace(&mut out.confidence, Grid::filled(0, 0, 0.0)), w, h, 0.0);
+        let subsets = Subsets::new(&self.lights, self.config.max_condition, self.config.cache_capacity);
+        let rows_done = AtomicUsize::new(0);
+        progress.report(0.0);
+        let band = BAND_ROWS * w;
+        let stats = normals
+            .par_chunks_mut(band)
+            .zip(albedo.par_chunks_mut(band))
+            .zip(confidence.par_chunks_mut(band))
+            .enumerate()
+            .map_init(
+                || Scratch::new(self.k, self.rgb),
+                |scratch, (b, ((n, a), c))| {
+                    let stats = self.solve_band(b * band, Out { normals: n, albedo: a, confidence: c }, scratch, &subsets);
+                    let done = rows_done.fetch_add(stats.pixels / w, Ordering::Relaxed) + stats.pixels / w;
+                    progress.report(done as f32 / h as f32);
+                    stats
+                },
+            )
+            .reduce(|| SolveStats::empty(self.k), SolveStats::merge);
+        progress.report(1.0);
+        out.normals = NormalMap::from_unit_grid(Grid::from_vec(w, h, normals).expect("sized above")).expect("solver writes unit or zero normals");
+        out.albedo = Grid::from_vec(w, h, albedo).expect("sized above");
+        out.confidence = Grid::from_vec(w, h, confidence).expect("sized above");
+        out.stats = stats;
+    }
+
+    /// Solves the pixels starting at `p0` (a band of whole rows), row by row in chunks.
+    fn solve_band(&self, p0: usize, out: Out, scratch: &mut Scratch, subsets: &Subsets) -> SolveStats {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, the only feature `solve_band_avx2` is compiled for.
+            return unsafe { self.solve_band_avx2(p0, out, scratch, subsets) };
+        }
+        self.solve_band_portable(p0, out, scratch, subsets)
+    }
+
+    /// [`Self::solve_band`] compiled for AVX2 (8-wide loops). No FMA: products and sums are
+    /// rounded as in the portable build, so both give the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn solve_band_avx2(&self, p0: usize, out: Out, scratch: &mut Scratch, subsets: &Subsets) -> SolveStats {
+        self.solve_band_portable(p0, out, scratch, subsets)
+    }
+
+    #[inline(always)]
+    fn solve_band_portable(&self, p0: usize, out: Out, scratch: &mut Scratch, subsets: &Subsets) -> SolveStats {
+        let mut stats = SolveStats::empty(self.k);
+        let n_px = out.normals.len();
+        stats.pixels = n_px;
+        let mut start = 0;
+        while start < n_px {
+            let row_end = (start / self.width + 1) * self.width;
+            let n = CHUNK.min(row_end - start);
+            let chunk = Out {
+                normals: &mut out.normals[start..start + n],
+                albedo: &mut out.albedo[start..start + n],
+                confidence: &mut out.confidence[start..start + n],
+            };
+            self.solve_chunk(p0 + start, chunk, scratch, subsets, &mut stats);
+            // Counted while the chunk is still in cache.
+            stats.invalid_count += out.normals[start..start + n].iter().filter(|v| **v == Vec3::ZERO).count();
+            start += n;
+        }
+        stats
+    }
+
+    /// Solves the `n <= CHUNK` pixels starting at image pixel `p`.
+    #[inline(always)]
+    fn solve_chunk(&self, p: usize, out: Out, scratch: &mut Scratch, subsets: &Subsets, stats: &mut SolveStats) {
+        let n = out.normals.len();
+        let inside = self.mask.map(|m| &m[p..p + n]);
+        if let Some(inside) = inside {
+            let masked = inside.iter().filter(|v| !**v).count();
+            stats.masked_count += masked;
+            if masked == n {
+                out.normals.fill(Vec3::ZERO);
+                out.albedo.fill(Vec3::ZERO);
+                out.confidence.fill(0.0);
+                return;
+            }
+        }
+        scratch.clear_sums();
+        if self.fast_ls {
+            self.accumulate_folded(p, n, scratch);
+        } else {
+            self.load_readings(p, n, scratch);
+            self.accumulate_readings(n, scratch);
+            if self.robust {
+                self.count_dropped(n, scratch);
+            }
+        }
+        self.normalise_all(n, scratch);
+        let any_dropped = self.robust && scratch.dropped[..n].iter().any(|&d| d > 0);
+        if !self.rgb && inside.is_none() && !any_dropped {
+            write_all_lights(n, scratch, out);
+            stats.lights_used[self.k] += n;
+            return;
+        }
+        let mut local = std::mem::take(&mut scratch.cache);
+        for j in 0..n {
+            if inside.is_some_and(|m| !m[j]) {
+                (out.normals[j], out.albedo[j], out.confidence[j]) = (Vec3::ZERO, Vec3::ZERO, 0.0);
+                continue;
+            }
+            let (normal, albedo, confidence, used) = if self.robust && scratch.dropped[j] > 0 {
+                self.finish_subset(j, scratch, subsets, &mut local)
+            } else {
+                let normal = Vec3::new(scratch.gx[j], scratch.gy[j], scratch.gz[j]);
+                let albedo = if self.rgb { self.rgb_albedo(j, self.full_bits(), normal, scratch) } else { Vec3::splat(scratch.len[j]) };
+                (normal, albedo, scratch.conf[j], self.k)
+            };
+            stats.lights_used[used] += 1;
+            out.normals[j] = normal;
+            out.albedo[j] = albedo;
+            out.confidence[j] = confidence;
+        }
+        scratch.cache = local;
+    }
+
+    /// Turns the all-lights solutions `g` of the chunk into normals (in place), albedo `|g|` and
+    /// confidence, vectorised; `|g| <= MIN_ALBEDO` or non-finite gives zeros.
+        #[inline(always)]
+    fn normalise_all(&self, n: usize, s: &mut Scratch) {
+        let m = self.full.gram;
+        let it = s.gx[..n].iter_mut().zip(&mut s.gy[..n]).zip(&mut s.gz[..n]).zip(&s.rr[..n]).zip(&mut s.len[..n]).zip(&mut s.conf[..n]);
+        for (((((x, y), z), &rr), len), conf) in it {
+            let g = [*x, *y, *z];
+            let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+            let ok = l > MIN_ALBEDO && l < f32::INFINITY;
+            let inv = if ok { 1.0 / l } else { 0.0 };
+            *conf = if ok { residual_factor(rr, gram_form(&m, g)) } else { 0.0 };
+            *len = if ok { l } else { 0.0 };
+            (*x, *y, *z) = (g[0] * inv, g[1] * inv, g[2] * inv);
+        }
+    }
+
+    /// Fast least-squares path for linear grey photos: `g += P'_i * raw_i`, `rr += r_i^2`.
+    /// Fast least-squares path for linear grey photos: raw values (minus ambient) into `s.r`,
+    /// then `g += P'_i * raw_i` with the folded pseudo-inverse and `rr += (raw_i * scale_i)^2`.
+    #[inline(always)]
+    fn accumulate_folded(&self, p: usize, n: usize, s: &mut Scratch) {
+        for (i, src) in self.sources.iter().enumerate() {
+            let out = &mut s.r[i * CHUNK..i * CHUNK + n];
+            match (src.raw, src.ambient) {
+                (Raw::U8(v), a) => raw_values::<u8>(&v[p..p + n], a.map(|a| &as_u8(a)[p..p + n]), out),
+                (Raw::U16(v), a) => raw_values::<u16>(&v[p..p + n], a.map(|a| &as_u16(a)[p..p + n]), out),
+                (Raw::F32(v), a) => raw_values::<f32>(&v[p..p + n], a.map(|a| &as_f32(a)[p..p + n]), out),
+            }
+        }
+        accumulate_all(n, s, &self.folded, &self.gray_scales);
+    }
+
+    /// Fills `s.r` (and `s.rgb`, `s.sat`) with every light's readings of the chunk.
+    #[inline(always)]
+    fn load_readings(&self, p: usize, n: usize, s: &mut Scratch) {
+        for (i, src) in self.sources.iter().enumerate() {
+            let r = &mut s.r[i * CHUNK..i * CHUNK + n];
+            let sat = &mut s.sat[i * CHUNK..i * CHUNK + n];
+            if self.rgb {
+                let rgb = &mut s.rgb[i * CHUNK..i * CHUNK + n];
+                src.load_rgb(p, self.linearise, r, rgb, sat);
+            } else {
+                src.load_gray(p, self.linearise, r, sat);
+            }
+        }
+    }
+
+    /// `g = P r` and `rr = sum r^2` over all lights, from the loaded readings.
+    #[inline(always)]
+    fn accumulate_readings(&self, n: usize, s: &mut Scratch) {
+        accumulate_all(n, s, &self.full.cols, &self.ones);
+    }
+
+    /// Counts, per pixel, the readings that are shadowed or saturated (`s.dropped`).
+    #[inline(always)]
+    fn count_dropped(&self, n: usize, s: &mut Scratch) {
+        s.top[..n].fill(f32::NEG_INFINITY);
+        for i in 0..self.k {
+            for (t, &v) in s.top[..n].iter_mut().zip(&s.r[i * CHUNK..i * CHUNK + n]) {
+                *t = t.max(v);
+            }
+        }
+        let (abs, rel) = (self.config.shadow_abs, self.config.shadow_rel);
+        for t in &mut s.top[..n] {
+            *t = abs.max(rel * *t);
+        }
+        s.dropped[..n].fill(0);
+        for i in 0..self.k {
+            let r = &s.r[i * CHUNK..i * CHUNK + n];
+            let sat = &s.sat[i * CHUNK..i * CHUNK + n];
+            for (((d, &t), &v), &q) in s.dropped[..n].iter_mut().zip(&s.top[..n]).zip(r).zip(sat) {
+                *d += ((v < t) as u32) | q as u32;
+            }
+        }
+    }
+
+    /// The bitmask of usable lights of pixel `j` (robust mode, after [`Self::count_dropped`]).
+    fn usable_bits(&self, j: usize, s: &Scratch) -> u128 {
+        let threshold = s.top[j];
+        (0..self.k).fold(0u128, |bits, i| {
+            let ok = s.r[i * CHUNK + j] >= threshold && s.sat[i * CHUNK + j] == 0;
+            bits | ((ok as u128) << i)
+        })
+    }
+
+    /// Normal, albedo, confidence and lights used for pixel `j`, solved from its usable lights.
+    fn finish_subset(&self, j: usize, s: &Scratch, subsets: &Subsets, local: &mut HashMap<u128, SubsetSolve>) -> (Vec3, Vec3, f32, usize) {
+        let invalid = |used| (Vec3::ZERO, Vec3::ZERO, 0.0, used);
+        let bits = self.usable_bits(j, s);
+        let used = bits.count_ones() as usize;
+        if used < self.config.min_lights {
+            return invalid(used);
+        }
+        let subset = subsets.get(bits, local);
+        if !subset.usable {
+            return invalid(used);
+        }
+        let (g, rr) = self.solve_subset(j, bits, subset, s);
+        let len = Vec3::from(g).length();
+        if !(len > MIN_ALBEDO && len < f32::INFINITY) {
+            return invalid(used);
+        }
+        let normal = Vec3::from(g) / len;
+        let weight = used as f32 / self.k as f32 * (self.full.condition / subset.condition).min(1.0) as f32;
+        let confidence = weight * residual_factor(rr, subset.fitted_sq(g));
+        let albedo = if self.rgb { self.rgb_albedo(j, bits, normal, s) } else { Vec3::splat(len) };
+        (normal, albedo, confidence, used)
+    }
+
+    fn full_bits(&self) -> u128 {
+        if self.k == 128 { u128::MAX } else { (1u128 << self.k) - 1 }
+    }
+
+    /// `g = P_S r_S` and `sum r_S^2` for pixel `j` over the lights in `bits`.
+    fn solve_subset(&self, j: usize, bits: u128, subset: &SubsetSolve, s: &Scratch) -> ([f32; 3], f32) {
+        let (mut g, mut rr) = ([0.0f32; 3], 0.0f32);
+        let used = (0..self.k).filter(|i| bits >> i & 1 == 1);
+        for (i, c) in used.zip(&subset.cols) {
+            let v = s.r[i * CHUNK + j];
+            g = [g[0] + c[0] * v, g[1] + c[1] * v, g[2] + c[2] * v];
+            rr += v * v;
+        }
+        (g, rr)
+    }
+
+    /// Per-channel least-squares albedo `sum r_ci d_i / sum d_i^2`, `d_i = n . L_i`, over `bits`.
+    fn rgb_albedo(&self, j: usize, bits: u128, normal: Vec3, s: &Scratch) -> Vec3 {
+        let (mut num, mut den) = (Vec3::ZERO, 0.0f32);
+        for (i, l) in self.lights.iter().enumerate().filter(|(i, _)| bits >> i & 1 == 1) {
+            let d = normal.dot(*l);
+            num += Vec3::from(s.rgb[i * CHUNK + j]) * d;
+            den += d * d;
+        }
+        if den > 0.0 { (num / den).max(Vec3::ZERO) } else { Vec3::ZERO }
+    }
+}
+
+/// The texels of `grid` when it is `w x h` (to be overwritten), else a new zeroed vector.
+fn take_sized<T: Copy + Send + Sync>(grid: Grid<T>, w: usize, h: usize, zero: T) -> Vec<T> {
+    if grid.size() == (w, h) { grid.into_vec() } else { zeroed(w * h, zero) }
+}
+
+/// A vector of `n` copies of `zero`, written in parallel (large outputs: the first touch of each
+/// page is a page fault, which a serial fill would take on one core).
+fn zeroed<T: Copy + Send + Sync>(n: usize, zero: T) -> Vec<T> {
+    let mut v = Vec::with_capacity(n);
+    v.par_extend(rayon::iter::repeat_n(zero, n));
+    v
+}
+
+/// Copies the chunk's all-lights results (grey albedo) to the output.
+#[inline(always)]
+fn write_all_lights(n: usize, s: &Scratch, out: Out) {
+    for (j, (normal, albedo)) in out.normals.iter_mut().zip(out.albedo.iter_mut()).enumerate().take(n) {
+        *normal = Vec3::new(s.gx[j], s.gy[j], s.gz[j]);
+        *albedo = Vec3::splat(s.len[j]);
+    }
+    out.confidence.copy_from_slice(&s.conf[..n]);
+}
+
+/// `1 / (1 + (rho / RESIDUAL_SCALE)^2)` with `rho^2 = (|r|^2 - |L g|^2) / |r|^2`, the relative
+/// residual of a least-squares fit (the fitted readings are orthogonal to the residual).
+#[inline(always)]
+fn residual_factor(rr: f32, fitted: f32) -> f32 {
+    let rho2 = if rr > 0.0 { ((rr - fitted) / rr).max(0.0) } else { 0.0 };
+    1.0 / (1.0 + rho2 / (RESIDUAL_SCALE * RESIDUAL_SCALE))
+}
+
+/// Stored values minus the ambient frame's, as f32.
+#[inline(always)]
+fn raw_values<T: Sample>(v: &[T], ambient: Option<&[T]>, out: &mut [f32]) {
+    match ambient {
+        None => out.iter_mut().zip(v).for_each(|(o, x)| *o = x.value()),
+        Some(a) => out.iter_mut().zip(v.iter().zip(a)).for_each(|(o, (x, y))| *o = x.value() - y.value()),
+    }
+}
+
+/// `g += coefs_i * x_i` and `rr += (x_i * scales_i)^2` over all lights, `x_i` the rows of `s.r`,
+/// four lights per pass over the accumulators (the sums are still formed light by light, so the
+/// grouping does not change a bit).
+#[inline(always)]
+fn accumulate_all(n: usize, s: &mut Scratch, coefs: &[[f32; 3]], scales: &[f32]) {
+    let Scratch { r, gx, gy, gz, rr, .. } = s;
+    let sums = (&mut gx[..n], &mut gy[..n], &mut gz[..n], &mut rr[..n]);
+    for (g, (c, sc)) in coefs.chunks(4).zip(scales.chunks(4)).enumerate() {
+        let rows = &r[4 * g * CHUNK..];
+        let sums = (&mut *sums.0, &mut *sums.1, &mut *sums.2, &mut *sums.3);
+        match c.len() {
+            4 => accumulate::<4>(rows, n, c, sc, sums),
+            3 => accumulate::<3>(rows, n, c, sc, sums),
+            2 => accumulate::<2>(rows, n, c, sc, sums),
+            _ => accumulate::<1>(rows, n, c, sc, sums),
+        }
+    }
+}
+
+/// The kernel of [`accumulate_all`] for `N` lights whose readings start at `rows` (stride [`CHUNK`]).
+#[inline(always)]
+fn accumulate<const N: usize>(rows: &[f32], n: usize, coefs: &[[f32; 3]], scales: &[f32], sums: (&mut [f32], &mut [f32], &mut [f32], &mut [f32])) {
+    let (gx, gy, gz, rr) = sums;
+    let xs: [&[f32]; N] = std::array::from_fn(|t| &rows[t * CHUNK..t * CHUNK + n]);
+    let c: [[f32; 3]; N] = std::array::from_fn(|t| coefs[t]);
+    let sc: [f32; N] = std::array::from_fn(|t| scales[t]);
+    let (gx, gy, gz, rr) = (&mut gx[..n], &mut gy[..n], &mut gz[..n], &mut rr[..n]);
+    for j in 0..n {
+        let (mut x, mut y, mut z, mut q) = (gx[j], gy[j], gz[j], rr[j]);
+        for t in 0..N {
+            let v = xs[t][j];
+            x += c[t][0] * v;
+            y += c[t][1] * v;
+            z += c[t][2] * v;
+            let w = v * sc[t];
+            q += w * w;
+        }
+        (gx[j], gy[j], gz[j], rr[j]) = (x, y, z, q);
+    }
+}
+
+impl<'a> Source<'a> {
+    fn new(photo: &'a Photo, ambient: Option<&'a Photo>, intensity: Vec3, config: &SolveConfig) -> Self {
+        let full = photo.samples().full_scale();
+        // Linear photos keep stored units until this scale; tables and the sRGB curve give [0, 1].
+        let unit = if photo.transfer() == Transfer::Linear { 1.0 / full } else { 1.0 };
+        let luma = Vec3::from(LUMA).dot(intensity);
+        Source {
+            raw: Raw::of(photo),
+            ambient: ambient.map(Raw::of),
+            scale: (Vec3::splat(unit) / intensity).into(),
+            gray_scale: unit / luma,
+            saturated_at: config.saturation * full,
+        }
+    }
+
+    /// Grey readings `r` and saturation flags of the pixels starting at `p`.
+    #[inline(always)]
+    fn load_gray(&self, p: usize, lin: Linearise, r: &mut [f32], sat: &mut [u8]) {
+        let n = r.len();
+        match (self.raw, self.ambient) {
+            (Raw::U8(v), a) => gray::<u8>(&v[p..p + n], a.map(|a| &as_u8(a)[p..p + n]), lin, self, r, sat),
+            (Raw::U16(v), a) => gray::<u16>(&v[p..p + n], a.map(|a| &as_u16(a)[p..p + n]), lin, self, r, sat),
+            (Raw::F32(v), a) => gray::<f32>(&v[p..p + n], a.map(|a| &as_f32(a)[p..p + n]), lin, self, r, sat),
+        }
+    }
+
+    /// RGB readings (per channel and luminance-combined) of the pixels starting at `p`.
+    fn load_rgb(&self, p: usize, lin: Linearise, r: &mut [f32], rgb: &mut [[f32; 3]], sat: &mut [u8]) {
+        let range = 3 * p..3 * (p + r.len());
+        match (self.raw, self.ambient) {
+            (Raw::U8(v), a) => color::<u8>(&v[range.clone()], a.map(|a| &as_u8(a)[range]), lin, self, r, rgb, sat),
+            (Raw::U16(v), a) => color::<u16>(&v[range.clone()], a.map(|a| &as_u16(a)[range]), lin, self, r, rgb, sat),
+            (Raw::F32(v), a) => color::<f32>(&v[range.clone()], a.map(|a| &as_f32(a)[range]), lin, self, r, rgb, sat),
+        }
+    }
+}
+
+fn as_u8(r: Raw<'_>) -> &[u8] {
+    match r {
+        Raw::U8(v) => v,
+        _ => unreachable!("the stack checks that the ambient photo has the photos' format"),
+    }
+}
+fn as_u16(r: Raw<'_>) -> &[u16] {
+    match r {
+        Raw::U16(v) => v,
+        _ => unreachable!("the stack checks that the ambient photo has the photos' format"),
+    }
+}
+fn as_f32(r: Raw<'_>) -> &[f32] {
+    match r {
+        Raw::F32(v) => v,
+        _ => unreachable!("the stack checks that the ambient photo has the photos' format"),
+    }
+}
+
+/// Linear, ambient-subtracted, intensity-divided value of one stored sample.
+#[inline]
+fn reading<T: Sample>(v: T, ambient: Option<T>, lin: Linearise) -> f32 {
+    let x = lin.apply(v.value());
+    match ambient {
+        Some(a) => x - lin.apply(a.value()),
+        None => x,
+    }
+}
+
+#[inline(always)]
+fn gray<T: Sample>(v: &[T], amb: Option<&[T]>, lin: Linearise, src: &Source, r: &mut [f32], sat: &mut [u8]) {
+    for (q, x) in sat.iter_mut().zip(v) {
+        *q = (x.value() >= src.saturated_at) as u8;
+    }
+    match lin {
+        // The common case stays a plain loop that vectorises.
+        Linearise::Identity => {
+            raw_values(v, amb, r);
+            r.iter_mut().for_each(|x| *x *= src.gray_scale);
+        }
+        _ => {
+            for j in 0..v.len() {
+                r[j] = reading(v[j], amb.map(|a| a[j]), lin) * src.gray_scale;
+            }
+        }
+    }
+}
+
+fn color<T: Sample>(v: &[T], amb: Option<&[T]>, lin: Linearise, src: &Source, r: &mut [f32], rgb: &mut [[f32; 3]], sat: &mut [u8]) {
+    for j in 0..r.len() {
+        let mut c = [0.0f32; 3];
+        let mut s = false;
+        for ch in 0..3 {
+            let q = 3 * j + ch;
+            s |= v[q].value() >= src.saturated_at;
+            c[ch] = reading(v[q], amb.map(|a| a[q]), lin) * src.scale[ch];
+        }
+        sat[j] = s as u8;
+        rgb[j] = c;
+        r[j] = LUMA[0] * c[0] + LUMA[1] * c[1] + LUMA[2] * c[2];
+    }
+}

@@ -1,1 +1,65 @@
-fn main(){}
+//! `skinkit`: the command-line face of the skinkit libraries.
+//!
+//! This crate only parses arguments, turns them into validated library configs, draws progress on
+//! stderr and prints results; the work itself lives in the library crates. Exit codes: 0 when all
+//! went well, 1 when an input failed (a bad photo, rig or session), 2 for a usage error.
+
+mod cmd;
+mod output;
+mod pipeline;
+
+use clap::{Parser, Subcommand};
+
+/// Capture, grow and render fine-scale human skin structure.
+#[derive(Parser, Debug)]
+#[command(name = "skinkit", version, about, propagate_version = true)]
+struct Cli {
+    #[command(flatten)]
+    global: output::GlobalArgs,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Photometric stereo: photos of a mold under known lights -> normal, albedo and confidence maps.
+    Capture(cmd::capture::Args),
+    /// Light rigs: import from public formats, calibrate from sphere photos, check conditioning.
+    #[command(subcommand)]
+    Rig(cmd::rig::Command),
+    /// Capture every session (sub-folder with photos and rig.toml) of a folder, in parallel.
+    Batch(cmd::batch::Args),
+    /// Regenerate the bundled sample molds (rendered from synthetic skin heightfields).
+    Samples(cmd::samples::Args),
+    /// Run the whole pipeline on the bundled samples and report its accuracy.
+    Demo(cmd::demo::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let out = output::Output::new(&cli.global);
+    let result = match cli.command {
+        Command::Capture(args) => cmd::capture::run(args, &out),
+        Command::Rig(command) => cmd::rig::run(command, &out),
+        Command::Batch(args) => cmd::batch::run(args, &out),
+        Command::Samples(args) => cmd::samples::run(args, &out),
+        Command::Demo(args) => cmd::demo::run(args, &out),
+    };
+    match result {
+        Ok(code) => std::process::exit(code),
+        Err(error) => {
+            out.error(&error);
+            std::process::exit(1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_definition_is_consistent() {
+        super::Cli::command().debug_assert();
+    }
+}

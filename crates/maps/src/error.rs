@@ -23,7 +23,11 @@ pub enum Error {
     Encode { path: PathBuf, reason: String },
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
-    Io { path: PathBuf, #[source] source: std::io::Error },
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// Result alias for the `maps` crate.

@@ -47,10 +47,7 @@ impl<T> Grid<T> {
         T: Send,
     {
         let mut data = Vec::with_capacity(width * height);
-        (0..width * height)
-            .into_par_iter()
-            .map(|i| f(i % width.max(1), i / width.max(1)))
-            .collect_into_vec(&mut data);
+        (0..width * height).into_par_iter().map(|i| f(i % width.max(1), i / width.max(1))).collect_into_vec(&mut data);
         Grid { width, height, data }
     }
 

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use image::{DynamicImage, ImageDecoder, ImageReader};
 
-use crate::encoding::{linear_to_srgb, NormalEncoding};
+use crate::encoding::{NormalEncoding, linear_to_srgb};
 use crate::{Channels, ColorMap, Error, Grid, NormalMap, Photo, Result, Samples, ScalarMap};
 
 /// Upper bounds checked before any large allocation.
@@ -100,7 +100,10 @@ fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
         i @ DynamicImage::ImageRgba16(_) => (Channels::Rgb, Samples::U16(i.into_rgb16().into_raw())),
         i @ DynamicImage::ImageRgba32F(_) => (Channels::Rgb, Samples::F32(i.into_rgb32f().into_raw())),
         other => {
-            return Err(Error::Unsupported { path: path.to_owned(), reason: format!("pixel layout {:?}", other.color()) });
+            return Err(Error::Unsupported {
+                path: path.to_owned(),
+                reason: format!("pixel layout {:?}", other.color()),
+            });
         }
     };
     Photo::new(w, h, channels, samples)
@@ -119,12 +122,19 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
     }
     let photo = decode_photo(path, Cursor::new(read_bytes(path)?), limits)?;
     if photo.channels() != Channels::Rgb {
-        return Err(Error::Unsupported { path: path.to_owned(), reason: "a normal map needs three channels (RGB)".into() });
+        return Err(Error::Unsupported {
+            path: path.to_owned(),
+            reason: "a normal map needs three channels (RGB)".into(),
+        });
     }
     let (w, h) = (photo.width(), photo.height());
     let normals: Vec<Vec3> = match photo.samples() {
-        Samples::U8(s) => s.chunks_exact(3).map(|c| encoding.decode([c[0] as u32, c[1] as u32, c[2] as u32], 255)).collect(),
-        Samples::U16(s) => s.chunks_exact(3).map(|c| encoding.decode([c[0] as u32, c[1] as u32, c[2] as u32], 65535)).collect(),
+        Samples::U8(s) => {
+            s.chunks_exact(3).map(|c| encoding.decode([c[0] as u32, c[1] as u32, c[2] as u32], 255)).collect()
+        }
+        Samples::U16(s) => {
+            s.chunks_exact(3).map(|c| encoding.decode([c[0] as u32, c[1] as u32, c[2] as u32], 65535)).collect()
+        }
         Samples::F32(s) => s.chunks_exact(3).map(|c| encoding.decode_float([c[0], c[1], c[2]])).collect(),
     };
     NormalMap::from_unit_grid(Grid::from_vec(w, h, normals)?)
@@ -157,11 +167,13 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> Re
         _ => PathBuf::from("."),
     };
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("output");
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
-        .tempfile_in(&dir)
-        .map_err(|e| Error::io(&dir, e))?;
+    let prefix = format!(".{name}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // tempfile creates private (0600) files; outputs are ordinary files (0644 less the umask).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let tmp = builder.tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?;
     {
         let mut writer = BufWriter::with_capacity(1 << 20, tmp.as_file());
         write(&mut writer)?;
@@ -193,7 +205,11 @@ pub fn write_png(path: &Path, width: usize, height: usize, layout: PngLayout, sa
         PngLayout::Rgb16 => (png::ColorType::Rgb, png::BitDepth::Sixteen, 3),
     };
     if samples.len() != width * height * channels {
-        return Err(Error::InvalidParameter(format!("{}: {} samples for a {width}x{height} image", path.display(), samples.len())));
+        return Err(Error::InvalidParameter(format!(
+            "{}: {} samples for a {width}x{height} image",
+            path.display(),
+            samples.len()
+        )));
     }
     let encode_err = |e: png::EncodingError| Error::Encode { path: path.to_owned(), reason: e.to_string() };
     write_atomic(path, |out| {
@@ -222,7 +238,12 @@ pub fn write_png(path: &Path, width: usize, height: usize, layout: PngLayout, sa
 ///
 /// # Errors
 /// When writing fails.
-pub fn write_exr_rgb(path: &Path, width: usize, height: usize, pixel: impl Fn(usize, usize) -> [f32; 3] + Sync) -> Result<()> {
+pub fn write_exr_rgb(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixel: impl Fn(usize, usize) -> [f32; 3] + Sync,
+) -> Result<()> {
     use exr::prelude::{Encoding, Image, Layer, LayerAttributes, SpecificChannels, Vec2, WritableImage};
     let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
         let [r, g, b] = pixel(pos.x(), pos.y());
@@ -246,10 +267,14 @@ pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, 
         "exr" => write_exr_rgb(path, w, h, |x, y| encoding.encode_float(map.get(x, y))),
         "png" => {
             let (max, layout) = if bits == 8 { (255, PngLayout::Rgb8) } else { (65535, PngLayout::Rgb16) };
-            let samples: Vec<u16> = map.as_slice().iter().flat_map(|&n| encoding.encode(n, max).map(|c| c as u16)).collect();
+            let samples: Vec<u16> =
+                map.as_slice().iter().flat_map(|&n| encoding.encode(n, max).map(|c| c as u16)).collect();
             write_png(path, w, h, layout, &samples)
         }
-        other => Err(Error::InvalidParameter(format!("{}: cannot write a normal map as `.{other}` (use .png or .exr)", path.display()))),
+        other => Err(Error::InvalidParameter(format!(
+            "{}: cannot write a normal map as `.{other}` (use .png or .exr)",
+            path.display()
+        ))),
     }
 }
 
@@ -264,9 +289,15 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
         "exr" => write_exr_rgb(path, w, h, |x, y| map.get(x, y).to_array()),
         "png" => {
             let samples: Vec<u16> = if bits == 8 {
-                map.as_slice().iter().flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0).round() as u16)).collect()
+                map.as_slice()
+                    .iter()
+                    .flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0).round() as u16))
+                    .collect()
             } else {
-                map.as_slice().iter().flat_map(|c| c.to_array().map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)).collect()
+                map.as_slice()
+                    .iter()
+                    .flat_map(|c| c.to_array().map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16))
+                    .collect()
             };
             write_png(path, w, h, if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 }, &samples)
         }
@@ -350,7 +381,8 @@ mod tests {
     fn tiff_photos_read() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.tiff");
-        let buf: image::ImageBuffer<image::Luma<u16>, Vec<u16>> = image::ImageBuffer::from_raw(2, 1, vec![7u16, 65000]).unwrap();
+        let buf: image::ImageBuffer<image::Luma<u16>, Vec<u16>> =
+            image::ImageBuffer::from_raw(2, 1, vec![7u16, 65000]).unwrap();
         buf.save(&path).unwrap();
         let p = read_photo(&path, &Limits::default()).unwrap();
         assert_eq!(p.samples(), &Samples::U16(vec![7, 65000]));

@@ -147,7 +147,9 @@ impl Photo {
         match self.channels {
             Channels::Gray => (0..self.pixel_count()).map(|i| self.linear(i)).collect(),
             Channels::Rgb => (0..self.pixel_count())
-                .map(|i| 0.2126 * self.linear(3 * i) + 0.7152 * self.linear(3 * i + 1) + 0.0722 * self.linear(3 * i + 2))
+                .map(|i| {
+                    0.2126 * self.linear(3 * i) + 0.7152 * self.linear(3 * i + 1) + 0.0722 * self.linear(3 * i + 2)
+                })
                 .collect(),
         }
     }

@@ -1,0 +1,159 @@
+//! `skinkit capture`: photos of a mold under a known rig -> normal, albedo and confidence maps.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use skinkit_capture::solve::{Method, SolveConfig};
+use skinkit_maps::{GreenAxis, Limits, NormalEncoding, Transfer};
+
+use crate::output::Output;
+use crate::pipeline::{self, CaptureOptions, Session};
+
+/// Photo file extensions `--photos-from` picks up.
+pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Light rig file (TOML) whose lights are in the same order as the photos.
+    #[arg(long, value_name = "RIG")]
+    pub rig: PathBuf,
+    /// Output folder: normal.exr, normal.png, albedo.png, confidence.png, report.json.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Photos in rig order (PNG or TIFF, 8 or 16-bit, grey or RGB; or float EXR).
+    #[arg(value_name = "PHOTO", required_unless_present = "photos_from", conflicts_with = "photos_from")]
+    pub photos: Vec<PathBuf>,
+    /// Take the photos from a folder instead, sorted by file name (files named mask.*, ambient.*
+    /// and truth.* are not photos).
+    #[arg(long, value_name = "DIR")]
+    pub photos_from: Option<PathBuf>,
+    /// Object mask (PNG): only nonzero pixels are solved.
+    #[arg(long, value_name = "PNG")]
+    pub mask: Option<PathBuf>,
+    /// Ambient frame (all lights off) subtracted from every photo; overrides the rig's.
+    #[arg(long, value_name = "PHOTO")]
+    pub ambient: Option<PathBuf>,
+    /// Ground-truth normal map: adds the angular error to the report.
+    #[arg(long, value_name = "MAP")]
+    pub truth: Option<PathBuf>,
+    #[command(flatten)]
+    pub solve: SolveArgs,
+}
+
+/// Solver and output options shared by `capture`, `batch` and `demo`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SolveArgs {
+    /// `ls`: the paper's least squares over all lights; `robust`: per pixel, drop shadowed and
+    /// saturated readings and solve from the rest.
+    #[arg(long, default_value = "robust", value_parser = ["ls", "robust"])]
+    pub solver: String,
+    /// Side of the low-frequency removal block in pixels (the paper's 50); 0 turns it off.
+    #[arg(long, default_value_t = 50, value_name = "PIXELS")]
+    pub detrend_block: usize,
+    /// Robust solver: readings below this fraction of full scale count as shadow.
+    #[arg(long, value_name = "FRACTION")]
+    pub shadow_threshold: Option<f32>,
+    /// Robust solver: readings below this fraction of the pixel's brightest reading count as shadow.
+    #[arg(long, value_name = "FRACTION")]
+    pub shadow_relative: Option<f32>,
+    /// Readings at or above this fraction of full scale count as saturated.
+    #[arg(long, value_name = "FRACTION")]
+    pub saturation: Option<f32>,
+    /// How 8/16-bit photo values relate to light: `linear` (raw, machine-vision cameras) or `srgb`.
+    #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
+    pub transfer: String,
+    /// Green channel convention of the written normal.png / normal.exr.
+    #[arg(long, default_value = "up", value_parser = ["up", "down"])]
+    pub green: String,
+}
+
+impl SolveArgs {
+    /// The validated library options.
+    pub fn options(&self) -> Result<CaptureOptions> {
+        let mut solve = SolveConfig::default();
+        solve.method = if self.solver == "ls" { Method::LeastSquares } else { Method::Robust };
+        if let Some(v) = self.shadow_threshold {
+            solve.shadow_abs = v;
+        }
+        if let Some(v) = self.shadow_relative {
+            solve.shadow_rel = v;
+        }
+        if let Some(v) = self.saturation {
+            solve.saturation = v;
+        }
+        solve.validate().context("invalid solver option")?;
+        let green: GreenAxis = self.green.parse().map_err(anyhow::Error::msg)?;
+        Ok(CaptureOptions {
+            solve,
+            detrend_block: self.detrend_block,
+            transfer: if self.transfer == "srgb" { Transfer::Srgb } else { Transfer::Linear },
+            encoding: NormalEncoding { green },
+            limits: Limits::default(),
+        })
+    }
+}
+
+/// Photo files of a folder, sorted by name (only image extensions skinkit reads).
+///
+/// # Errors
+/// When the folder cannot be listed or holds no photo.
+pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut photos: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot list photos in {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && is_photo(p))
+        .collect();
+    photos.sort();
+    if photos.is_empty() {
+        bail!("{}: no photos (.png, .tif, .tiff, .exr) found", dir.display());
+    }
+    Ok(photos)
+}
+
+/// File stems a session folder reserves for other inputs: never taken as photos.
+pub const RESERVED_STEMS: &[&str] = &["mask", "ambient", "truth"];
+
+fn is_photo(path: &Path) -> bool {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let stem = path.file_stem().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    PHOTO_EXTENSIONS.contains(&ext.as_str()) && !RESERVED_STEMS.contains(&stem.as_str())
+}
+
+pub fn run(args: Args, out: &Output) -> Result<i32> {
+    let options = args.solve.options()?;
+    let photos = match &args.photos_from {
+        Some(dir) => photos_in(dir)?,
+        None => args.photos.clone(),
+    };
+    let session = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth };
+    let bar = out.progress(4, "capture");
+    let mut captured = pipeline::capture(&session, &options, &|stage| {
+        bar.set_message(stage.to_owned());
+        bar.inc(1);
+    })?;
+    bar.set_message("write");
+    pipeline::write_outputs(&args.out, &mut captured, &options)?;
+    bar.finish_and_clear();
+    for w in &captured.report.warnings {
+        out.warn(w);
+    }
+    let r = &captured.report;
+    out.result(r, || {
+        let mut s = format!(
+            "{}: {}x{}, {} lights (condition {:.2}), {} invalid pixels, normals tilt {:.2} deg rms, {:.2} s",
+            args.out.display(),
+            r.width,
+            r.height,
+            r.light_count,
+            r.condition_number,
+            r.invalid_pixels,
+            r.tilt_degrees.rms,
+            r.timings_s.total
+        );
+        if let Some(e) = &r.error_vs_truth_degrees {
+            s += &format!("\nerror vs truth: mean {:.3} deg, rms {:.3}, p95 {:.3}", e.mean, e.rms, e.p95);
+        }
+        s
+    });
+    Ok(0)
+}

@@ -1,0 +1,7 @@
+//! One module per subcommand: its `Args` and its `run`.
+
+pub mod batch;
+pub mod capture;
+pub mod demo;
+pub mod rig;
+pub mod samples;

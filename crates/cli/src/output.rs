@@ -1,0 +1,82 @@
+//! Where results and messages go: results to stdout (text or `--json`), progress and messages
+//! to stderr, nothing but errors with `--quiet`.
+
+use std::time::Duration;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::Serialize;
+
+/// Flags every subcommand takes.
+#[derive(clap::Args, Debug, Clone)]
+pub struct GlobalArgs {
+    /// Print nothing but errors (and `--json` results).
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// Print results as one JSON document on stdout (for scripts).
+    #[arg(long, global = true)]
+    pub json: bool,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+/// The terminal side of a command run.
+pub struct Output {
+    quiet: bool,
+    json: bool,
+}
+
+impl Output {
+    pub fn new(args: &GlobalArgs) -> Self {
+        if let Some(n) = args.threads {
+            // Ignore the error: the global pool can only be set once, and tests may set it first.
+            let _ = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global();
+        }
+        Output { quiet: args.quiet, json: args.json }
+    }
+
+    /// A progress bar on stderr over `len` steps, hidden with `--quiet`/`--json` or off a terminal.
+    pub fn progress(&self, len: u64, message: &str) -> ProgressBar {
+        let bar = if self.quiet || self.json {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr())
+        };
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        bar.set_message(message.to_owned());
+        bar.enable_steady_tick(Duration::from_millis(200));
+        bar
+    }
+
+    /// A message for people, on stderr, unless quiet or json.
+    pub fn note(&self, message: impl std::fmt::Display) {
+        if !self.quiet && !self.json {
+            eprintln!("{message}");
+        }
+    }
+
+    /// A warning on stderr (shown unless `--quiet`).
+    pub fn warn(&self, message: impl std::fmt::Display) {
+        if !self.quiet {
+            eprintln!("warning: {message}");
+        }
+    }
+
+    /// Prints an error and its causes on stderr.
+    pub fn error(&self, error: &anyhow::Error) {
+        eprintln!("error: {error:#}");
+    }
+
+    /// Prints a result: as JSON with `--json`, else as the text `human` gives, on stdout.
+    pub fn result<T: Serialize>(&self, value: &T, human: impl FnOnce() -> String) {
+        if self.json {
+            println!("{}", serde_json::to_string_pretty(value).expect("serialisable result"));
+        } else if !self.quiet {
+            println!("{}", human());
+        }
+    }
+}

@@ -1,0 +1,230 @@
+//! End-to-end tests of the `skinkit` binary: what a user at a shell sees (exit codes, messages that
+//! name the file and field, outputs written whole or not at all).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn skinkit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn mold(region: &str) -> PathBuf {
+    repo().join("samples/molds").join(region)
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn photos(region: &str) -> Vec<String> {
+    (1..=8).map(|i| mold(region).join(format!("{i:02}.png")).display().to_string()).collect()
+}
+
+fn capture_args<'a>(rig: &'a str, out: &'a str, photos: &'a [String]) -> Vec<&'a str> {
+    let mut args = vec!["capture", "--quiet", "--rig", rig, "--out", out];
+    args.extend(photos.iter().map(String::as_str));
+    args
+}
+
+#[test]
+fn capture_of_a_sample_mold_writes_every_output_and_matches_truth() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cheek");
+    let truth = mold("cheek").join("truth.png");
+    let o = skinkit(&[
+        "capture",
+        "--json",
+        "--rig",
+        mold("cheek").join("rig.toml").to_str().unwrap(),
+        "--photos-from",
+        mold("cheek").to_str().unwrap(),
+        "--truth",
+        truth.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["normal.exr", "normal.png", "albedo.png", "confidence.png", "report.json"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let printed: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(printed["light_count"], 8);
+    assert_eq!(saved["width"], printed["width"]);
+    for stage in ["decode", "solve", "detrend", "write", "total"] {
+        assert!(saved["timings_s"][stage].as_f64().unwrap() >= 0.0, "timing {stage}");
+    }
+    // Shadows and 0.2% noise on the samples: the robust solve stays within a couple of degrees.
+    let mean = saved["error_vs_truth_degrees"]["mean"].as_f64().unwrap();
+    assert!(mean < 2.0, "mean error {mean} deg");
+    let source_untouched = std::fs::read(mold("cheek").join("01.png")).unwrap();
+    assert!(!source_untouched.is_empty());
+}
+
+#[test]
+fn wrong_photo_count_is_refused_and_nothing_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let rig = mold("nose").join("rig.toml");
+    let seven = &photos("nose")[..7];
+    let o = skinkit(&capture_args(rig.to_str().unwrap(), out.to_str().unwrap(), seven));
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("8 lights") && e.contains("7 photos"), "{e}");
+    assert!(!out.exists(), "output folder created for a refused capture");
+}
+
+#[test]
+fn photos_of_different_sizes_name_both_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut p = photos("nose");
+    let small = tmp.path().join("small.png");
+    skinkit_write_gray16(&small, 10, 12);
+    p[2] = small.display().to_string();
+    let out = tmp.path().join("out");
+    let o = skinkit(&capture_args(mold("nose").join("rig.toml").to_str().unwrap(), out.to_str().unwrap(), &p));
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("small.png") && e.contains("10x12"), "{e}");
+    assert!(!out.exists());
+}
+
+/// A small valid 16-bit grey PNG.
+fn skinkit_write_gray16(path: &Path, w: usize, h: usize) {
+    skinkit_maps::io::write_png(path, w, h, skinkit_maps::io::PngLayout::Gray16, &vec![32768; w * h]).unwrap();
+}
+
+#[test]
+fn truncated_and_fake_pngs_are_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut p = photos("forehead");
+    let bytes = std::fs::read(&p[4]).unwrap();
+    let cut = tmp.path().join("cut.png");
+    std::fs::write(&cut, &bytes[..bytes.len() / 3]).unwrap();
+    let fake = tmp.path().join("notes.png");
+    std::fs::write(&fake, "these are my notes, not a photo\n").unwrap();
+    for bad in [&cut, &fake] {
+        p[4] = bad.display().to_string();
+        let out = tmp.path().join("out");
+        let o = skinkit(&capture_args(mold("forehead").join("rig.toml").to_str().unwrap(), out.to_str().unwrap(), &p));
+        assert_eq!(o.status.code(), Some(1));
+        let e = stderr(&o);
+        assert!(e.contains(bad.file_name().unwrap().to_str().unwrap()), "{e}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn bad_rigs_name_the_file_and_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(mold("cheek").join("rig.toml")).unwrap();
+    let cases = [
+        ("zero.toml", good.replacen("direction = [", "direction = [0.0, 0.0, 0.0] # was [", 1), "direction"),
+        ("missing.toml", "name = \"x\"\n[[light]]\nintensity = 1.0\n".to_string(), "direction"),
+    ];
+    for (name, text, field) in cases {
+        let rig = tmp.path().join(name);
+        std::fs::write(&rig, text).unwrap();
+        let out = tmp.path().join("out");
+        let o = skinkit(&capture_args(rig.to_str().unwrap(), out.to_str().unwrap(), &photos("cheek")));
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let e = stderr(&o);
+        assert!(e.contains(name) && e.contains(field), "{name}: {e}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn batch_goes_on_past_a_bad_session_and_says_which() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sessions = tmp.path().join("sessions");
+    let good = sessions.join("a-good");
+    let bad = sessions.join("b-bad");
+    for dir in [&good, &bad] {
+        std::fs::create_dir_all(dir).unwrap();
+        for entry in std::fs::read_dir(mold("forehead-edge")).unwrap() {
+            let entry = entry.unwrap();
+            std::fs::copy(entry.path(), dir.join(entry.file_name())).unwrap();
+        }
+    }
+    std::fs::remove_file(bad.join("08.png")).unwrap();
+    let out = tmp.path().join("out");
+    let o = skinkit(&["batch", "--json", sessions.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["succeeded"], 1);
+    assert_eq!(report["failed"], 1);
+    assert_eq!(report["outcomes"][1]["session"], "b-bad");
+    assert!(report["outcomes"][1]["error"].as_str().unwrap().contains("7 photos"));
+    assert!(out.join("a-good/normal.png").is_file());
+    assert!(!out.join("b-bad").exists());
+    assert!(out.join("batch-report.json").is_file());
+}
+
+#[test]
+fn rig_import_reads_diligent_and_uw_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("ball");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("light_directions.txt"), "0.5 0.0 0.866\n-0.5 0.0 0.866\n0.0 0.5 0.866\n0.0 -0.5 0.866\n")
+        .unwrap();
+    std::fs::write(d.join("light_intensities.txt"), "1 1 1\n2 2 2\n1 1 1\n1 1.5 1\n").unwrap();
+    let rig = tmp.path().join("diligent.toml");
+    let o = skinkit(&["rig", "import", "--diligent", d.to_str().unwrap(), "--out", rig.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&rig).unwrap();
+    assert_eq!(text.matches("[[light]]").count(), 4, "{text}");
+
+    let uw = tmp.path().join("lights.txt");
+    std::fs::write(&uw, "3\n0.3 0.2 0.93\n-0.4 0.1 0.91\n0.05 -0.5 0.86\n").unwrap();
+    let rig = tmp.path().join("uw.toml");
+    let o = skinkit(&["rig", "import", "--uw", uw.to_str().unwrap(), "--out", rig.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let coplanar = tmp.path().join("flat");
+    std::fs::create_dir_all(&coplanar).unwrap();
+    std::fs::write(coplanar.join("light_directions.txt"), "1 0 0.001\n0 1 0.001\n-1 0 0.001\n0 -1 0.001\n").unwrap();
+    std::fs::write(coplanar.join("light_intensities.txt"), "1 1 1\n1 1 1\n1 1 1\n1 1 1\n").unwrap();
+    let rig = tmp.path().join("flat.toml");
+    let o = skinkit(&["rig", "import", "--diligent", coplanar.to_str().unwrap(), "--out", rig.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!rig.exists());
+}
+
+#[test]
+fn samples_regenerate_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = skinkit(&["samples", "--quiet", "--out", tmp.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for region in ["forehead", "forehead-edge", "nose", "cheek"] {
+        for entry in std::fs::read_dir(mold(region)).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap();
+            let fresh = std::fs::read(tmp.path().join(region).join(name)).unwrap();
+            assert!(
+                fresh == std::fs::read(&path).unwrap(),
+                "{region}/{} differs from the committed sample",
+                name.to_string_lossy()
+            );
+        }
+    }
+}
+
+#[test]
+fn demo_reports_every_mold_with_both_solvers() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = skinkit(&["demo", "--json", "--out", tmp.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let molds = report["molds"].as_array().unwrap();
+    assert_eq!(molds.len(), 8);
+    for m in molds {
+        assert!(m["mean_error_deg"].as_f64().unwrap().is_finite());
+    }
+    assert!(tmp.path().join("demo-report.json").is_file());
+}
