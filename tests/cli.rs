@@ -188,11 +188,12 @@ fn rig_import_reads_diligent_and_uw_files() {
 
     let coplanar = tmp.path().join("flat");
     std::fs::create_dir_all(&coplanar).unwrap();
-    std::fs::write(coplanar.join("light_directions.txt"), "1 0 0.001\n0 1 0.001\n-1 0 0.001\n0 -1 0.001\n").unwrap();
+    std::fs::write(coplanar.join("light_directions.txt"), "1 0 1\n0 1 1\n1 1 2\n2 1 3\n").unwrap();
     std::fs::write(coplanar.join("light_intensities.txt"), "1 1 1\n1 1 1\n1 1 1\n1 1 1\n").unwrap();
     let rig = tmp.path().join("flat.toml");
     let o = skinkit(&["rig", "import", "--diligent", coplanar.to_str().unwrap(), "--out", rig.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("coplanar"), "{}", stderr(&o));
     assert!(!rig.exists());
 }
 

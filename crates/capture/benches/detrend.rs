@@ -12,7 +12,10 @@ fn bench_detrend(c: &mut Criterion) {
         if (x * 7 + y * 3) % 97 == 0 { Vec3::ZERO } else { Vec3::new(0.3 * u.sin() + 0.2, 0.2 * v.cos(), 1.0) }
     }));
     let mut group = c.benchmark_group("detrend_2048");
-    group.sample_size(10).measurement_time(std::time::Duration::from_secs(5)).warm_up_time(std::time::Duration::from_secs(1));
+    group
+        .sample_size(10)
+        .measurement_time(std::time::Duration::from_secs(5))
+        .warm_up_time(std::time::Duration::from_secs(1));
     group.throughput(Throughput::Elements((size * size) as u64));
     for block in [50, 200] {
         group.bench_with_input(BenchmarkId::from_parameter(block), &block, |b, &block| {

@@ -11,7 +11,11 @@ fn ring(k: usize, theta: f32) -> Rig {
     let lights = (0..k)
         .map(|i| {
             let a = std::f32::consts::TAU * i as f32 / k as f32;
-            Light { direction: Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()), intensity: Vec3::ONE, position: None }
+            Light {
+                direction: Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()),
+                intensity: Vec3::ONE,
+                position: None,
+            }
         })
         .collect();
     Rig { lights, ..Rig::default() }
@@ -47,7 +51,10 @@ fn bench_solve(c: &mut Criterion) {
     let size = 2048;
     let rig = ring(8, 45.0);
     let mut group = c.benchmark_group("solve_8_lights_u16");
-    group.sample_size(10).measurement_time(std::time::Duration::from_secs(4)).warm_up_time(std::time::Duration::from_secs(1));
+    group
+        .sample_size(10)
+        .measurement_time(std::time::Duration::from_secs(4))
+        .warm_up_time(std::time::Duration::from_secs(1));
     group.throughput(Throughput::Elements((size * size) as u64));
     for (method, shadows) in [(Method::LeastSquares, false), (Method::Robust, false), (Method::Robust, true)] {
         let stack = photos(size, &rig, shadows);
@@ -60,7 +67,9 @@ fn bench_solve(c: &mut Criterion) {
         });
         // With fresh output maps each time (page faults included).
         if method == Method::LeastSquares {
-            group.bench_with_input(BenchmarkId::new(name, size), &stack, |b, stack| b.iter(|| solve(stack, &rig, &config, &no_progress).unwrap()));
+            group.bench_with_input(BenchmarkId::new(name, size), &stack, |b, stack| {
+                b.iter(|| solve(stack, &rig, &config, &no_progress).unwrap())
+            });
         }
     }
     group.finish();

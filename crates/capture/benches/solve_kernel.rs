@@ -1,5 +1,7 @@
-//! A fixed amount of solver work without criterion, for `perf stat` (cycles per pixel do not
-//! depend on what else the machine runs): `cargo bench --bench solve_kernel -- [ls|robust|shadows] [iterations]`.
+//! A fixed amount of solver work without criterion, for profiling and for CPU-time measurements
+//! on a busy machine (user time of `N` iterations minus that of 0 iterations does not depend much
+//! on other processes): `cargo bench -p skinkit-capture --bench solve_kernel -- [ls|robust|shadows]
+//! [iterations] [size]`, e.g. with `RAYON_NUM_THREADS=1 /usr/bin/time -f %U`.
 
 use glam::Vec3;
 use skinkit_capture::solve::{Method, PhotoStack, SolveConfig, no_progress, solve, solve_into};
@@ -10,12 +12,16 @@ fn main() {
     let args: Vec<String> = std::env::args().filter(|a| !a.starts_with("--")).collect();
     let which = args.get(1).map_or("ls", |s| s.as_str());
     let iterations: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10);
-    let size = 2048;
+    let size: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(2048);
     let lights: Vec<Light> = (0..8)
         .map(|i| {
             let a = std::f32::consts::TAU * i as f32 / 8.0;
             let t = 45f32.to_radians();
-            Light { direction: Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()), intensity: Vec3::ONE, position: None }
+            Light {
+                direction: Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()),
+                intensity: Vec3::ONE,
+                position: None,
+            }
         })
         .collect();
     let rig = Rig { lights, ..Rig::default() };
@@ -45,5 +51,8 @@ fn main() {
         solve_into(&stack, &rig, &config, &no_progress, &mut out).unwrap();
     }
     let secs = start.elapsed().as_secs_f64();
-    println!("{which}: {:.1} Mpx/s wall ({iterations} x {size}x{size})", (iterations * size * size) as f64 / secs / 1e6);
+    println!(
+        "{which}: {:.1} Mpx/s wall ({iterations} x {size}x{size})",
+        (iterations * size * size) as f64 / secs / 1e6
+    );
 }

@@ -24,7 +24,11 @@ pub enum Error {
     Maps(#[from] skinkit_maps::Error),
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
-    Io { path: PathBuf, #[source] source: std::io::Error },
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// Result alias for the `capture` crate.

@@ -53,7 +53,10 @@ fn float_photos(w: usize, h: usize, values: Vec<Vec<f32>>) -> Vec<Photo> {
 
 fn u16_photos(w: usize, h: usize, values: Vec<Vec<f32>>) -> Vec<Photo> {
     let q = |v: f32| (v.clamp(0.0, 1.0) * 65535.0).round() as u16;
-    values.into_iter().map(|v| Photo::new(w, h, Channels::Gray, Samples::U16(v.into_iter().map(q).collect())).unwrap()).collect()
+    values
+        .into_iter()
+        .map(|v| Photo::new(w, h, Channels::Gray, Samples::U16(v.into_iter().map(q).collect())).unwrap())
+        .collect()
 }
 
 fn stack(photos: Vec<Photo>) -> PhotoStack {
@@ -71,7 +74,10 @@ fn run(photos: Vec<Photo>, rig: &Rig, method: Method) -> Solution {
 
 /// Mean angle in degrees over texels where `keep` holds.
 fn mean_error(sol: &Solution, truth: &Grid<Vec3>, keep: impl Fn(usize) -> bool) -> f64 {
-    let errors: Vec<f64> = (0..truth.len()).filter(|&i| keep(i)).map(|i| angle_degrees(sol.normals.as_slice()[i], truth.as_slice()[i]) as f64).collect();
+    let errors: Vec<f64> = (0..truth.len())
+        .filter(|&i| keep(i))
+        .map(|i| angle_degrees(sol.normals.as_slice()[i], truth.as_slice()[i]) as f64)
+        .collect();
     assert!(errors.len() > 100, "too few texels compared");
     errors.iter().sum::<f64>() / errors.len() as f64
 }
@@ -131,7 +137,8 @@ fn least_squares_matches_naive_solve_on_random_inputs() {
     let k = 7;
     let lights: Vec<Light> = (0..k)
         .map(|_| {
-            let d = Vec3::new(rng.random_range(-0.7..0.7), rng.random_range(-0.7..0.7), rng.random_range(0.4..1.0)).normalize();
+            let d = Vec3::new(rng.random_range(-0.7..0.7), rng.random_range(-0.7..0.7), rng.random_range(0.4..1.0))
+                .normalize();
             Light { direction: d, intensity: Vec3::splat(rng.random_range(0.5..2.0)), position: None }
         })
         .collect();
@@ -144,7 +151,9 @@ fn least_squares_matches_naive_solve_on_random_inputs() {
         let scale = if photos[0].bit_depth() == 16 { 65535.0 } else { 1.0 };
         let sol = solve(&stack(photos.clone()), &rig, &config(Method::LeastSquares), &no_progress).unwrap();
         for p in 0..w * h {
-            let r = DVector::from_fn(k, |i, _| photos[i].samples().get(p) as f64 / scale / rig.lights[i].intensity.x as f64);
+            let r = DVector::from_fn(k, |i, _| {
+                photos[i].samples().get(p) as f64 / scale / rig.lights[i].intensity.x as f64
+            });
             let g = naive_g(&l, &r);
             let ours = sol.normals.as_slice()[p].as_dvec3() * sol.albedo.as_slice()[p].x as f64;
             let diff = (ours - DVec3::new(g[0], g[1], g[2])).length();
@@ -152,7 +161,11 @@ fn least_squares_matches_naive_solve_on_random_inputs() {
             // Confidence: the residual factor of the naive fit (all lights used, cond factor 1).
             let rho2 = (&l * &g - &r).norm_squared() / r.norm_squared();
             let expect = 1.0 / (1.0 + rho2 / 0.01);
-            assert!((sol.confidence.as_slice()[p] as f64 - expect).abs() < 2e-3, "pixel {p}: {} vs {expect}", sol.confidence.as_slice()[p]);
+            assert!(
+                (sol.confidence.as_slice()[p] as f64 - expect).abs() < 2e-3,
+                "pixel {p}: {} vs {expect}",
+                sol.confidence.as_slice()[p]
+            );
         }
     }
 }
@@ -164,7 +177,10 @@ fn noise_matches_the_predicted_tilt_error() {
     let rig = ring(k, theta);
     let flat = Grid::filled(w, h, Vec3::Z);
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let values: Vec<Vec<f32>> = render(&flat, 1.0, &rig).into_iter().map(|v| v.into_iter().map(|x| x + sigma * gaussian(&mut rng)).collect()).collect();
+    let values: Vec<Vec<f32>> = render(&flat, 1.0, &rig)
+        .into_iter()
+        .map(|v| v.into_iter().map(|x| x + sigma * gaussian(&mut rng)).collect())
+        .collect();
     let predicted = (sigma as f64 * (4.0 / (k as f64 * theta.to_radians().sin().powi(2))).sqrt()).to_degrees();
     for method in [Method::LeastSquares, Method::Robust] {
         let sol = run(float_photos(w, h, values.clone()), &rig, method);
@@ -199,7 +215,10 @@ fn robust_beats_least_squares_under_cast_shadows() {
     let ls = run(u16_photos(w, h, values.clone()), &rig, Method::LeastSquares);
     let robust = run(u16_photos(w, h, values), &rig, Method::Robust);
     let valid = |s: &Solution, i: usize| s.normals.as_slice()[i] != Vec3::ZERO;
-    let (e_ls, e_robust) = (mean_error(&ls, &truth, |i| keep(i) && valid(&ls, i)), mean_error(&robust, &truth, |i| keep(i) && valid(&robust, i)));
+    let (e_ls, e_robust) = (
+        mean_error(&ls, &truth, |i| keep(i) && valid(&ls, i)),
+        mean_error(&robust, &truth, |i| keep(i) && valid(&robust, i)),
+    );
     println!("cast shadows: least squares {e_ls:.3} deg, robust {e_robust:.4} deg");
     assert!(e_robust < 0.1 && e_ls > 3.0 && e_robust * 20.0 < e_ls);
     // Pixels that lost lights are still solved, with less confidence than fully lit ones.
@@ -290,7 +309,11 @@ fn srgb_photos_are_linearised() {
     let encode = |v: f32| (skinkit_maps::encoding::linear_to_srgb(v) * 255.0).round() as u8;
     let photos = render(&truth, 0.8, &rig)
         .into_iter()
-        .map(|v| Photo::new(w, h, Channels::Gray, Samples::U8(v.into_iter().map(encode).collect())).unwrap().with_transfer(Transfer::Srgb))
+        .map(|v| {
+            Photo::new(w, h, Channels::Gray, Samples::U8(v.into_iter().map(encode).collect()))
+                .unwrap()
+                .with_transfer(Transfer::Srgb)
+        })
         .collect();
     let sol = run(photos, &rig, Method::LeastSquares);
     let e = mean_error(&sol, &truth, lit_by_all(&truth, &rig));
@@ -305,7 +328,8 @@ fn ambient_frame_is_subtracted() {
     let rig = ring(8, 45.0);
     let truth = bumps(w, h);
     let ambient: Vec<f32> = (0..w * h).map(|i| 0.05 + 0.1 * (i % 7) as f32 / 7.0).collect();
-    let lit: Vec<Vec<f32>> = render(&truth, 0.6, &rig).into_iter().map(|v| v.iter().zip(&ambient).map(|(a, b)| a + b).collect()).collect();
+    let lit: Vec<Vec<f32>> =
+        render(&truth, 0.6, &rig).into_iter().map(|v| v.iter().zip(&ambient).map(|(a, b)| a + b).collect()).collect();
     let amb = u16_photos(w, h, vec![ambient]).pop().unwrap();
     for method in [Method::LeastSquares, Method::Robust] {
         let st = stack(u16_photos(w, h, lit.clone())).with_ambient(amb.clone(), "dark.png").unwrap();
@@ -339,7 +363,16 @@ fn hard_pixels_are_invalid_never_nan() {
         .lights
         .iter()
         .enumerate()
-        .map(|(i, l)| vec![reading(l), 0.0, if i < 2 { reading(l) } else { 0.0 }, if i < 6 { 1.0 } else { reading(l) }, if i == 0 { 1.0 } else { reading(l) }, 0.0])
+        .map(|(i, l)| {
+            vec![
+                reading(l),
+                0.0,
+                if i < 2 { reading(l) } else { 0.0 },
+                if i < 6 { 1.0 } else { reading(l) },
+                if i == 0 { 1.0 } else { reading(l) },
+                0.0,
+            ]
+        })
         .collect();
     for method in [Method::LeastSquares, Method::Robust] {
         let sol = run(u16_photos(6, 1, values.clone()), &rig, method);
