@@ -12,20 +12,29 @@
 //! vanishes (no valid texel, or normals that cancel: `|sum| < 1e-6 * count`) the normal is left
 //! unchanged.
 //!
-//! Cost does not grow with the block: the block sums come from separable running sums, first
-//! along each row (f64 accumulators, stored as f32: 16 bytes a texel of extra memory, 256 MiB
-//! for a 4096 x 4096 map), then down each column in strips of columns processed in parallel.
-//! Every column is summed in the same order whatever the thread count, so results are bitwise
-//! deterministic.
+//! Cost does not grow with the block: block sums come from separable running sums. The image is
+//! cut into a few bands of rows processed in parallel; each band keeps, per column, the sum over
+//! the rows of its window (updated by one entering and one leaving row per output row), slides a
+//! window along that row of column sums, and rotates the row's normals, so everything a row needs
+//! is in cache. The sums are exact integers (normals in fixed point, `2^-29` steps, well below f32
+//! resolution near unit length), so they do not depend on the order of the updates: results are
+//! bitwise identical whatever the banding or the thread count. Extra memory: the output map
+//! (12 bytes a texel, 192 MiB for 4096 x 4096) and a few rows of sums per band.
 
 use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
 use skinkit_maps::NormalMap;
 
-/// Columns per parallel strip of the vertical pass.
-const STRIP: usize = 64;
+use crate::solve::fresh_zeroed_vec3;
+
 /// A mean whose length is below this fraction of the texel count counts as vanishing.
 const VANISHING: f64 = 1e-6;
+/// Fixed-point scale of the normal components in the block sums (`|n| <= 1` fits an `i32`).
+const FIXED: f32 = (1u32 << 29) as f32;
+/// Parallel bands per worker thread (each band first sums the rows above its first row).
+const BANDS_PER_THREAD: usize = 2;
+/// Fewest rows in a band.
+const MIN_BAND_ROWS: usize = 16;
 
 /// Rotates every valid normal by the rotation taking the mean normal of the `block`-wide window
 /// centred on it to +Z. `block == 0` leaves the map unchanged.
@@ -43,87 +52,100 @@ pub fn detrend(normals: &mut NormalMap, block: usize) {
         return;
     }
     let half = block / 2;
-    let mut grid = std::mem::replace(normals, NormalMap::flat(0, 0)).into_grid();
-    let (w, h) = grid.size();
-    let rows = row_sums(grid.as_slice(), w, half);
-    let mut strips: Vec<Vec<&mut [Vec3]>> = (0..w.div_ceil(STRIP)).map(|_| Vec::with_capacity(h)).collect();
-    for row in grid.as_mut_slice().chunks_mut(w) {
-        for (s, piece) in row.chunks_mut(STRIP).enumerate() {
-            strips[s].push(piece);
-        }
-    }
-    strips.into_par_iter().enumerate().for_each(|(s, strip)| rotate_strip(strip, &rows, s * STRIP, w, half));
+    let (w, h) = normals.size();
+    let input = normals.as_slice();
+    let bands = rayon::current_num_threads() * BANDS_PER_THREAD;
+    let band_rows = h.div_ceil(bands).max(MIN_BAND_ROWS);
+    let mut output = fresh_zeroed_vec3(w * h);
+    output
+        .par_chunks_mut(band_rows * w)
+        .enumerate()
+        .for_each(|(b, out)| detrend_band(input, w, h, b * band_rows, out, half));
+    let grid = skinkit_maps::Grid::from_vec(w, h, output).expect("sized above");
     *normals = NormalMap::from_unit_grid(grid).expect("rotations keep normals unit");
 }
 
-/// Per texel, the sums `(nx, ny, nz, count)` of the valid normals in the row window
-/// `[x - half, x + half]`, rows in parallel.
-fn row_sums(normals: &[Vec3], w: usize, half: usize) -> Vec<[f32; 4]> {
-    let mut sums = vec![[0.0f32; 4]; normals.len()];
-    sums.par_chunks_mut(w).zip(normals.par_chunks(w)).for_each(|(out, row)| slide_row(row, out, half));
-    sums
+/// One texel's contribution to the block sums: fixed-point normal and a count (zero if invalid).
+#[inline(always)]
+fn fixed(n: Vec3) -> [i64; 4] {
+    if n == Vec3::ZERO {
+        [0; 4]
+    } else {
+        // Truncation is odd-symmetric, so opposite normals cancel exactly.
+        [(n.x * FIXED) as i32 as i64, (n.y * FIXED) as i32 as i64, (n.z * FIXED) as i32 as i64, 1]
+    }
 }
 
-/// The texel's contribution to a block sum (zero for an invalid texel).
-#[inline]
+/// Adds (`ADD`) or subtracts one input row's fixed-point terms to the column sums.
+#[inline(always)]
+fn update_columns<const ADD: bool>(cols: &mut [[i64; 4]], row: &[Vec3]) {
+    for (c, &n) in cols.iter_mut().zip(row) {
+        let t = fixed(n);
+        for (a, v) in c.iter_mut().zip(t) {
+            if ADD { *a += v } else { *a -= v }
+        }
+    }
+}
+
+/// Detrends the rows `y0..` of `out` (whole rows) from `input` (the full `w x h` map).
+fn detrend_band(input: &[Vec3], w: usize, h: usize, y0: usize, out: &mut [Vec3], half: usize) {
+    let row = |y: usize| &input[y * w..(y + 1) * w];
+    let mut cols = vec![[0i64; 4]; w];
+    for y in y0.saturating_sub(half)..(y0 + half + 1).min(h) {
+        update_columns::<true>(&mut cols, row(y));
+    }
+    for (dy, out_row) in out.chunks_mut(w).enumerate() {
+        let y = y0 + dy;
+        if dy > 0 {
+            if y + half < h {
+                update_columns::<true>(&mut cols, row(y + half));
+            }
+            if y > half {
+                update_columns::<false>(&mut cols, row(y - half - 1));
+            }
+        }
+        rotate_row(row(y), &cols, out_row, half);
+    }
+}
+
+/// Slides the window along one row of column sums and rotates the row's normals into `out`.
+#[inline(always)]
+fn rotate_row(row: &[Vec3], cols: &[[i64; 4]], out: &mut [Vec3], half: usize) {
+    let w = row.len();
+    let mut acc = [0i64; 4];
+    for c in &cols[..(half + 1).min(w)] {
+        acc = std::array::from_fn(|i| acc[i] + c[i]);
+    }
+    for x in 0..w {
+        let scale = 1.0 / FIXED as f64;
+        let sum = [acc[0] as f64 * scale, acc[1] as f64 * scale, acc[2] as f64 * scale, acc[3] as f64];
+        out[x] = rotate_by_mean(row[x], &sum);
+        if x + half + 1 < w {
+            let c = cols[x + half + 1];
+            acc = std::array::from_fn(|i| acc[i] + c[i]);
+        }
+        if x >= half {
+            let c = cols[x - half];
+            acc = std::array::from_fn(|i| acc[i] - c[i]);
+        }
+    }
+}
+
+/// The texel's contribution to a block sum in floating point (zero for an invalid texel).
+#[cfg(test)]
 fn term(n: Vec3) -> [f64; 4] {
     if n == Vec3::ZERO { [0.0; 4] } else { [n.x as f64, n.y as f64, n.z as f64, 1.0] }
 }
 
-#[inline]
+#[cfg(test)]
 fn add(acc: &mut [f64; 4], t: [f64; 4], sign: f64) {
     for (a, v) in acc.iter_mut().zip(t) {
         *a += sign * v;
     }
 }
 
-/// Running window sums along one row.
-fn slide_row(row: &[Vec3], out: &mut [[f32; 4]], half: usize) {
-    let w = row.len();
-    let mut acc = [0.0f64; 4];
-    for &n in &row[..(half + 1).min(w)] {
-        add(&mut acc, term(n), 1.0);
-    }
-    for x in 0..w {
-        out[x] = acc.map(|v| v as f32);
-        if x + half + 1 < w {
-            add(&mut acc, term(row[x + half + 1]), 1.0);
-        }
-        if x >= half {
-            add(&mut acc, term(row[x - half]), -1.0);
-        }
-    }
-}
-
-/// Slides the window down the columns `x0..` of one strip and rotates its normals.
-fn rotate_strip(strip: Vec<&mut [Vec3]>, rows: &[[f32; 4]], x0: usize, w: usize, half: usize) {
-    let h = strip.len();
-    let width = strip.first().map_or(0, |r| r.len());
-    let row_of = |y: usize| &rows[y * w + x0..y * w + x0 + width];
-    let mut acc = vec![[0.0f64; 4]; width];
-    let add_row = |acc: &mut [[f64; 4]], y: usize, sign: f64| {
-        for (a, t) in acc.iter_mut().zip(row_of(y)) {
-            add(a, t.map(f64::from), sign);
-        }
-    };
-    for y in 0..(half + 1).min(h) {
-        add_row(&mut acc, y, 1.0);
-    }
-    for (y, row) in strip.into_iter().enumerate() {
-        for (n, sum) in row.iter_mut().zip(&acc) {
-            *n = rotate_by_mean(*n, sum);
-        }
-        if y + half + 1 < h {
-            add_row(&mut acc, y + half + 1, 1.0);
-        }
-        if y >= half {
-            add_row(&mut acc, y - half, -1.0);
-        }
-    }
-}
-
 /// `n` rotated by the rotation taking the block mean (from its sums) to +Z.
-#[inline]
+#[inline(always)]
 fn rotate_by_mean(n: Vec3, sum: &[f64; 4]) -> Vec3 {
     let s = DVec3::new(sum[0], sum[1], sum[2]);
     let len = s.length();
@@ -135,7 +157,7 @@ fn rotate_by_mean(n: Vec3, sum: &[f64; 4]) -> Vec3 {
 
 /// `rotation_to_z(m) * n` without forming the matrix: with `d = mx nx + my ny` and
 /// `t = d / (1 + mz) + nz`, the rows of [`rotation_to_z`] give `(nx - mx t, ny - my t, d + mz nz)`.
-#[inline]
+#[inline(always)]
 fn rotate_to_z(m: DVec3, n: DVec3) -> DVec3 {
     if m.z < -1.0 + 1e-12 {
         return DVec3::new(n.x, -n.y, -n.z);

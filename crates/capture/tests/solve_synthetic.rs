@@ -5,7 +5,7 @@ use glam::{DVec3, Vec3};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use skinkit_capture::solve::{Method, PhotoStack, Solution, SolveConfig, no_progress, solve};
+use skinkit_capture::solve::{AlbedoMap, Method, PhotoStack, Solution, SolveConfig, no_progress, solve, solve_into};
 use skinkit_capture::{Error, Light, Rig};
 use skinkit_maps::normal::angle_degrees;
 use skinkit_maps::{Channels, Grid, Photo, Samples, Transfer};
@@ -107,7 +107,8 @@ fn noise_free_photos_give_exact_normals() {
         println!("{method:?}: float {ef:.5} deg, u16 {eq:.5} deg");
         assert!(ef < 0.05 && eq < 0.05, "{method:?}: {ef} {eq}");
         let i = (0..truth.len()).find(|&i| keep(i)).unwrap();
-        assert!((f.albedo.as_slice()[i] - Vec3::splat(0.7)).abs().max_element() < 1e-4);
+        assert!((f.albedo.as_gray().expect("grey photos, grey albedo").as_slice()[i] - 0.7).abs() < 1e-4);
+        assert_eq!(f.albedo.get(i % w, i / w), Vec3::splat(f.albedo.as_gray().unwrap().as_slice()[i]));
         assert!(f.confidence.as_slice()[i] > 0.99);
     }
 }
@@ -155,7 +156,7 @@ fn least_squares_matches_naive_solve_on_random_inputs() {
                 photos[i].samples().get(p) as f64 / scale / rig.lights[i].intensity.x as f64
             });
             let g = naive_g(&l, &r);
-            let ours = sol.normals.as_slice()[p].as_dvec3() * sol.albedo.as_slice()[p].x as f64;
+            let ours = sol.normals.as_slice()[p].as_dvec3() * sol.albedo.as_gray().unwrap().as_slice()[p] as f64;
             let diff = (ours - DVec3::new(g[0], g[1], g[2])).length();
             assert!(diff < 1e-5 * (1.0 + g.norm()), "pixel {p}: {ours} vs {g}");
             // Confidence: the residual factor of the naive fit (all lights used, cond factor 1).
@@ -297,7 +298,50 @@ fn rgb_photos_give_rgb_albedo() {
         let sol = run(photos.clone(), &rig, method);
         assert!(mean_error(&sol, &truth, &keep) < 0.05);
         let i = (0..w * h).find(|&i| keep(i)).unwrap();
-        assert!((sol.albedo.as_slice()[i] - albedo).abs().max_element() < 1e-3, "{}", sol.albedo.as_slice()[i]);
+        let rgb = sol.albedo.as_rgb().expect("rgb photos, rgb albedo");
+        assert!((rgb.as_slice()[i] - albedo).abs().max_element() < 1e-3, "{}", rgb.as_slice()[i]);
+        assert_eq!(sol.albedo.get(i % w, i / w), rgb.as_slice()[i]);
+    }
+}
+
+/// `solve_into` gives the bits of a fresh `solve` whether it reuses the output maps (same size and
+/// kind) or has to replace them (another size, or RGB maps reused for grey photos and back).
+#[test]
+fn solve_into_reuses_or_replaces_maps_with_the_same_results() {
+    let rig = ring(8, 45.0);
+    let grey = |w, h| u16_photos(w, h, render(&bumps(w, h), 0.6, &rig));
+    let rgb = |w: usize, h: usize| {
+        let photos = grey(w, h).into_iter().map(|p| {
+            let Samples::U16(v) = p.samples() else { unreachable!() };
+            let samples = v.iter().flat_map(|&x| [x, x / 2, x / 3]).collect();
+            Photo::new(w, h, Channels::Rgb, Samples::U16(samples)).unwrap()
+        });
+        photos.collect::<Vec<_>>()
+    };
+    for method in [Method::LeastSquares, Method::Robust] {
+        let cfg = config(method);
+        let fresh_grey = solve(&stack(grey(31, 9)), &rig, &cfg, &no_progress).unwrap();
+        let fresh_rgb = solve(&stack(rgb(31, 9)), &rig, &cfg, &no_progress).unwrap();
+        assert!(matches!(fresh_grey.albedo, AlbedoMap::Gray(_)) && matches!(fresh_rgb.albedo, AlbedoMap::Rgb(_)));
+        let same = |a: &Solution, b: &Solution| {
+            a.normals == b.normals && a.albedo == b.albedo && a.confidence == b.confidence && a.stats == b.stats
+        };
+        // Reused in place: a solution of the same stack, and one of a differently sized stack.
+        let mut out = fresh_grey.clone();
+        solve_into(&stack(grey(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        assert!(same(&out, &fresh_grey), "{method:?}");
+        let mut out = solve(&stack(grey(12, 40)), &rig, &cfg, &no_progress).unwrap();
+        solve_into(&stack(grey(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        assert!(same(&out, &fresh_grey), "{method:?}");
+        // Kind switches both ways.
+        let mut out = fresh_rgb.clone();
+        solve_into(&stack(grey(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        assert!(same(&out, &fresh_grey), "{method:?}");
+        solve_into(&stack(rgb(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        assert!(same(&out, &fresh_rgb), "{method:?}");
+        assert_eq!(fresh_rgb.albedo.to_color_map().get(3, 4), &fresh_rgb.albedo.get(3, 4));
+        assert_eq!(fresh_grey.albedo.to_color_map().get(3, 4), &fresh_grey.albedo.get(3, 4));
+        assert_eq!(fresh_grey.albedo.size(), (31, 9));
     }
 }
 
@@ -376,7 +420,8 @@ fn hard_pixels_are_invalid_never_nan() {
         .collect();
     for method in [Method::LeastSquares, Method::Robust] {
         let sol = run(u16_photos(6, 1, values.clone()), &rig, method);
-        let all_finite = sol.normals.as_slice().iter().chain(sol.albedo.as_slice()).all(|v| v.is_finite());
+        let albedo = sol.albedo.to_color_map();
+        let all_finite = sol.normals.as_slice().iter().chain(albedo.as_slice()).all(|v| v.is_finite());
         assert!(all_finite && sol.confidence.as_slice().iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c)));
         assert!(angle_degrees(sol.normals.get(0, 0), n) < 0.05);
         for px in [1, 5] {

@@ -7,10 +7,10 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use serde::Serialize;
-use skinkit_capture::solve::{self, PhotoStack, Solution, SolveConfig};
+use skinkit_capture::solve::{self, AlbedoMap, PhotoStack, Solution, SolveConfig};
 use skinkit_capture::{Rig, detrend};
 use skinkit_maps::io::{self, Limits};
-use skinkit_maps::normal::{AngularStats, angle_degrees};
+use skinkit_maps::normal::AngularStats;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 
 /// The files of one capture session.
@@ -43,7 +43,11 @@ pub struct Timings {
     pub decode: f64,
     pub solve: f64,
     pub detrend: f64,
+    /// Report statistics (normal tilt, error against the truth).
+    pub stats: f64,
     pub write: f64,
+    /// Seconds per output file (they are written concurrently, so these overlap).
+    pub write_files: std::collections::BTreeMap<String, f64>,
     pub total: f64,
 }
 
@@ -154,6 +158,8 @@ pub fn capture(session: &Session, options: &CaptureOptions, stage: &(dyn Fn(&str
     detrend::detrend(&mut solution.normals, options.detrend_block);
     timings.detrend = t.elapsed().as_secs_f64();
 
+    let t = Instant::now();
+    let tilt = tilt_stats(&solution.normals);
     let error_vs_truth =
         truth.map(|truth| compare_with_truth(&solution.normals, truth, options.detrend_block)).transpose()?;
     if solution.stats.invalid_count * 10 > width * height {
@@ -164,6 +170,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, stage: &(dyn Fn(&str
             100.0 * solution.stats.invalid_count as f64 / (width * height) as f64
         ));
     }
+    timings.stats = t.elapsed().as_secs_f64();
     timings.total = start.elapsed().as_secs_f64();
     let report = CaptureReport {
         rig: session.rig.display().to_string(),
@@ -177,7 +184,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, stage: &(dyn Fn(&str
         detrend_block: options.detrend_block,
         valid_pixels: width * height - solution.stats.invalid_count,
         invalid_pixels: solution.stats.invalid_count,
-        tilt_degrees: tilt_stats(&solution.normals).into(),
+        tilt_degrees: tilt.into(),
         error_vs_truth_degrees: error_vs_truth.map(Stats::from),
         warnings,
         timings_s: timings,
@@ -220,9 +227,14 @@ fn compare_with_truth(normals: &NormalMap, mut truth: NormalMap, block: usize) -
     Ok(normals.angular_error(&truth, None)?)
 }
 
+/// Angles of the valid normals from +Z.
 fn tilt_stats(normals: &NormalMap) -> AngularStats {
-    let degrees = normals.as_slice().iter().filter(|n| **n != Vec3::ZERO).map(|&n| angle_degrees(n, Vec3::Z)).collect();
-    AngularStats::from_degrees(degrees)
+    AngularStats::from_par_iter(normals.as_slice().par_iter().filter(|n| **n != Vec3::ZERO).map(|&n| tilt_degrees(n)))
+}
+
+/// Angle of a unit vector from +Z in degrees (atan2 form: exact near zero, unlike acos).
+fn tilt_degrees(n: Vec3) -> f32 {
+    n.truncate().length().atan2(n.z).to_degrees()
 }
 
 /// Writes `normal.exr`, `normal.png`, `albedo.png`, `confidence.png` and `report.json` into `dir`
@@ -237,17 +249,31 @@ pub fn write_outputs(dir: &Path, captured: &mut Captured, options: &CaptureOptio
     let jobs: [(&str, Box<dyn Fn(&Path) -> skinkit_maps::Result<()> + Sync>); 4] = [
         ("normal.exr", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 32))),
         ("normal.png", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 16))),
-        ("albedo.png", Box::new(|p| io::write_color_map(p, &s.albedo, 16))),
+        ("albedo.png", Box::new(|p| write_albedo(p, &s.albedo))),
         ("confidence.png", Box::new(|p| io::write_scalar_png(p, &s.confidence, 8))),
     ];
-    jobs.par_iter().try_for_each(|(name, job)| {
-        job(&dir.join(name)).with_context(|| format!("cannot write {}", dir.join(name).display()))
-    })?;
+    let seconds: Vec<(String, f64)> = jobs
+        .par_iter()
+        .map(|(name, job)| {
+            let t = Instant::now();
+            job(&dir.join(name)).with_context(|| format!("cannot write {}", dir.join(name).display()))?;
+            Ok((name.to_string(), t.elapsed().as_secs_f64()))
+        })
+        .collect::<Result<_>>()?;
     let report = &mut captured.report;
+    report.timings_s.write_files = seconds.into_iter().collect();
     report.timings_s.write = t.elapsed().as_secs_f64();
     report.timings_s.total += report.timings_s.write;
     report.peak_memory_mib = peak_memory_mib();
     write_json(&dir.join("report.json"), report)
+}
+
+/// Albedo as 16-bit linear PNG: grey for grey photos, RGB for colour ones.
+fn write_albedo(path: &Path, albedo: &AlbedoMap) -> skinkit_maps::Result<()> {
+    match albedo {
+        AlbedoMap::Gray(map) => io::write_scalar_png(path, map, 16),
+        AlbedoMap::Rgb(map) => io::write_color_map(path, map, 16),
+    }
 }
 
 /// Writes a value as pretty JSON, atomically.

@@ -52,7 +52,7 @@ impl NormalEncoding {
             return [0; 3];
         }
         let scale = max as f32;
-        let q = |c: f32| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * scale).round() as u32;
+        let q = |c: f32| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * scale + 0.5) as u32;
         let q = [q(n.x), q(n.y * self.y_sign()), q(n.z)];
         // A valid normal that happens to round to the invalid marker (only (-1,-1,-1)-ish ones,
         // which are not unit) cannot occur; keep the guard for safety anyway.

@@ -198,19 +198,52 @@ pub enum PngLayout {
 /// # Errors
 /// When the sample count is wrong or writing fails.
 pub fn write_png(path: &Path, width: usize, height: usize, layout: PngLayout, samples: &[u16]) -> Result<()> {
-    let (color, depth, channels) = match layout {
-        PngLayout::Gray8 => (png::ColorType::Grayscale, png::BitDepth::Eight, 1),
-        PngLayout::Gray16 => (png::ColorType::Grayscale, png::BitDepth::Sixteen, 1),
-        PngLayout::Rgb8 => (png::ColorType::Rgb, png::BitDepth::Eight, 3),
-        PngLayout::Rgb16 => (png::ColorType::Rgb, png::BitDepth::Sixteen, 3),
-    };
-    if samples.len() != width * height * channels {
+    let row_len = width * layout.channels();
+    if samples.len() != height * row_len {
         return Err(Error::InvalidParameter(format!(
             "{}: {} samples for a {width}x{height} image",
             path.display(),
             samples.len()
         )));
     }
+    write_png_rows(path, width, height, layout, |y, row| row.copy_from_slice(&samples[y * row_len..(y + 1) * row_len]))
+}
+
+impl PngLayout {
+    /// Samples per pixel.
+    pub fn channels(self) -> usize {
+        match self {
+            PngLayout::Gray8 | PngLayout::Gray16 => 1,
+            PngLayout::Rgb8 | PngLayout::Rgb16 => 3,
+        }
+    }
+}
+
+/// Rows encoded per batch: filled in parallel, then compressed in order.
+const PNG_BATCH_ROWS: usize = 64;
+
+/// Writes a PNG whose rows `fill_row(y, row)` produces (interleaved samples, `u16` even for 8-bit
+/// layouts), atomically, without holding the whole image in memory. Rows are produced in parallel
+/// batches while deflate, which is sequential, runs on the calling thread.
+///
+/// # Errors
+/// When writing fails.
+pub fn write_png_rows(
+    path: &Path,
+    width: usize,
+    height: usize,
+    layout: PngLayout,
+    fill_row: impl Fn(usize, &mut [u16]) + Sync,
+) -> Result<()> {
+    use rayon::prelude::*;
+    let (color, depth) = match layout {
+        PngLayout::Gray8 => (png::ColorType::Grayscale, png::BitDepth::Eight),
+        PngLayout::Gray16 => (png::ColorType::Grayscale, png::BitDepth::Sixteen),
+        PngLayout::Rgb8 => (png::ColorType::Rgb, png::BitDepth::Eight),
+        PngLayout::Rgb16 => (png::ColorType::Rgb, png::BitDepth::Sixteen),
+    };
+    let row_len = width * layout.channels();
+    let row_bytes = row_len * if depth == png::BitDepth::Sixteen { 2 } else { 1 };
     let encode_err = |e: png::EncodingError| Error::Encode { path: path.to_owned(), reason: e.to_string() };
     write_atomic(path, |out| {
         let mut encoder = png::Encoder::new(out, width as u32, height as u32);
@@ -219,22 +252,34 @@ pub fn write_png(path: &Path, width: usize, height: usize, layout: PngLayout, sa
         encoder.set_compression(png::Compression::Fast);
         let mut writer = encoder.write_header().map_err(encode_err)?;
         let mut stream = writer.stream_writer().map_err(encode_err)?;
-        let row_len = width * channels;
-        let mut bytes = Vec::with_capacity(row_len * 2);
-        for row in samples.chunks_exact(row_len.max(1)) {
-            bytes.clear();
-            match depth {
-                png::BitDepth::Sixteen => row.iter().for_each(|v| bytes.extend_from_slice(&v.to_be_bytes())),
-                _ => row.iter().for_each(|&v| bytes.push(v.min(255) as u8)),
-            }
-            stream.write_all(&bytes).map_err(|e| Error::io(path, e))?;
+        let mut bytes = vec![0u8; row_bytes * PNG_BATCH_ROWS.min(height)];
+        for first in (0..height).step_by(PNG_BATCH_ROWS) {
+            let rows = PNG_BATCH_ROWS.min(height - first);
+            bytes[..rows * row_bytes].par_chunks_mut(row_bytes.max(1)).enumerate().for_each_init(
+                || vec![0u16; row_len],
+                |row, (i, out)| {
+                    fill_row(first + i, row);
+                    match depth {
+                        png::BitDepth::Sixteen => out
+                            .chunks_exact_mut(2)
+                            .zip(row.iter())
+                            .for_each(|(o, v)| o.copy_from_slice(&v.to_be_bytes())),
+                        _ => out.iter_mut().zip(row.iter()).for_each(|(o, &v)| *o = v.min(255) as u8),
+                    }
+                },
+            );
+            stream.write_all(&bytes[..rows * row_bytes]).map_err(|e| Error::io(path, e))?;
         }
         stream.finish().map_err(encode_err)?;
         Ok(())
     })
 }
 
-/// Writes float RGB triples to an EXR file (ZIP compression, lossless), atomically.
+/// Writes float RGB triples to an uncompressed scanline EXR file, atomically.
+///
+/// Uncompressed on purpose: measured on a captured 4096x4096 normal map, ZIP took 4.8 s to save 1%
+/// (float normals carry sensor noise in every mantissa bit) and RLE saved nothing, while
+/// uncompressed writes in about 0.2 s.
 ///
 /// # Errors
 /// When writing fails.
@@ -249,7 +294,7 @@ pub fn write_exr_rgb(
         let [r, g, b] = pixel(pos.x(), pos.y());
         (r, g, b)
     });
-    let layer = Layer::new((width, height), LayerAttributes::default(), Encoding::FAST_LOSSLESS, channels);
+    let layer = Layer::new((width, height), LayerAttributes::default(), Encoding::UNCOMPRESSED, channels);
     let image = Image::from_layer(layer);
     write_atomic(path, |out| {
         image.write().to_buffered(out).map_err(|e| Error::Encode { path: path.to_owned(), reason: e.to_string() })
@@ -312,8 +357,14 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
 pub fn write_scalar_png(path: &Path, map: &ScalarMap, bits: u32) -> Result<()> {
     let (w, h) = map.size();
     let (max, layout) = if bits == 8 { (255.0, PngLayout::Gray8) } else { (65535.0, PngLayout::Gray16) };
-    let samples: Vec<u16> = map.as_slice().iter().map(|v| (v.clamp(0.0, 1.0) * max).round() as u16).collect();
-    write_png(path, w, h, layout, &samples)
+    write_png_rows(path, w, h, layout, |y, row| {
+        row.iter_mut().zip(map.row(y)).for_each(|(out, &v)| *out = quantise(v, max));
+    })
+}
+
+/// `v` in `[0, 1]` (clamped; NaN gives 0) scaled to `[0, max]` and rounded.
+fn quantise(v: f32, max: f32) -> u16 {
+    (v.clamp(0.0, 1.0) * max + 0.5) as u16
 }
 
 /// Reads a grey (or RGB, luminance taken) image as a linear scalar map in `[0, 1]`.

@@ -1,6 +1,7 @@
 //! [`NormalMap`]: unit normals on a grid, with `(0, 0, 0)` for invalid texels.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::encoding::{is_valid_normal, normalize_or_invalid};
 use crate::{Error, Grid, Result};
@@ -22,7 +23,6 @@ impl NormalMap {
 
     /// Wraps a grid of vectors, normalising each and marking non-finite or zero ones invalid.
     pub fn from_grid(mut grid: Grid<Vec3>) -> Self {
-        use rayon::prelude::*;
         grid.as_mut_slice().par_iter_mut().for_each(|n| *n = normalize_or_invalid(*n));
         NormalMap { grid }
     }
@@ -102,7 +102,7 @@ impl NormalMap {
         }
         let degrees: Vec<f32> = self
             .as_slice()
-            .iter()
+            .par_iter()
             .zip(other.as_slice())
             .enumerate()
             .filter(|(i, (a, b))| is_valid_normal(**a) && is_valid_normal(**b) && mask.is_none_or(|m| m.as_slice()[*i]))
@@ -132,23 +132,96 @@ pub struct AngularStats {
 }
 
 impl AngularStats {
-    /// Statistics of a list of angles in degrees (all zero for an empty list).
+    /// Statistics of a list of angles in degrees (all zero for an empty list). Linear time: the
+    /// quantiles come from selection, not a full sort, so 16-megapixel maps cost milliseconds.
     pub fn from_degrees(mut degrees: Vec<f32>) -> Self {
         let count = degrees.len();
         if count == 0 {
             return AngularStats::default();
         }
-        degrees.sort_by(f32::total_cmp);
-        let sum: f64 = degrees.iter().map(|&d| d as f64).sum();
-        let sum_sq: f64 = degrees.iter().map(|&d| (d as f64) * (d as f64)).sum();
-        let at = |q: f64| degrees[((count - 1) as f64 * q).round() as usize];
+        let (sum, sum_sq, max) = degrees
+            .par_iter()
+            .fold(|| (0.0f64, 0.0f64, f32::MIN), |(s, q, m), &d| (s + d as f64, q + (d as f64) * (d as f64), m.max(d)))
+            .reduce(|| (0.0, 0.0, f32::MIN), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
+        let mut at =
+            |q: f64| *degrees.select_nth_unstable_by(((count - 1) as f64 * q).round() as usize, f32::total_cmp).1;
+        let (median, p95) = (at(0.5), at(0.95));
         AngularStats {
             count,
             mean: (sum / count as f64) as f32,
             rms: (sum_sq / count as f64).sqrt() as f32,
-            median: at(0.5),
-            p95: at(0.95),
-            max: degrees[count - 1],
+            median,
+            p95,
+            max,
+        }
+    }
+}
+
+/// Histogram step of [`AngularStats::from_par_iter`], in degrees.
+pub const ANGLE_BIN_DEGREES: f32 = 0.01;
+
+/// Running sums and a histogram of angles, for [`AngularStats::from_par_iter`].
+struct AngleHistogram {
+    bins: Vec<u32>,
+    count: usize,
+    sum: f64,
+    sum_sq: f64,
+    max: f32,
+}
+
+impl AngleHistogram {
+    fn new() -> Self {
+        let len = (180.0 / ANGLE_BIN_DEGREES) as usize + 1;
+        AngleHistogram { bins: vec![0; len], count: 0, sum: 0.0, sum_sq: 0.0, max: 0.0 }
+    }
+    fn add(mut self, degrees: f32) -> Self {
+        let d = if degrees.is_finite() { degrees.clamp(0.0, 180.0) } else { 180.0 };
+        self.bins[(d / ANGLE_BIN_DEGREES + 0.5) as usize] += 1;
+        self.count += 1;
+        self.sum += d as f64;
+        self.sum_sq += (d as f64) * (d as f64);
+        self.max = self.max.max(d);
+        self
+    }
+    fn merge(mut self, other: Self) -> Self {
+        self.bins.iter_mut().zip(&other.bins).for_each(|(a, b)| *a += b);
+        self.count += other.count;
+        self.sum += other.sum;
+        self.sum_sq += other.sum_sq;
+        self.max = self.max.max(other.max);
+        self
+    }
+    /// The angle of rank `round((count - 1) * q)`, to the bin's centre.
+    fn quantile(&self, q: f64) -> f32 {
+        let rank = ((self.count - 1) as f64 * q).round() as usize;
+        let mut seen = 0usize;
+        for (i, &n) in self.bins.iter().enumerate() {
+            seen += n as usize;
+            if seen > rank {
+                return i as f32 * ANGLE_BIN_DEGREES;
+            }
+        }
+        self.max
+    }
+}
+
+impl AngularStats {
+    /// Statistics of angles in `[0, 180]` degrees streamed from a parallel iterator, without
+    /// storing them: count, mean, rms and max are exact, median and p95 are rounded to
+    /// [`ANGLE_BIN_DEGREES`]. For 16-megapixel maps, where sorting or selecting would dominate.
+    pub fn from_par_iter(angles: impl ParallelIterator<Item = f32>) -> Self {
+        let h =
+            angles.fold(AngleHistogram::new, AngleHistogram::add).reduce(AngleHistogram::new, AngleHistogram::merge);
+        if h.count == 0 {
+            return AngularStats::default();
+        }
+        AngularStats {
+            count: h.count,
+            mean: (h.sum / h.count as f64) as f32,
+            rms: (h.sum_sq / h.count as f64).sqrt() as f32,
+            median: h.quantile(0.5),
+            p95: h.quantile(0.95),
+            max: h.max,
         }
     }
 }
@@ -170,6 +243,20 @@ mod tests {
         let a = Vec3::Z;
         let b = Vec3::new(1e-4, 0.0, 1.0).normalize();
         assert!((angle_degrees(a, b) - 1e-4f32.to_degrees()).abs() < 1e-7);
+    }
+
+    #[test]
+    fn streamed_stats_agree_with_exact_ones() {
+        let degrees: Vec<f32> = (0..10_000).map(|i| ((i * 7919) % 10_000) as f32 * 0.0123).collect();
+        let exact = AngularStats::from_degrees(degrees.clone());
+        let streamed = AngularStats::from_par_iter(degrees.into_par_iter());
+        assert_eq!(streamed.count, exact.count);
+        assert!((streamed.mean - exact.mean).abs() < 1e-3);
+        assert!((streamed.rms - exact.rms).abs() < 1e-3);
+        assert_eq!(streamed.max, exact.max);
+        assert!((streamed.median - exact.median).abs() <= ANGLE_BIN_DEGREES);
+        assert!((streamed.p95 - exact.p95).abs() <= ANGLE_BIN_DEGREES);
+        assert_eq!(AngularStats::from_par_iter(Vec::<f32>::new().into_par_iter()), AngularStats::default());
     }
 
     #[test]

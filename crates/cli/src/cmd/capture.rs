@@ -23,8 +23,9 @@ pub struct Args {
     /// Photos in rig order (PNG or TIFF, 8 or 16-bit, grey or RGB; or float EXR).
     #[arg(value_name = "PHOTO", required_unless_present = "photos_from", conflicts_with = "photos_from")]
     pub photos: Vec<PathBuf>,
-    /// Take the photos from a folder instead, sorted by file name (files named mask.*, ambient.*
-    /// and truth.* are not photos).
+    /// Take the photos from a folder instead: in the order of its filenames.txt if it has one
+    /// (DiLiGenT), else sorted by file name (files named mask.*, ambient.* and truth.* are not
+    /// photos).
     #[arg(long, value_name = "DIR")]
     pub photos_from: Option<PathBuf>,
     /// Object mask (PNG): only nonzero pixels are solved.
@@ -93,11 +94,16 @@ impl SolveArgs {
     }
 }
 
-/// Photo files of a folder, sorted by name (only image extensions skinkit reads).
+/// Photo files of a folder in light order: the order `filenames.txt` gives when the folder has
+/// one (the DiLiGenT layout), else sorted by name (only image extensions skinkit reads).
 ///
 /// # Errors
-/// When the folder cannot be listed or holds no photo.
+/// When the folder cannot be listed, `filenames.txt` names a missing file, or there is no photo.
 pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
+    let listing = dir.join("filenames.txt");
+    if listing.is_file() {
+        return photos_listed(&listing);
+    }
     let mut photos: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("cannot list photos in {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -106,6 +112,24 @@ pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
     photos.sort();
     if photos.is_empty() {
         bail!("{}: no photos (.png, .tif, .tiff, .exr) found", dir.display());
+    }
+    Ok(photos)
+}
+
+/// The photos a `filenames.txt` lists, one per line, relative to its folder.
+fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
+    let text = std::fs::read_to_string(listing).with_context(|| format!("cannot read {}", listing.display()))?;
+    let dir = listing.parent().unwrap_or(Path::new("."));
+    let mut photos = Vec::new();
+    for (line, name) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let path = dir.join(name.trim());
+        if !path.is_file() {
+            bail!("{}: line {}: photo `{}` does not exist", listing.display(), line + 1, name.trim());
+        }
+        photos.push(path);
+    }
+    if photos.is_empty() {
+        bail!("{}: lists no photos", listing.display());
     }
     Ok(photos)
 }
