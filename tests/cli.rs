@@ -229,3 +229,74 @@ fn demo_reports_every_mold_with_both_solvers() {
     }
     assert!(tmp.path().join("demo-report.json").is_file());
 }
+
+/// Writes `count` 16-bit photos of a flat RGB patch lit by the rig's lights, plus its rig.
+fn write_flat_rgb_session(dir: &Path, w: usize, h: usize, directions: &[[f32; 3]]) {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut rig = String::from("name = \"flat\"\n");
+    let albedo = [0.6f32, 0.4, 0.3];
+    for (i, d) in directions.iter().enumerate() {
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        rig += &format!("[[light]]\ndirection = [{}, {}, {}]\n", d[0], d[1], d[2]);
+        let shade = d[2] / len;
+        let px: Vec<u16> = (0..w * h).flat_map(|_| albedo.map(|a| (a * shade * 65535.0).round() as u16)).collect();
+        let name = format!("img_{:03}.png", 100 - i);
+        skinkit_maps::io::write_png(&dir.join(&name), w, h, skinkit_maps::io::PngLayout::Rgb16, &px).unwrap();
+    }
+    std::fs::write(dir.join("rig.toml"), rig).unwrap();
+}
+
+#[test]
+fn diligent_style_folder_uses_filenames_txt_order_and_gives_rgb_albedo() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("obj");
+    let dirs = [[0.5, 0.0, 0.866], [-0.5, 0.0, 0.866], [0.0, 0.5, 0.866], [0.0, -0.5, 0.866], [0.3, 0.3, 0.9]];
+    write_flat_rgb_session(&dir, 6, 5, &dirs);
+    // Names sort in reverse light order; filenames.txt restores it, as in DiLiGenT.
+    let listing: Vec<String> = (0..dirs.len()).map(|i| format!("img_{:03}.png", 100 - i)).collect();
+    std::fs::write(dir.join("filenames.txt"), listing.join("\n") + "\n").unwrap();
+    skinkit_maps::io::write_png(&dir.join("Normal_gt.png"), 6, 5, skinkit_maps::io::PngLayout::Rgb8, &vec![128; 90]).unwrap();
+    let out = tmp.path().join("out");
+    let o = skinkit(&[
+        "capture",
+        "--json",
+        "--detrend-block",
+        "0",
+        "--rig",
+        dir.join("rig.toml").to_str().unwrap(),
+        "--photos-from",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["invalid_pixels"], 0);
+    assert!(report["tilt_degrees"]["max"].as_f64().unwrap() < 0.05, "{}", report["tilt_degrees"]);
+    let albedo = skinkit_maps::io::read_photo(&out.join("albedo.png"), &Default::default()).unwrap();
+    assert_eq!(albedo.channels(), skinkit_maps::Channels::Rgb);
+    for (c, want) in [0.6f32, 0.4, 0.3].into_iter().enumerate() {
+        assert!((albedo.linear(c) - want).abs() < 2e-3, "channel {c}: {} vs {want}", albedo.linear(c));
+    }
+}
+
+#[test]
+fn a_one_pixel_capture_stays_finite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("one");
+    write_flat_rgb_session(&dir, 1, 1, &[[0.5, 0.0, 0.866], [-0.5, 0.0, 0.866], [0.0, 0.5, 0.866]]);
+    let out = tmp.path().join("out");
+    let o = skinkit(&[
+        "capture",
+        "--json",
+        "--rig",
+        dir.join("rig.toml").to_str().unwrap(),
+        "--photos-from",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let normals = skinkit_maps::io::read_normal_map(&out.join("normal.exr"), Default::default(), &Default::default()).unwrap();
+    assert!((normals.get(0, 0) - skinkit_maps::Vec3::Z).length() < 1e-4, "{}", normals.get(0, 0));
+}

@@ -281,6 +281,20 @@ mod tests {
     }
 
     #[test]
+    fn results_do_not_depend_on_thread_count() {
+        let map = random_map(57, 300, 11);
+        let with = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut m = map.clone();
+            pool.install(|| detrend(&mut m, 40));
+            m.as_slice().iter().flat_map(|v| v.to_array()).map(f32::to_bits).collect::<Vec<u32>>()
+        };
+        let one = with(1);
+        assert_eq!(one, with(3));
+        assert_eq!(one, with(8));
+    }
+
+    #[test]
     fn degenerate_maps() {
         let mut empty = NormalMap::from_grid(Grid::filled(6, 5, Vec3::ZERO));
         detrend(&mut empty, 50);
