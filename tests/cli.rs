@@ -255,7 +255,8 @@ fn diligent_style_folder_uses_filenames_txt_order_and_gives_rgb_albedo() {
     // Names sort in reverse light order; filenames.txt restores it, as in DiLiGenT.
     let listing: Vec<String> = (0..dirs.len()).map(|i| format!("img_{:03}.png", 100 - i)).collect();
     std::fs::write(dir.join("filenames.txt"), listing.join("\n") + "\n").unwrap();
-    skinkit_maps::io::write_png(&dir.join("Normal_gt.png"), 6, 5, skinkit_maps::io::PngLayout::Rgb8, &vec![128; 90]).unwrap();
+    skinkit_maps::io::write_png(&dir.join("Normal_gt.png"), 6, 5, skinkit_maps::io::PngLayout::Rgb8, &vec![128; 90])
+        .unwrap();
     let out = tmp.path().join("out");
     let o = skinkit(&[
         "capture",
@@ -297,6 +298,7 @@ fn a_one_pixel_capture_stays_finite() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let normals = skinkit_maps::io::read_normal_map(&out.join("normal.exr"), Default::default(), &Default::default()).unwrap();
+    let normals =
+        skinkit_maps::io::read_normal_map(&out.join("normal.exr"), Default::default(), &Default::default()).unwrap();
     assert!((normals.get(0, 0) - skinkit_maps::Vec3::Z).length() < 1e-4, "{}", normals.get(0, 0));
 }

@@ -10,6 +10,7 @@
 pub mod detrend;
 pub mod error;
 pub mod import;
+pub mod near;
 pub mod rig;
 pub mod solve;
 pub mod sphere;

@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use serde::Serialize;
 use skinkit_capture::solve::{self, AlbedoMap, PhotoStack, Solution, SolveConfig};
-use skinkit_capture::{Rig, detrend};
+use skinkit_capture::{Rig, detrend, near};
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::normal::AngularStats;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
@@ -149,7 +149,14 @@ pub fn capture(session: &Session, options: &CaptureOptions, stage: &(dyn Fn(&str
 
     stage("solve");
     let t = Instant::now();
-    let mut solution = solve::solve(&stack, &rig, &options.solve, &solve::no_progress)?;
+    // A rig that knows where its lamps are and how large a pixel is gets per-pixel light
+    // directions and falloff; otherwise the lights are taken as distant (the paper).
+    let near_lights = near::applies(&rig);
+    let mut solution = if near_lights {
+        near::solve(&stack, &rig, &options.solve)?
+    } else {
+        solve::solve(&stack, &rig, &options.solve, &solve::no_progress)?
+    };
     drop(stack);
     timings.solve = t.elapsed().as_secs_f64();
 
@@ -178,7 +185,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, stage: &(dyn Fn(&str
         width,
         height,
         light_count: rig.lights.len(),
-        solver: format!("{:?}", options.solve.method).to_lowercase(),
+        solver: format!("{:?}{}", options.solve.method, if near_lights { " (near lights)" } else { "" }).to_lowercase(),
         condition_number: conditioning.condition_number,
         noise_amplification: conditioning.noise_amplification,
         detrend_block: options.detrend_block,
