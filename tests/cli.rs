@@ -302,3 +302,53 @@ fn a_one_pixel_capture_stays_finite() {
         skinkit_maps::io::read_normal_map(&out.join("normal.exr"), Default::default(), &Default::default()).unwrap();
     assert!((normals.get(0, 0) - skinkit_maps::Vec3::Z).length() < 1e-4, "{}", normals.get(0, 0));
 }
+
+/// A 16-bit photo of a mirror sphere (dim disc, Gaussian highlight where it reflects `light`).
+fn mirror_sphere_photo(path: &Path, light: [f32; 3], (w, h, cx, cy, r): (usize, usize, f32, f32, f32)) {
+    let l = skinkit_maps::Vec3::from(light).normalize();
+    let n = (l + skinkit_maps::Vec3::Z).normalize();
+    let (hx, hy) = (cx + r * n.x, cy - r * n.y);
+    let px: Vec<u16> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            if (x - cx).hypot(y - cy) > r {
+                return 0;
+            }
+            let glint = (-((x - hx).powi(2) + (y - hy).powi(2)) / (2.0 * 1.2f32.powi(2))).exp();
+            ((0.15 + 0.85 * glint) * 65535.0) as u16
+        })
+        .collect();
+    skinkit_maps::io::write_png(path, w, h, skinkit_maps::io::PngLayout::Gray16, &px).unwrap();
+}
+
+#[test]
+fn rig_from_mirror_sphere_recovers_the_light_directions() {
+    let tmp = tempfile::tempdir().unwrap();
+    let lights = [[0.6f32, 0.1, 0.8], [-0.5, 0.3, 0.81], [0.05, -0.6, 0.8], [0.2, 0.2, 0.96]];
+    let mut args = vec!["rig".to_string(), "from-sphere".into(), "--quiet".into()];
+    for (i, l) in lights.iter().enumerate() {
+        let p = tmp.path().join(format!("chrome{i}.png"));
+        mirror_sphere_photo(&p, *l, (120, 100, 58.0, 47.0, 40.0));
+        args.push(p.display().to_string());
+    }
+    let rig = tmp.path().join("rig.toml");
+    args.extend(["--out".into(), rig.display().to_string()]);
+    let o = skinkit(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&rig).unwrap();
+    let parsed: Vec<[f32; 3]> = text
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("direction = ["))
+        .map(|l| {
+            let v: Vec<f32> = l.trim_end_matches(']').split(',').map(|x| x.trim().parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    assert_eq!(parsed.len(), lights.len(), "{text}");
+    for (got, want) in parsed.iter().zip(lights) {
+        let (g, w) = (skinkit_maps::Vec3::from(*got).normalize(), skinkit_maps::Vec3::from(want).normalize());
+        let deg = skinkit_maps::normal::angle_degrees(g, w);
+        // The sphere's circle is found automatically from 120x100 photos: about a degree at most.
+        assert!(deg < 1.5, "{got:?} vs {want:?}: {deg} deg");
+    }
+}
