@@ -246,6 +246,17 @@ fn write_flat_rgb_session(dir: &Path, w: usize, h: usize, directions: &[[f32; 3]
     std::fs::write(dir.join("rig.toml"), rig).unwrap();
 }
 
+/// Captures the session folder `dir` (its rig.toml and photos) into `out`; returns the JSON report.
+fn capture_session_json(dir: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let rig = dir.join("rig.toml");
+    let mut args = vec!["capture", "--json", "--rig", rig.to_str().unwrap(), "--photos-from", dir.to_str().unwrap()];
+    args.extend(["--out", out.to_str().unwrap()]);
+    args.extend(extra);
+    let o = skinkit(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_slice(&o.stdout).expect("--json prints JSON")
+}
+
 #[test]
 fn diligent_style_folder_uses_filenames_txt_order_and_gives_rgb_albedo() {
     let tmp = tempfile::tempdir().unwrap();
@@ -258,20 +269,7 @@ fn diligent_style_folder_uses_filenames_txt_order_and_gives_rgb_albedo() {
     skinkit_maps::io::write_png(&dir.join("Normal_gt.png"), 6, 5, skinkit_maps::io::PngLayout::Rgb8, &vec![128; 90])
         .unwrap();
     let out = tmp.path().join("out");
-    let o = skinkit(&[
-        "capture",
-        "--json",
-        "--detrend-block",
-        "0",
-        "--rig",
-        dir.join("rig.toml").to_str().unwrap(),
-        "--photos-from",
-        dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let report = capture_session_json(&dir, &out, &["--detrend-block", "0"]);
     assert_eq!(report["invalid_pixels"], 0);
     assert!(report["tilt_degrees"]["max"].as_f64().unwrap() < 0.05, "{}", report["tilt_degrees"]);
     let albedo = skinkit_maps::io::read_photo(&out.join("albedo.png"), &Default::default()).unwrap();
@@ -287,17 +285,7 @@ fn a_one_pixel_capture_stays_finite() {
     let dir = tmp.path().join("one");
     write_flat_rgb_session(&dir, 1, 1, &[[0.5, 0.0, 0.866], [-0.5, 0.0, 0.866], [0.0, 0.5, 0.866]]);
     let out = tmp.path().join("out");
-    let o = skinkit(&[
-        "capture",
-        "--json",
-        "--rig",
-        dir.join("rig.toml").to_str().unwrap(),
-        "--photos-from",
-        dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    capture_session_json(&dir, &out, &[]);
     let normals =
         skinkit_maps::io::read_normal_map(&out.join("normal.exr"), Default::default(), &Default::default()).unwrap();
     assert!((normals.get(0, 0) - skinkit_maps::Vec3::Z).length() < 1e-4, "{}", normals.get(0, 0));

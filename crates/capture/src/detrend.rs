@@ -205,6 +205,7 @@ fn rotate_by_mean(n: Vec3, sum: &[f64; 4]) -> Vec3 {
     rotate_to_z(s / len, n.as_dvec3()).as_vec3()
 }
 
+#[cfg(test)]
 /// `rotation_to_z(m) * n` without forming the matrix: with `d = mx nx + my ny` and
 /// `t = d / (1 + mz) + nz`, the rows of [`rotation_to_z`] give `(nx - mx t, ny - my t, d + mz nz)`.
 #[inline(always)]

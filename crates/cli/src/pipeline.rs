@@ -66,32 +66,15 @@ pub struct CaptureReport {
     pub valid_pixels: usize,
     pub invalid_pixels: usize,
     /// Angle of the output normals from +Z, in degrees (how rough the captured surface is).
-    pub tilt_degrees: Stats,
+    pub tilt_degrees: AngularStats,
     /// Angular error against the ground truth, when one was given.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub error_vs_truth_degrees: Option<Stats>,
+    pub error_vs_truth_degrees: Option<AngularStats>,
     pub warnings: Vec<String>,
     pub timings_s: Timings,
     /// Peak resident memory of the process so far, in MiB (Linux only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub peak_memory_mib: Option<f64>,
-}
-
-/// Angular statistics in degrees, for reports.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Stats {
-    pub count: usize,
-    pub mean: f32,
-    pub rms: f32,
-    pub median: f32,
-    pub p95: f32,
-    pub max: f32,
-}
-
-impl From<AngularStats> for Stats {
-    fn from(s: AngularStats) -> Self {
-        Stats { count: s.count, mean: s.mean, rms: s.rms, median: s.median, p95: s.p95, max: s.max }
-    }
 }
 
 /// A finished capture in memory.
@@ -191,8 +174,8 @@ pub fn capture(session: &Session, options: &CaptureOptions, stage: &(dyn Fn(&str
         detrend_block: options.detrend_block,
         valid_pixels: width * height - solution.stats.invalid_count,
         invalid_pixels: solution.stats.invalid_count,
-        tilt_degrees: tilt.into(),
-        error_vs_truth_degrees: error_vs_truth.map(Stats::from),
+        tilt_degrees: tilt,
+        error_vs_truth_degrees: error_vs_truth,
         warnings,
         timings_s: timings,
         peak_memory_mib: peak_memory_mib(),

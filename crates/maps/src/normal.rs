@@ -120,7 +120,7 @@ pub fn angle_degrees(a: Vec3, b: Vec3) -> f32 {
 }
 
 /// Summary of angular differences, in degrees.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct AngularStats {
     /// Number of texels compared.
     pub count: usize,
