@@ -991,10 +991,20 @@ impl<'a> Plan<'a> {
         invalid as usize
     }
 
-    /// Fast least-squares path for linear grey photos: raw values (minus ambient) into `s.r`,
-    /// then `g += P'_i * raw_i` with the folded pseudo-inverse and `rr += (raw_i * scale_i)^2`.
+    /// Fast least-squares path for linear grey photos: `g += P'_i * raw_i` with the folded
+    /// pseudo-inverse and `rr += (raw_i * scale_i)^2`, straight from the stored samples (the
+    /// conversion to f32 is exact), or from `s.r` holding raw values minus the ambient frame's.
     #[inline(always)]
     fn accumulate_folded(&self, p: usize, n: usize, s: &mut Scratch) {
+        let (folded, scales) = (&self.folded[..], &self.gray_scales[..]);
+        let sums = (&mut s.gx, &mut s.gy, &mut s.gz, &mut s.rr);
+        let src = |i: usize| self.sources[i].raw;
+        match (self.sources[0].raw, self.sources[0].ambient) {
+            (Raw::U16(_), None) => return accumulate_rows(n, |i| &as_u16(src(i))[p..p + n], sums, folded, scales),
+            (Raw::U8(_), None) => return accumulate_rows(n, |i| &as_u8(src(i))[p..p + n], sums, folded, scales),
+            (Raw::F32(_), None) => return accumulate_rows(n, |i| &as_f32(src(i))[p..p + n], sums, folded, scales),
+            _ => {}
+        }
         for (i, src) in self.sources.iter().enumerate() {
             let out = &mut s.r[i * CHUNK..i * CHUNK + n];
             match (src.raw, src.ambient) {
@@ -1124,12 +1134,13 @@ fn take_sized<T: AlbedoTexel>(grid: Grid<T>, w: usize, h: usize) -> Vec<T> {
 
 /// `n` zeros from the allocator's zeroed allocation. Large sizes come straight from the OS as
 /// untouched zero pages, so the only touch of each page is the solve's write to it, made by the
-/// worker that owns the band (no separate fill pass); transparent huge pages are requested for
-/// them, cutting the page faults 512-fold where the kernel grants them.
+/// worker that owns the band (no separate fill pass).
+///
+/// Transparent huge pages were tried (`madvise(MADV_HUGEPAGE)`): they made the solve faster on
+/// average but the whole 4096x4096 capture slower and erratic (0.13 to 0.44 s detrends, from
+/// synchronous compaction), so the plain 4 KiB pages stay.
 pub(crate) fn fresh_zeroed(n: usize) -> Vec<f32> {
-    let v = vec![0.0f32; n];
-    advise_huge_pages(v.as_ptr().cast(), n * size_of::<f32>());
-    v
+    vec![0.0f32; n]
 }
 
 /// [`fresh_zeroed`] for `Vec3` texels.
@@ -1142,27 +1153,6 @@ pub(crate) fn fresh_zeroed_vec3(n: usize) -> Vec<Vec3> {
     // the layout of `n` zero `Vec3`s, and the old vector is never dropped.
     debug_assert!(len == cap && len % 3 == 0);
     unsafe { Vec::from_raw_parts(ptr.cast::<Vec3>(), len / 3, cap / 3) }
-}
-
-/// Asks Linux to back `len` bytes at `ptr` with transparent huge pages (`madvise` mode); a hint
-/// only, ignored elsewhere, for small buffers, or when refused.
-fn advise_huge_pages(ptr: *const u8, len: usize) {
-    #[cfg(target_os = "linux")]
-    {
-        const HUGE: usize = 2 << 20;
-        const PAGE: usize = 4096;
-        if len < 2 * HUGE {
-            return;
-        }
-        let start = (ptr as usize).next_multiple_of(PAGE);
-        let end = (ptr as usize + len) & !(PAGE - 1);
-        // SAFETY: the range lies inside a live allocation of ours; MADV_HUGEPAGE changes no data.
-        unsafe {
-            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = (ptr, len);
 }
 
 /// Copies the chunk's all-lights results (grey albedo) to the output.
@@ -1196,46 +1186,58 @@ fn raw_values<T: Sample>(v: &[T], ambient: Option<&[T]>, out: &mut [f32]) {
     }
 }
 
-/// `g += coefs_i * x_i` and `rr += (x_i * scales_i)^2` over all lights, `x_i` the rows of `s.r`,
-/// four lights per pass over the accumulators (the sums are still formed light by light, so the
-/// grouping does not change a bit).
+/// `g += coefs_i * x_i` and `rr += (x_i * scales_i)^2` over all lights, `x_i` the rows of `s.r`.
 #[inline(always)]
 fn accumulate_all(n: usize, s: &mut Scratch, coefs: &[[f32; 3]], scales: &[f32]) {
     let Scratch { r, gx, gy, gz, rr, .. } = s;
-    let sums = (&mut gx[..n], &mut gy[..n], &mut gz[..n], &mut rr[..n]);
+    accumulate_rows(n, |i| &r[i * CHUNK..i * CHUNK + n], (gx, gy, gz, rr), coefs, scales);
+}
+
+/// `g += coefs_i * x_i` and `rr += (x_i * scales_i)^2` over all lights, `x_i = row(i)` (the `n`
+/// values of light `i`, stored samples or readings), four lights per pass over the accumulators
+/// (the sums are still formed light by light, so the grouping does not change a bit).
+#[inline(always)]
+fn accumulate_rows<'r, T: Sample + 'r>(
+    n: usize,
+    row: impl Fn(usize) -> &'r [T],
+    sums: (&mut [f32; CHUNK], &mut [f32; CHUNK], &mut [f32; CHUNK], &mut [f32; CHUNK]),
+    coefs: &[[f32; 3]],
+    scales: &[f32],
+) {
+    let (gx, gy, gz, rr) = sums;
     for (g, (c, sc)) in coefs.chunks(4).zip(scales.chunks(4)).enumerate() {
-        let rows = &r[4 * g * CHUNK..];
-        let sums = (&mut *sums.0, &mut *sums.1, &mut *sums.2, &mut *sums.3);
+        let sums = (&mut gx[..n], &mut gy[..n], &mut gz[..n], &mut rr[..n]);
+        let rows = |t: usize| row(4 * g + t);
         match (c.len(), g == 0) {
-            (4, true) => accumulate::<4, true>(rows, n, c, sc, sums),
-            (4, false) => accumulate::<4, false>(rows, n, c, sc, sums),
-            (3, true) => accumulate::<3, true>(rows, n, c, sc, sums),
-            (3, false) => accumulate::<3, false>(rows, n, c, sc, sums),
-            (2, _) => accumulate::<2, false>(rows, n, c, sc, sums),
-            _ => accumulate::<1, false>(rows, n, c, sc, sums),
+            (4, true) => accumulate::<T, 4, true>(std::array::from_fn(rows), n, c, sc, sums),
+            (4, false) => accumulate::<T, 4, false>(std::array::from_fn(rows), n, c, sc, sums),
+            (3, true) => accumulate::<T, 3, true>(std::array::from_fn(rows), n, c, sc, sums),
+            (3, false) => accumulate::<T, 3, false>(std::array::from_fn(rows), n, c, sc, sums),
+            (2, _) => accumulate::<T, 2, false>(std::array::from_fn(rows), n, c, sc, sums),
+            _ => accumulate::<T, 1, false>(std::array::from_fn(rows), n, c, sc, sums),
         }
     }
 }
 
-/// The kernel of [`accumulate_all`] for `N` lights whose readings start at `rows` (stride [`CHUNK`]);
-/// `FIRST` starts the sums from zero instead of reading them (no separate clearing pass).
+/// The kernel of [`accumulate_rows`] for `N` lights' values `xs`; `FIRST` starts the sums from
+/// zero instead of reading them (no separate clearing pass).
 #[inline(always)]
-fn accumulate<const N: usize, const FIRST: bool>(
-    rows: &[f32],
+fn accumulate<T: Sample, const N: usize, const FIRST: bool>(
+    xs: [&[T]; N],
     n: usize,
     coefs: &[[f32; 3]],
     scales: &[f32],
     sums: (&mut [f32], &mut [f32], &mut [f32], &mut [f32]),
 ) {
     let (gx, gy, gz, rr) = sums;
-    let xs: [&[f32]; N] = std::array::from_fn(|t| &rows[t * CHUNK..t * CHUNK + n]);
+    let xs: [&[T]; N] = std::array::from_fn(|t| &xs[t][..n]);
     let c: [[f32; 3]; N] = std::array::from_fn(|t| coefs[t]);
     let sc: [f32; N] = std::array::from_fn(|t| scales[t]);
     let (gx, gy, gz, rr) = (&mut gx[..n], &mut gy[..n], &mut gz[..n], &mut rr[..n]);
     for j in 0..n {
         let (mut x, mut y, mut z, mut q) = if FIRST { (0.0, 0.0, 0.0, 0.0) } else { (gx[j], gy[j], gz[j], rr[j]) };
         for t in 0..N {
-            let v = xs[t][j];
+            let v = xs[t][j].value();
             // Fused multiply-adds: one rounding each, the same bits with or without FMA hardware.
             x = c[t][0].mul_add(v, x);
             y = c[t][1].mul_add(v, y);
@@ -1287,19 +1289,19 @@ impl<'a> Source<'a> {
 fn as_u8(r: Raw<'_>) -> &[u8] {
     match r {
         Raw::U8(v) => v,
-        _ => unreachable!("the stack checks that the ambient photo has the photos' format"),
+        _ => unreachable!("the stack checks that all photos and the ambient frame share one format"),
     }
 }
 fn as_u16(r: Raw<'_>) -> &[u16] {
     match r {
         Raw::U16(v) => v,
-        _ => unreachable!("the stack checks that the ambient photo has the photos' format"),
+        _ => unreachable!("the stack checks that all photos and the ambient frame share one format"),
     }
 }
 fn as_f32(r: Raw<'_>) -> &[f32] {
     match r {
         Raw::F32(v) => v,
-        _ => unreachable!("the stack checks that the ambient photo has the photos' format"),
+        _ => unreachable!("the stack checks that all photos and the ambient frame share one format"),
     }
 }
 
