@@ -252,7 +252,8 @@ impl Rig {
         let lights = (0..count)
             .map(|i| {
                 let a = std::f64::consts::TAU * i as f64 / count as f64;
-                let d = [e.cos() * a.cos(), e.cos() * a.sin(), e.sin()];
+                // Snap the rounding residue of cos(90 deg) and friends to zero so rig files read cleanly.
+                let d = [e.cos() * a.cos(), e.cos() * a.sin(), e.sin()].map(|c| if c.abs() < 1e-12 { 0.0 } else { c });
                 Light {
                     direction: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32),
                     intensity: Vec3::splat(intensity),
