@@ -108,10 +108,10 @@ impl Light {
     pub fn new(direction: Vec3, intensity: Vec3, position: Option<Vec3>) -> Result<Light, String> {
         let direction = unit_direction(direction)?;
         check_intensity(intensity)?;
-        if let Some(p) = position {
-            if !p.is_finite() {
-                return Err(format!("position {} is not finite", show(p)));
-            }
+        if let Some(p) = position
+            && !p.is_finite()
+        {
+            return Err(format!("position {} is not finite", show(p)));
         }
         Ok(Light { direction, intensity, position })
     }
@@ -178,10 +178,10 @@ impl Rig {
                 return Err(bad(&format!("{origin}: light {}", i + 1), "direction is not a unit vector".into()));
             }
         }
-        if let Some(mm) = self.mm_per_pixel {
-            if !(mm.is_finite() && mm > 0.0) {
-                return Err(bad(origin, format!("mm_per_pixel {mm} must be finite and > 0")));
-            }
+        if let Some(mm) = self.mm_per_pixel
+            && !(mm.is_finite() && mm > 0.0)
+        {
+            return Err(bad(origin, format!("mm_per_pixel {mm} must be finite and > 0")));
         }
         Ok(())
     }

@@ -227,6 +227,9 @@ fn tilt_degrees(n: Vec3) -> f32 {
     n.truncate().length().atan2(n.z).to_degrees()
 }
 
+/// An output file's name and the function that writes it to a path.
+type WriteJob<'a> = (&'a str, Box<dyn Fn(&Path) -> skinkit_maps::Result<()> + Sync + 'a>);
+
 /// Writes `normal.exr`, `normal.png`, `albedo.png`, `confidence.png` and `report.json` into `dir`
 /// (created if needed), each atomically. Returns the time spent.
 ///
@@ -236,7 +239,7 @@ pub fn write_outputs(dir: &Path, captured: &mut Captured, options: &CaptureOptio
     let t = Instant::now();
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let s = &captured.solution;
-    let jobs: [(&str, Box<dyn Fn(&Path) -> skinkit_maps::Result<()> + Sync>); 4] = [
+    let jobs: [WriteJob; 4] = [
         ("normal.exr", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 32))),
         ("normal.png", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 16))),
         ("albedo.png", Box::new(|p| write_albedo(p, &s.albedo))),

@@ -71,17 +71,14 @@ pub struct SolveArgs {
 impl SolveArgs {
     /// The validated library options.
     pub fn options(&self) -> Result<CaptureOptions> {
-        let mut solve = SolveConfig::default();
-        solve.method = if self.solver == "ls" { Method::LeastSquares } else { Method::Robust };
-        if let Some(v) = self.shadow_threshold {
-            solve.shadow_abs = v;
-        }
-        if let Some(v) = self.shadow_relative {
-            solve.shadow_rel = v;
-        }
-        if let Some(v) = self.saturation {
-            solve.saturation = v;
-        }
+        let defaults = SolveConfig::default();
+        let solve = SolveConfig {
+            method: if self.solver == "ls" { Method::LeastSquares } else { Method::Robust },
+            shadow_abs: self.shadow_threshold.unwrap_or(defaults.shadow_abs),
+            shadow_rel: self.shadow_relative.unwrap_or(defaults.shadow_rel),
+            saturation: self.saturation.unwrap_or(defaults.saturation),
+            ..defaults
+        };
         solve.validate().context("invalid solver option")?;
         let green: GreenAxis = self.green.parse().map_err(anyhow::Error::msg)?;
         Ok(CaptureOptions {

@@ -80,7 +80,8 @@ pub fn render_lights(rig: &Rig) -> Vec<hf::RenderLight> {
 
 /// Renders one region into `dir`.
 fn write_region(region: &str, dir: &Path, args: &Args, rig: &Rig) -> Result<()> {
-    let region_seed = args.seed ^ (REGIONS.iter().position(|r| *r == region).unwrap_or(0) as u64 + 1) * 0x9E37_79B9;
+    let region_index = REGIONS.iter().position(|r| *r == region).unwrap_or(0) as u64;
+    let region_seed = args.seed ^ ((region_index + 1) * 0x9E37_79B9);
     let field = hf::generate(&preset(region, args.size, region_seed)?)?;
     let photos = hf::render(&field, &render_lights(rig), &render_config(region_seed))?;
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
