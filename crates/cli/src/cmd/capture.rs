@@ -52,13 +52,13 @@ pub struct SolveArgs {
     #[arg(long, default_value_t = 50, value_name = "PIXELS")]
     pub detrend_block: usize,
     /// Robust solver: readings below this fraction of full scale count as shadow.
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", value_parser = fraction)]
     pub shadow_threshold: Option<f32>,
     /// Robust solver: readings below this fraction of the pixel's brightest reading count as shadow.
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", value_parser = fraction)]
     pub shadow_relative: Option<f32>,
     /// Readings at or above this fraction of full scale count as saturated.
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", value_parser = fraction)]
     pub saturation: Option<f32>,
     /// How 8/16-bit photo values relate to light: `linear` (raw, machine-vision cameras) or `srgb`.
     #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
@@ -88,6 +88,14 @@ impl SolveArgs {
             encoding: NormalEncoding { green },
             limits: Limits::default(),
         })
+    }
+}
+
+/// A number in `[0, 1]`, for the threshold flags.
+fn fraction(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}` is not a fraction between 0 and 1")),
     }
 }
 
