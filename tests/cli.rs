@@ -340,3 +340,20 @@ fn rig_from_mirror_sphere_recovers_the_light_directions() {
         assert!(deg < 1.5, "{got:?} vs {want:?}: {deg} deg");
     }
 }
+
+#[test]
+fn outputs_do_not_depend_on_the_thread_count() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut outputs = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = tmp.path().join(threads);
+        capture_session_json(&mold("nose"), &out, &["--threads", threads]);
+        outputs.push(out);
+    }
+    for name in ["normal.exr", "normal.png", "albedo.png", "confidence.png"] {
+        let first = std::fs::read(outputs[0].join(name)).unwrap();
+        for other in &outputs[1..] {
+            assert!(first == std::fs::read(other.join(name)).unwrap(), "{name} differs with {}", other.display());
+        }
+    }
+}
