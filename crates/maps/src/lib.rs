@@ -19,6 +19,7 @@ pub mod grid;
 pub mod io;
 pub mod normal;
 pub mod photo;
+pub mod pyramid;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};
