@@ -1,0 +1,182 @@
+//! [`SynthConfig`]: the options of a synthesis run and their validation against an exemplar.
+
+use crate::{Error, Result};
+
+/// How the nearest exemplar neighbourhood is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Search {
+    /// Exhaustive L2 scan over every candidate: the reference every faster mode is measured against.
+    Exact,
+    /// PCA projection to `dims` dimensions (1..=32), a kd-tree query there, and the `rerank` best
+    /// tree candidates re-scored in the full neighbourhood space.
+    Approximate { dims: usize, rerank: usize },
+}
+
+/// Options of [`crate::synthesize`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SynthConfig {
+    /// Output width in texels.
+    pub width: usize,
+    /// Output height in texels.
+    pub height: usize,
+    /// Pyramid levels (1 = single resolution); clamped to what the exemplar allows.
+    pub levels: usize,
+    /// Side of the causal neighbourhood at the current level (odd, at least 3).
+    pub neighbourhood: usize,
+    /// Side of the full neighbourhood at the coarser level (odd).
+    pub parent: usize,
+    /// Nearest-neighbourhood search mode.
+    pub search: Search,
+    /// Add Ashikhmin coherence candidates (approximate search only).
+    pub coherence: bool,
+    /// Exemplar neighbourhoods wrap around the exemplar (otherwise only texels whose whole
+    /// neighbourhood lies inside are candidates).
+    pub exemplar_wrap: bool,
+    /// Seed of the initial noise.
+    pub seed: u64,
+    /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
+    pub memory_limit: u64,
+}
+
+impl Default for SynthConfig {
+    fn default() -> Self {
+        SynthConfig {
+            width: 256,
+            height: 256,
+            levels: 3,
+            neighbourhood: 5,
+            parent: 3,
+            search: Search::Approximate { dims: 8, rerank: 8 },
+            coherence: true,
+            exemplar_wrap: false,
+            seed: 0,
+            memory_limit: 8 << 30,
+        }
+    }
+}
+
+/// The side of the next coarser pyramid level.
+pub(crate) fn half(side: usize) -> usize {
+    side.div_ceil(2)
+}
+
+impl SynthConfig {
+    /// The default options for a `width x height` output.
+    pub fn new(width: usize, height: usize) -> Self {
+        SynthConfig { width, height, ..Default::default() }
+    }
+
+    /// The most pyramid levels an `ew x eh` exemplar allows: its coarsest level must still hold a
+    /// full `neighbourhood x neighbourhood` window.
+    pub fn max_levels(&self, ew: usize, eh: usize) -> usize {
+        skinkit_maps::pyramid::max_levels(ew, eh, self.neighbourhood).max(1)
+    }
+
+    /// Checks the options against an `ew x eh` exemplar; returns the options to run with (levels
+    /// clamped) and warnings about what was changed.
+    ///
+    /// # Errors
+    /// On an empty output, an even or too small neighbourhood, zero levels, search parameters out
+    /// of range, or an exemplar smaller than the neighbourhood.
+    pub fn validate(&self, ew: usize, eh: usize) -> Result<(SynthConfig, Vec<String>)> {
+        if self.width == 0 || self.height == 0 {
+            let size = format!("{}x{}", self.width, self.height);
+            return Err(Error::config("size", size, "the output must be at least 1x1"));
+        }
+        if self.width > u32::MAX as usize || self.height > u32::MAX as usize {
+            let size = format!("{}x{}", self.width, self.height);
+            return Err(Error::config("size", size, "sides must fit in 32 bits"));
+        }
+        if self.neighbourhood < 3 || self.neighbourhood.is_multiple_of(2) {
+            return Err(Error::config("neighbourhood", self.neighbourhood, "must be odd and at least 3"));
+        }
+        if self.parent.is_multiple_of(2) {
+            return Err(Error::config("parent", self.parent, "must be odd"));
+        }
+        if self.levels == 0 {
+            return Err(Error::config("levels", 0, "at least one level is needed"));
+        }
+        if let Search::Approximate { dims, rerank } = self.search {
+            if !(1..=32).contains(&dims) {
+                return Err(Error::config("dims", dims, "must be between 1 and 32"));
+            }
+            if rerank == 0 {
+                return Err(Error::config("rerank", 0, "at least one candidate is needed"));
+            }
+        }
+        if ew < self.neighbourhood || eh < self.neighbourhood || ew > u32::MAX as usize || eh > u32::MAX as usize {
+            return Err(Error::ExemplarTooSmall { width: ew, height: eh, n: self.neighbourhood });
+        }
+        let mut config = self.clone();
+        let mut warnings = Vec::new();
+        let max = self.max_levels(ew, eh);
+        if self.levels > max {
+            warnings.push(format!(
+                "levels {} clamped to {max}: the {ew}x{eh} exemplar's coarsest level must hold a {n}x{n} neighbourhood",
+                self.levels,
+                n = self.neighbourhood
+            ));
+            config.levels = max;
+        }
+        let estimate = config.memory_estimate(ew, eh);
+        if estimate > config.memory_limit {
+            return Err(Error::TooLarge {
+                width: config.width,
+                height: config.height,
+                estimate_mib: estimate.div_ceil(1 << 20),
+                limit_mib: config.memory_limit >> 20,
+            });
+        }
+        Ok((config, warnings))
+    }
+
+    /// Bytes a run from an `ew x eh` exemplar holds at its peak, roughly: every output level's
+    /// texels, coordinates and progress flags; the exemplar pyramid; and the finest exemplar level's
+    /// features with, for approximate search, its projected points and kd-tree.
+    pub fn memory_estimate(&self, ew: usize, eh: usize) -> u64 {
+        let (mut w, mut h) = (self.width as u64, self.height as u64);
+        let mut output = 0u64;
+        for _ in 0..self.levels.max(1) {
+            output = output.saturating_add(w.saturating_mul(h).saturating_mul(12 + 8 + 1));
+            (w, h) = (w.div_ceil(2), h.div_ceil(2));
+        }
+        let texels = (ew as u64).saturating_mul(eh as u64);
+        let dim = 3 * ((self.neighbourhood * self.neighbourhood) / 2 + self.parent * self.parent) as u64;
+        let per_candidate = match self.search {
+            Search::Exact => 4 * dim,
+            Search::Approximate { dims, .. } => {
+                4 * dim + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
+            }
+        };
+        let exemplar = texels.saturating_mul(12 * 4 / 3 + per_candidate);
+        output.saturating_add(exemplar)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn max_levels_keeps_a_neighbourhood_at_the_top() {
+        let c = SynthConfig::default();
+        // 32 -> 16 -> 8 -> 4: 4 < 5, so three levels.
+        assert_eq!(c.max_levels(32, 32), 3);
+        assert_eq!(c.max_levels(5, 100), 1);
+        assert_eq!(c.max_levels(9, 9), 2);
+        assert_eq!(c.max_levels(10, 10), 2);
+    }
+
+    #[test]
+    fn validate_rejects_bad_options() {
+        let bad = |f: fn(&mut SynthConfig)| {
+            let mut c = SynthConfig::new(8, 8);
+            f(&mut c);
+            c.validate(32, 32).unwrap_err().to_string()
+        };
+        assert!(bad(|c| c.neighbourhood = 4).contains("neighbourhood = 4"));
+        assert!(bad(|c| c.width = 0).contains("0x8"));
+        assert!(bad(|c| c.search = Search::Approximate { dims: 33, rerank: 1 }).contains("dims = 33"));
+        assert!(bad(|c| c.levels = 0).contains("levels"));
+    }
+}

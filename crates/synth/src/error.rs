@@ -1,0 +1,33 @@
+//! The error type of the `synth` crate: every message names the offending values.
+
+/// Errors from synthesis and coordinate replay.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The exemplar cannot hold a single full neighbourhood.
+    #[error("exemplar {width}x{height} is smaller than the {n}x{n} neighbourhood")]
+    ExemplarTooSmall { width: usize, height: usize, n: usize },
+    /// A [`crate::SynthConfig`] field out of range.
+    #[error("synthesis option {field} = {value}: {reason}")]
+    InvalidConfig { field: &'static str, value: String, reason: String },
+    /// A run whose estimated working memory exceeds [`crate::SynthConfig::memory_limit`].
+    #[error("synthesising {width}x{height} needs an estimated {estimate_mib} MiB, over the limit of {limit_mib} MiB")]
+    TooLarge { width: usize, height: usize, estimate_mib: u64, limit_mib: u64 },
+    /// A coordinate map that points outside the map it is replayed on.
+    #[error(
+        "coordinate map entry ({x}, {y}) at output texel ({col}, {row}) lies outside the {width}x{height} map being replayed"
+    )]
+    CoordsOutside { x: u32, y: u32, col: usize, row: usize, width: usize, height: usize },
+    /// An error from the `maps` crate.
+    #[error(transparent)]
+    Maps(#[from] skinkit_maps::Error),
+}
+
+/// Result alias for the `synth` crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    pub(crate) fn config(field: &'static str, value: impl ToString, reason: impl ToString) -> Self {
+        Error::InvalidConfig { field, value: value.to_string(), reason: reason.to_string() }
+    }
+}

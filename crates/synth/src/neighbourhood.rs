@@ -1,0 +1,99 @@
+//! Wei-Levoy neighbourhoods flattened into feature vectors (Wei and Levoy 2000, section 3).
+//!
+//! A feature vector holds, 3 floats per texel, first the causal part of the `N x N` window at the
+//! current level (the `(N*N - 1) / 2` texels before the centre in scanline order: full rows above,
+//! then the texels left of the centre), then, when a coarser level exists, the full `M x M` window
+//! of that level centred on `(x / 2, y / 2)`, in row-major order.
+
+use glam::Vec3;
+
+/// The offsets of one neighbourhood shape.
+#[derive(Clone, Debug)]
+pub struct Neighbourhood {
+    causal: Vec<[isize; 2]>,
+    parent: Vec<[isize; 2]>,
+}
+
+impl Neighbourhood {
+    /// A causal `n x n` window, joined with a full `m x m` coarser window when `has_parent`.
+    pub fn new(n: usize, m: usize, has_parent: bool) -> Self {
+        let r = (n / 2) as isize;
+        let causal = (-r..=0).flat_map(|dy| (-r..=r).map(move |dx| [dx, dy])).take_while(|&o| o != [0, 0]).collect();
+        let pr = (m / 2) as isize;
+        let parent = if has_parent {
+            (-pr..=pr).flat_map(|dy| (-pr..=pr).map(move |dx| [dx, dy])).collect()
+        } else {
+            Vec::new()
+        };
+        Neighbourhood { causal, parent }
+    }
+
+    /// Offsets `[dx, dy]` of the causal texels, in feature order.
+    pub fn causal(&self) -> &[[isize; 2]] {
+        &self.causal
+    }
+
+    /// Offsets of the coarser-level texels around `(x / 2, y / 2)`, in feature order (empty at the
+    /// coarsest level).
+    pub fn parent(&self) -> &[[isize; 2]] {
+        &self.parent
+    }
+
+    /// Length of the feature vector in floats.
+    pub fn dim(&self) -> usize {
+        3 * (self.causal.len() + self.parent.len())
+    }
+
+    /// Writes the feature vector of texel `(x, y)` into `out` (length [`Self::dim`]); `current`
+    /// and `coarser` read texels at the current and at the coarser level and do their own
+    /// border addressing.
+    pub fn gather(
+        &self,
+        x: isize,
+        y: isize,
+        current: impl Fn(isize, isize) -> Vec3,
+        coarser: impl Fn(isize, isize) -> Vec3,
+        out: &mut [f32],
+    ) {
+        debug_assert_eq!(out.len(), self.dim());
+        let (px, py) = (x.div_euclid(2), y.div_euclid(2));
+        let texels = self
+            .causal
+            .iter()
+            .map(|&[dx, dy]| current(x + dx, y + dy))
+            .chain(self.parent.iter().map(|&[dx, dy]| coarser(px + dx, py + dy)));
+        for (slot, t) in out.chunks_exact_mut(3).zip(texels) {
+            slot.copy_from_slice(&t.to_array());
+        }
+    }
+}
+
+/// Squared L2 distance, summed in index order (so every caller gets the same bits).
+pub fn distance2(a: &[f32], b: &[f32]) -> f32 {
+    a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn causal_window_is_the_texels_before_the_centre() {
+        let nb = Neighbourhood::new(5, 3, true);
+        assert_eq!(nb.causal().len(), 12);
+        assert_eq!(nb.causal()[0], [-2, -2]);
+        assert_eq!(nb.causal()[11], [-1, 0]);
+        assert_eq!(nb.parent().len(), 9);
+        assert_eq!(nb.dim(), 3 * 21);
+        assert_eq!(Neighbourhood::new(3, 3, false).dim(), 12);
+    }
+
+    #[test]
+    fn gather_reads_both_levels_in_order() {
+        let nb = Neighbourhood::new(3, 1, true);
+        let mut out = vec![0.0; nb.dim()];
+        nb.gather(5, 3, |x, y| Vec3::new(x as f32, y as f32, 0.0), |x, y| Vec3::new(x as f32, y as f32, 1.0), &mut out);
+        let expect = [4., 2., 0., 5., 2., 0., 6., 2., 0., 4., 3., 0., 2., 1., 1.];
+        assert_eq!(out, expect);
+    }
+}

@@ -1,0 +1,238 @@
+//! Wei-Levoy multiresolution synthesis (Wei and Levoy 2000; Haro et al. 2001, section 4.1).
+//!
+//! Coarse to fine over Gaussian pyramids of exemplar and output: each output level starts as noise
+//! with the exemplar level's per-channel histogram, then its texels are replaced in scanline order
+//! by the exemplar texel whose neighbourhood ([`crate::neighbourhood`]) is nearest in L2. The
+//! output is toroidal, so results tile.
+//!
+//! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, and the
+//! exhaustive scan over candidates for one texel. The texel loop itself stays sequential: each
+//! texel's causal neighbourhood holds the texels synthesised just before it.
+//!
+//! Normal maps are synthesised as unnormalised vectors, so pyramid averages stay meaningful. The
+//! finest level copies exemplar texels verbatim, so the output of a unit exemplar is unit (or
+//! invalid zero) without renormalising, bit for bit the exemplar's texels.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use skinkit_maps::pyramid::{Border, gaussian};
+use skinkit_maps::{Grid, NormalMap};
+
+use crate::config::{Search, SynthConfig, half};
+use crate::exemplar::{ExemplarLevel, better};
+use crate::neighbourhood::Neighbourhood;
+use crate::search::ApproximateIndex;
+use crate::{Error, Result};
+
+/// The result of [`synthesize`].
+#[derive(Clone, Debug)]
+pub struct Synthesis {
+    /// The finest output level.
+    pub texels: Grid<Vec3>,
+    /// For every output texel, the exemplar texel `[x, y]` it copies.
+    pub coords: Grid<[u32; 2]>,
+    /// What validation changed (clamped levels, sanitised texels).
+    pub warnings: Vec<String>,
+    /// Wall-clock seconds per level, `[0]` the finest.
+    pub level_seconds: Vec<f64>,
+}
+
+/// The result of [`synthesize_normals`].
+#[derive(Clone, Debug)]
+pub struct NormalSynthesis {
+    /// Unit normals (or zero where the exemplar texel copied was invalid).
+    pub normals: NormalMap,
+    /// For every output texel, the exemplar texel `[x, y]` it copies.
+    pub coords: Grid<[u32; 2]>,
+    pub warnings: Vec<String>,
+    pub level_seconds: Vec<f64>,
+}
+
+/// Grows `exemplar` into a `config.width x config.height` map. `progress(level, fraction)` is called
+/// after every output row (level 0 is the finest; levels run from the coarsest down).
+///
+/// # Errors
+/// When [`SynthConfig::validate`] fails.
+pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
+    let (ew, eh) = exemplar.size();
+    let (config, mut warnings) = config.validate(ew, eh)?;
+    let bad = exemplar.as_slice().iter().filter(|v| !v.is_finite()).count();
+    let clean;
+    let exemplar = if bad > 0 {
+        warnings.push(format!("{bad} exemplar texels were not finite and were set to zero"));
+        clean = exemplar.map(|v| if v.is_finite() { *v } else { Vec3::ZERO });
+        &clean
+    } else {
+        exemplar
+    };
+    let pyramid = gaussian(exemplar, config.levels, Border::Clamp);
+    let mut sizes = vec![(config.width, config.height)];
+    while sizes.len() < config.levels {
+        let (w, h) = sizes[sizes.len() - 1];
+        sizes.push((half(w), half(h)));
+    }
+    let mut level_seconds = vec![0.0; config.levels];
+    let mut coarser: Option<Grid<Vec3>> = None;
+    let mut result = None;
+    for level in (0..config.levels).rev() {
+        let start = Instant::now();
+        let (texels, coords) = synthesize_level(&pyramid, level, sizes[level], coarser.as_ref(), &config, progress);
+        level_seconds[level] = start.elapsed().as_secs_f64();
+        if level == 0 {
+            result = Some((texels, coords));
+        } else {
+            coarser = Some(texels);
+        }
+    }
+    let (texels, coords) = result.expect("level 0 is always synthesised");
+    Ok(Synthesis { texels, coords, warnings, level_seconds })
+}
+
+/// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
+///
+/// # Errors
+/// When [`SynthConfig::validate`] fails.
+pub fn synthesize_normals(
+    exemplar: &NormalMap,
+    config: &SynthConfig,
+    progress: &dyn Fn(usize, f32),
+) -> Result<NormalSynthesis> {
+    let s = synthesize(exemplar.grid(), config, progress)?;
+    Ok(NormalSynthesis {
+        // The finest level copies exemplar texels, which are unit (or invalid zero) already:
+        // wrapping them keeps the bits, where renormalising would perturb the last one.
+        normals: NormalMap::from_unit_grid(s.texels)?,
+        coords: s.coords,
+        warnings: s.warnings,
+        level_seconds: s.level_seconds,
+    })
+}
+
+/// Copies `map` (a map of the exemplar's size, e.g. the albedo registered with the normals) through
+/// a coordinate map, so the result stays in register with the synthesised output.
+///
+/// # Errors
+/// When an entry of `coords` lies outside `map`.
+pub fn replay<T: Clone + Send + Sync>(coords: &Grid<[u32; 2]>, map: &Grid<T>) -> Result<Grid<T>> {
+    let (w, h) = map.size();
+    for (i, &[x, y]) in coords.as_slice().iter().enumerate() {
+        if x as usize >= w || y as usize >= h {
+            let (col, row) = (i % coords.width(), i / coords.width());
+            return Err(Error::CoordsOutside { x, y, col, row, width: w, height: h });
+        }
+    }
+    Ok(Grid::from_fn(coords.width(), coords.height(), |x, y| {
+        let [sx, sy] = *coords.get(x, y);
+        map.get(sx as usize, sy as usize).clone()
+    }))
+}
+
+/// Output noise whose per-channel histogram is the exemplar level's: each channel of each texel is
+/// an independent draw from the exemplar's empirical distribution of that channel (inverse CDF of
+/// a uniform), seeded by `seed` with one ChaCha stream per level.
+pub fn histogram_noise(exemplar: &Grid<Vec3>, width: usize, height: usize, seed: u64, level: usize) -> Grid<Vec3> {
+    let sorted: [Vec<f32>; 3] = std::array::from_fn(|c| {
+        let mut v: Vec<f32> = exemplar.as_slice().iter().map(|t| t[c]).collect();
+        v.sort_by(f32::total_cmp);
+        v
+    });
+    let n = sorted[0].len();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(level as u64);
+    let data = (0..width * height)
+        .map(|_| {
+            let mut draw = |c: usize| sorted[c][((rng.random::<f64>() * n as f64) as usize).min(n - 1)];
+            let (x, y, z) = (draw(0), draw(1), draw(2));
+            Vec3::new(x, y, z)
+        })
+        .collect();
+    Grid::from_vec(width, height, data).expect("length is width * height")
+}
+
+/// Synthesises one output level given the finished coarser one.
+fn synthesize_level(
+    pyramid: &[Grid<Vec3>],
+    level: usize,
+    (w, h): (usize, usize),
+    coarser: Option<&Grid<Vec3>>,
+    config: &SynthConfig,
+    progress: &dyn Fn(usize, f32),
+) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    let nb = Neighbourhood::new(config.neighbourhood, config.parent, coarser.is_some());
+    let ex = ExemplarLevel::new(
+        pyramid[level].clone(),
+        pyramid.get(level + 1).filter(|_| coarser.is_some()),
+        &nb,
+        config.neighbourhood,
+        config.exemplar_wrap,
+    );
+    let index = match config.search {
+        Search::Exact => None,
+        Search::Approximate { dims, rerank } => Some(ApproximateIndex::new(&ex, dims, rerank)),
+    };
+    let mut out = histogram_noise(&pyramid[level], w, h, config.seed, level);
+    let mut coords = Grid::filled(w, h, [0u32; 2]);
+    let mut done = Grid::filled(w, h, false);
+    let mut query = vec![0.0f32; nb.dim()];
+    let mut candidates = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let (xi, yi) = (x as isize, y as isize);
+            nb.gather(
+                xi,
+                yi,
+                |sx, sy| *out.get_wrapped(sx, sy),
+                |sx, sy| coarser.map_or(Vec3::ZERO, |c| *c.get_wrapped(sx, sy)),
+                &mut query,
+            );
+            let best = match &index {
+                None => ex.nearest_exact(&query),
+                Some(index) => {
+                    candidates.clear();
+                    if config.coherence {
+                        coherence_candidates(&ex, &nb, &coords, &done, xi, yi, &mut candidates);
+                    }
+                    let score = |&i: &usize| (ex.distance2(i, &query), i);
+                    let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
+                    // Tree candidates farther than the best coherent one (in projected distance, a
+                    // lower bound of the full one) cannot win: search only within that radius. The
+                    // margin covers the rounding of the f32 projection.
+                    let radius2 = coherent.0 * (1.0 + 1e-4) + 1e-6;
+                    let first = candidates.len();
+                    index.candidates(&query, radius2, &mut candidates);
+                    candidates[first..].iter().map(score).fold(coherent, better).1
+                }
+            };
+            *out.get_mut(x, y) = ex.texel(best);
+            *coords.get_mut(x, y) = ex.position(best);
+            *done.get_mut(x, y) = true;
+        }
+        progress(level, (y + 1) as f32 / h as f32);
+    }
+    (out, coords)
+}
+
+/// Ashikhmin (2001) candidates: for each already synthesised causal neighbour at offset `(dx, dy)`,
+/// the exemplar texel at its source shifted back by `(dx, dy)`.
+fn coherence_candidates(
+    ex: &ExemplarLevel,
+    nb: &Neighbourhood,
+    coords: &Grid<[u32; 2]>,
+    done: &Grid<bool>,
+    x: isize,
+    y: isize,
+    out: &mut Vec<usize>,
+) {
+    for &[dx, dy] in nb.causal() {
+        if !*done.get_wrapped(x + dx, y + dy) {
+            continue;
+        }
+        let [sx, sy] = *coords.get_wrapped(x + dx, y + dy);
+        if let Some(i) = ex.index_of(sx as isize - dx, sy as isize - dy) {
+            out.push(i);
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! End-to-end checks of Wei-Levoy synthesis on tiny exemplars (exact search is
+//! O(output x exemplar), so sizes stay small).
+
+use glam::Vec3;
+use skinkit_maps::Grid;
+use skinkit_synth::neighbourhood::Neighbourhood;
+use skinkit_synth::synthesis::histogram_noise;
+use skinkit_synth::{Error, Search, SynthConfig, replay, synthesize, synthesize_normals};
+
+/// A structured exemplar with no exactly repeated neighbourhoods: stripes plus a hash.
+fn pattern(w: usize, h: usize) -> Grid<Vec3> {
+    Grid::from_fn(w, h, |x, y| {
+        let hash = ((x as u32).wrapping_mul(73_856_093) ^ (y as u32).wrapping_mul(19_349_663)) % 1000;
+        let r = hash as f32 / 1000.0;
+        Vec3::new((x as f32 * 0.9).sin() + 0.3 * r, (y as f32 * 0.7).cos(), r)
+    })
+}
+
+fn config(w: usize, h: usize, search: Search) -> SynthConfig {
+    SynthConfig { levels: 2, search, ..SynthConfig::new(w, h) }
+}
+
+fn quiet(_: usize, _: f32) {}
+
+const APPROX: Search = Search::Approximate { dims: 8, rerank: 4 };
+
+fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(f)
+}
+
+#[test]
+fn same_bits_on_one_and_two_threads() {
+    let ex = pattern(16, 16);
+    for search in [Search::Exact, APPROX] {
+        let c = config(24, 24, search);
+        let one = on_threads(1, || synthesize(&ex, &c, &quiet).unwrap());
+        let two = on_threads(2, || synthesize(&ex, &c, &quiet).unwrap());
+        assert_eq!(one.coords, two.coords, "{search:?}");
+        let bits = |s: &skinkit_synth::Synthesis| {
+            s.texels.as_slice().iter().map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&one), bits(&two), "{search:?}");
+    }
+}
+
+#[test]
+fn output_texels_are_copies_of_their_coords() {
+    let ex = pattern(16, 16);
+    for search in [Search::Exact, APPROX] {
+        let s = synthesize(&ex, &config(24, 24, search), &quiet).unwrap();
+        assert_eq!(s.texels.size(), (24, 24));
+        for y in 0..24 {
+            for x in 0..24 {
+                let [sx, sy] = *s.coords.get(x, y);
+                assert_eq!(s.texels.get(x, y), ex.get(sx as usize, sy as usize));
+                // Without exemplar wrap only texels with a whole 5x5 window inside are copied.
+                assert!((2..14).contains(&sx) && (2..14).contains(&sy), "({sx}, {sy})");
+            }
+        }
+        assert_eq!(replay(&s.coords, &ex).unwrap(), s.texels);
+        // Not a single copied texel: the output uses many exemplar positions.
+        let mut used: Vec<[u32; 2]> = s.coords.as_slice().to_vec();
+        used.sort();
+        used.dedup();
+        assert!(used.len() > 20, "{search:?}: {} positions", used.len());
+    }
+}
+
+/// Independent single-level Wei-Levoy: a plain loop over every interior exemplar texel, with the
+/// causal 5x5 window written out by hand.
+fn brute_force_single_level(ex: &Grid<Vec3>, w: usize, h: usize, seed: u64) -> Grid<[u32; 2]> {
+    let mut out = histogram_noise(ex, w, h, seed, 0);
+    let mut coords = Grid::filled(w, h, [0u32; 2]);
+    let offsets: Vec<(isize, isize)> =
+        (-2..=0).flat_map(|dy| (-2..=2).map(move |dx| (dx, dy))).filter(|&(dx, dy)| dy < 0 || dx < 0).collect();
+    assert_eq!(offsets.len(), 12);
+    for y in 0..h as isize {
+        for x in 0..w as isize {
+            let mut best = (f32::INFINITY, [0u32; 2]);
+            for ey in 2..ex.height() as isize - 2 {
+                for ex_x in 2..ex.width() as isize - 2 {
+                    let mut d = 0.0f32;
+                    for &(dx, dy) in &offsets {
+                        let a = *out.get_wrapped(x + dx, y + dy);
+                        let b = *ex.get((ex_x + dx) as usize, (ey + dy) as usize);
+                        for c in 0..3 {
+                            d += (a[c] - b[c]) * (a[c] - b[c]);
+                        }
+                    }
+                    if d < best.0 {
+                        best = (d, [ex_x as u32, ey as u32]);
+                    }
+                }
+            }
+            let [bx, by] = best.1;
+            *out.get_mut(x as usize, y as usize) = *ex.get(bx as usize, by as usize);
+            *coords.get_mut(x as usize, y as usize) = best.1;
+        }
+    }
+    coords
+}
+
+#[test]
+fn exact_search_equals_a_brute_force_scan() {
+    let ex = pattern(13, 11);
+    let c = SynthConfig { levels: 1, search: Search::Exact, seed: 7, ..SynthConfig::new(9, 10) };
+    let s = synthesize(&ex, &c, &quiet).unwrap();
+    assert_eq!(s.coords, brute_force_single_level(&ex, 9, 10, 7));
+    assert_eq!(Neighbourhood::new(5, 3, false).dim(), 36);
+}
+
+#[test]
+fn constant_exemplar_gives_constant_output() {
+    let v = Vec3::new(0.2, -0.4, 0.9);
+    let ex = Grid::filled(12, 12, v);
+    for search in [Search::Exact, APPROX] {
+        let s = synthesize(&ex, &config(10, 7, search), &quiet).unwrap();
+        assert!(s.texels.as_slice().iter().all(|t| *t == v), "{search:?}");
+    }
+}
+
+#[test]
+fn exemplar_smaller_than_the_neighbourhood_is_refused() {
+    let err = synthesize(&pattern(3, 4), &config(8, 8, Search::Exact), &quiet).unwrap_err();
+    assert!(matches!(err, Error::ExemplarTooSmall { width: 3, height: 4, n: 5 }));
+    assert_eq!(err.to_string(), "exemplar 3x4 is smaller than the 5x5 neighbourhood");
+}
+
+#[test]
+fn one_by_one_output_and_non_square_exemplar() {
+    let ex = pattern(21, 9);
+    for search in [Search::Exact, APPROX] {
+        let s = synthesize(&ex, &config(1, 1, search), &quiet).unwrap();
+        assert_eq!(s.texels.size(), (1, 1));
+        assert!(s.texels.get(0, 0).is_finite());
+        let s = synthesize(&ex, &config(17, 6, search), &quiet).unwrap();
+        assert_eq!(s.coords.size(), (17, 6));
+        assert!(s.coords.as_slice().iter().all(|&[x, y]| (2..19).contains(&x) && (2..7).contains(&y)));
+    }
+}
+
+#[test]
+fn too_many_levels_are_clamped_with_a_warning() {
+    let ex = pattern(16, 16);
+    let c = SynthConfig { levels: 6, search: APPROX, ..SynthConfig::new(8, 8) };
+    let s = synthesize(&ex, &c, &quiet).unwrap();
+    // 16 -> 8 -> 4: only two levels keep a 5x5 window.
+    assert_eq!(s.level_seconds.len(), 2);
+    assert_eq!(s.warnings.len(), 1);
+    assert!(s.warnings[0].contains("levels 6 clamped to 2"), "{}", s.warnings[0]);
+}
+
+#[test]
+fn wrapped_exemplar_uses_every_texel_position() {
+    let ex = pattern(8, 8);
+    let c = SynthConfig { exemplar_wrap: true, ..config(16, 16, Search::Exact) };
+    let s = synthesize(&ex, &c, &quiet).unwrap();
+    for (t, &[x, y]) in s.texels.as_slice().iter().zip(s.coords.as_slice()) {
+        assert_eq!(t, ex.get(x as usize, y as usize));
+    }
+}
+
+#[test]
+fn progress_reaches_one_on_every_level() {
+    let seen = std::sync::Mutex::new(Vec::new());
+    let report = |level: usize, f: f32| seen.lock().unwrap().push((level, f));
+    synthesize(&pattern(16, 16), &config(6, 6, APPROX), &report).unwrap();
+    let seen = seen.into_inner().unwrap();
+    assert_eq!(seen.first(), Some(&(1, 1.0 / 3.0)));
+    assert_eq!(seen.last(), Some(&(0, 1.0)));
+}
+
+#[test]
+fn replay_rejects_coordinates_outside_the_map() {
+    let coords = Grid::filled(2, 2, [5u32, 1]);
+    let err = replay(&coords, &Grid::filled(4, 4, 0.0f32)).unwrap_err();
+    assert!(err.to_string().contains("(5, 1)") && err.to_string().contains("4x4"), "{err}");
+}
+
+#[test]
+fn normal_maps_come_out_unit_length() {
+    let field = skinkit_heightfield::SkinParams::forehead(16, 16, 3).generate().unwrap();
+    let c = config(20, 12, APPROX);
+    let s = synthesize_normals(&field.normals, &c, &quiet).unwrap();
+    assert_eq!(s.normals.size(), (20, 12));
+    for n in s.normals.as_slice() {
+        assert!((n.length() - 1.0).abs() < 1e-5, "{n}");
+    }
+    assert_eq!(replay(&s.coords, field.normals.grid()).unwrap(), *s.normals.grid());
+}
+
+#[test]
+fn approximate_search_reranking_every_candidate_equals_exact() {
+    // 16x16 without wrap: 12 x 12 = 144 candidates per finest level, fewer at the coarser one.
+    let ex = pattern(16, 16);
+    let exact = synthesize(&ex, &config(12, 12, Search::Exact), &quiet).unwrap();
+    for coherence in [false, true] {
+        let c = SynthConfig { coherence, ..config(12, 12, Search::Approximate { dims: 3, rerank: 144 }) };
+        let approx = synthesize(&ex, &c, &quiet).unwrap();
+        assert_eq!(approx.coords, exact.coords, "coherence {coherence}");
+    }
+}
+
+#[test]
+fn outputs_over_the_memory_limit_are_refused_with_the_estimate() {
+    let c = SynthConfig { memory_limit: 1 << 20, ..config(1024, 1024, Search::Exact) };
+    let estimate = c.memory_estimate(16, 16);
+    // 1024x1024 texels at 21 bytes each on the finest level alone.
+    assert!(estimate > 21 << 20, "{estimate}");
+    let err = synthesize(&pattern(16, 16), &c, &quiet).unwrap_err();
+    assert!(matches!(err, Error::TooLarge { width: 1024, height: 1024, limit_mib: 1, .. }), "{err}");
+    assert!(err.to_string().contains(&format!("{} MiB", estimate.div_ceil(1 << 20))), "{err}");
+}
+
+#[test]
+fn non_finite_exemplar_texels_are_zeroed_with_a_warning() {
+    let mut ex = pattern(12, 12);
+    *ex.get_mut(5, 5) = Vec3::new(f32::NAN, 0.0, f32::INFINITY);
+    for search in [Search::Exact, APPROX] {
+        let s = synthesize(&ex, &config(9, 9, search), &quiet).unwrap();
+        assert!(s.texels.as_slice().iter().all(|t| t.is_finite()), "{search:?}");
+        assert!(s.warnings.iter().any(|w| w.contains("1 exemplar texels were not finite")), "{:?}", s.warnings);
+    }
+}
