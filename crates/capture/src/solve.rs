@@ -29,8 +29,14 @@
 //!   functions of the bitmask, so results never depend on the cache or the thread count.
 //!   Pixels with all readings usable take the vectorised least-squares result unchanged; in the
 //!   fused kernel a step of 16 pixels is solved in registers unless one of its readings is
-//!   dropped (a reading is below the threshold iff the pixel's dimmest one is), and only such
-//!   steps go through the chunk path.
+//!   dropped (a reading is below the threshold iff the pixel's dimmest one is). Shadows are
+//!   spatially coherent, so a step whose 16 pixels all drop the same readings is solved in
+//!   registers too, with that subset's columns (`fused::subset_step`); other such steps go
+//!   through the chunk path. There, with k <= [`DENSE_MAX_LIGHTS`], the pixels that drop
+//!   readings are grouped by subset and each group is solved with its subset's columns
+//!   (`Plan::finish_subsets`); with more lights, one pixel at a time. All three subset paths
+//!   use the same operations in the same order (`g = g + c_i r_i` over the used lights, no
+//!   fused multiply-add; `n = g / |g|`), so they give the same bits.
 //!
 //! RGB photos: the normal comes from the luminance-weighted (Rec. 709) sum of the
 //! intensity-divided channels; then each channel's albedo is the least-squares fit
@@ -615,6 +621,10 @@ struct Plan<'a> {
     fast_ls: bool,
     /// Whether the fused kernel applies: linear grey photos without an ambient frame.
     fused: bool,
+    /// Robust with at most [`DENSE_MAX_LIGHTS`] lights: a chunk's pixels with dropped readings
+    /// are grouped by subset and solved a group at a time ([`Self::finish_subsets`]); else one
+    /// pixel at a time ([`Self::finish_subset`]). Both give the same bits.
+    batch_subsets: bool,
     mask: Option<&'a [bool]>,
 }
 
@@ -631,6 +641,16 @@ struct Scratch {
     len: [f32; CHUNK],
     conf: [f32; CHUNK],
     dropped: [u32; CHUNK],
+    /// Batched subsets: usable lights per pixel (bit `i` for light `i`).
+    bits: [u32; CHUNK],
+    /// Batched subsets: pixels still to solve, and those of the current group.
+    pending: [u8; CHUNK],
+    group: [u8; CHUNK],
+    /// Batched subsets: `g` and `sum r^2` of the current group.
+    bx: [f32; CHUNK],
+    by: [f32; CHUNK],
+    bz: [f32; CHUNK],
+    brr: [f32; CHUNK],
     cache: HashMap<u128, SubsetSolve>,
 }
 
@@ -648,6 +668,13 @@ impl Scratch {
             len: [0.0; CHUNK],
             conf: [0.0; CHUNK],
             dropped: [0; CHUNK],
+            bits: [0; CHUNK],
+            pending: [0; CHUNK],
+            group: [0; CHUNK],
+            bx: [0.0; CHUNK],
+            by: [0.0; CHUNK],
+            bz: [0.0; CHUNK],
+            brr: [0.0; CHUNK],
             cache: HashMap::new(),
         }
     }
@@ -799,6 +826,7 @@ impl<'a> Plan<'a> {
             ones: vec![1.0; k],
             fast_ls: !robust && !rgb && first.transfer() == Transfer::Linear,
             fused: !rgb && first.transfer() == Transfer::Linear && stack.ambient().is_none(),
+            batch_subsets: robust && k <= DENSE_MAX_LIGHTS,
             mask: stack.mask().map(|m| m.as_slice()),
         })
     }
@@ -939,6 +967,7 @@ impl<'a> Plan<'a> {
             saturated_at: self.sources[0].saturated_at,
             shadow_abs: self.config.shadow_abs,
             shadow_rel: self.config.shadow_rel,
+            group_subsets: self.batch_subsets,
         };
         let mut stats = SolveStats::empty(self.k);
         let n_px = out.normals.len();
@@ -956,14 +985,40 @@ impl<'a> Plan<'a> {
             let solved = if n == STEP && inside {
                 fused::step::<T, ROBUST>(&kernel, &rows, p, chunk.normals, chunk.albedo, chunk.confidence)
             } else {
-                None
+                fused::Step::Declined
             };
             match solved {
-                Some(invalid) => {
+                fused::Step::Solved(invalid) => {
                     stats.lights_used[self.k] += STEP;
                     stats.invalid_count += invalid as usize;
                 }
-                None => self.solve_chunk(p, chunk, scratch, subsets, &mut stats),
+                fused::Step::Subset(bits) => {
+                    let used = bits.count_ones() as usize;
+                    stats.lights_used[used] += STEP;
+                    let subset = if used < self.config.min_lights {
+                        None
+                    } else {
+                        Some(subsets.get(bits as u128, &mut scratch.cache)).filter(|s| s.usable)
+                    };
+                    let Some(subset) = subset else {
+                        chunk.normals.fill(Vec3::ZERO);
+                        chunk.albedo.fill(0.0);
+                        chunk.confidence.fill(0.0);
+                        stats.invalid_count += STEP;
+                        j += n;
+                        continue;
+                    };
+                    let sk = fused::SubsetKernel {
+                        bits,
+                        cols: &subset.cols,
+                        gains: &self.gray_scales,
+                        gram: subset.gram,
+                        weight: self.subset_weight(used, subset),
+                    };
+                    let invalid = fused::subset_step(&sk, &rows, p, chunk.normals, chunk.albedo, chunk.confidence);
+                    stats.invalid_count += invalid as usize;
+                }
+                fused::Step::Declined => self.solve_chunk(p, chunk, scratch, subsets, &mut stats),
             }
             j += n;
         }
@@ -1001,7 +1056,7 @@ impl<'a> Plan<'a> {
     fn solve_chunk<A: AlbedoTexel>(
         &self,
         p: usize,
-        out: Out<A>,
+        mut out: Out<A>,
         scratch: &mut Scratch,
         subsets: &Subsets,
         stats: &mut SolveStats,
@@ -1037,9 +1092,15 @@ impl<'a> Plan<'a> {
             return;
         }
         let mut local = std::mem::take(&mut scratch.cache);
+        let mut pending = 0;
         for j in 0..n {
             if inside.is_some_and(|m| !m[j]) {
                 (out.normals[j], out.albedo[j], out.confidence[j]) = (Vec3::ZERO, A::ZERO, 0.0);
+                continue;
+            }
+            if self.batch_subsets && scratch.dropped[j] > 0 {
+                scratch.pending[pending] = j as u8;
+                pending += 1;
                 continue;
             }
             let (normal, albedo, confidence, used) = if self.robust && scratch.dropped[j] > 0 {
@@ -1057,6 +1118,9 @@ impl<'a> Plan<'a> {
             out.normals[j] = normal;
             out.albedo[j] = A::rgb(albedo);
             out.confidence[j] = confidence;
+        }
+        if pending > 0 {
+            self.finish_subsets(pending, scratch, subsets, &mut local, &mut out, stats);
         }
         scratch.cache = local;
         stats.invalid_count += out.normals.iter().filter(|v| **v == Vec3::ZERO).count();
@@ -1160,6 +1224,17 @@ impl<'a> Plan<'a> {
                 *d += ((v < t) as u32) | q as u32;
             }
         }
+        if self.batch_subsets {
+            // The same test as `usable_bits` (a NaN reading is neither dropped nor usable).
+            s.bits[..n].fill(0);
+            for i in 0..self.k {
+                let r = &s.r[i * CHUNK..i * CHUNK + n];
+                let sat = &s.sat[i * CHUNK..i * CHUNK + n];
+                for (((b, &t), &v), &q) in s.bits[..n].iter_mut().zip(&s.top[..n]).zip(r).zip(sat) {
+                    *b |= (((v >= t) & (q == 0)) as u32) << i;
+                }
+            }
+        }
     }
 
     /// The bitmask of usable lights of pixel `j` (robust mode, after [`Self::count_dropped`]).
@@ -1195,10 +1270,111 @@ impl<'a> Plan<'a> {
             return invalid(used);
         }
         let normal = Vec3::from(g) / len;
-        let weight = used as f32 / self.k as f32 * (self.full.condition / subset.condition).min(1.0) as f32;
-        let confidence = weight * residual_factor(rr, subset.fitted_sq(g));
+        let confidence = self.subset_weight(used, subset) * residual_factor(rr, subset.fitted_sq(g));
         let albedo = if self.rgb { self.rgb_albedo(j, bits, normal, s) } else { Vec3::splat(len) };
         (normal, albedo, confidence, used)
+    }
+
+    /// [`Self::finish_subset`] for the `count` pixels listed in `s.pending` (robust, at most
+    /// [`DENSE_MAX_LIGHTS`] lights, `s.bits` filled), written to `out`: the pixels are grouped by
+    /// their subset (usually one or two per chunk, as shadows are coherent) and each group is
+    /// solved with that subset's columns in registers, in the same operations and order as
+    /// [`Self::solve_subset`], so the bits match the per-pixel path.
+    fn finish_subsets<A: AlbedoTexel>(
+        &self,
+        mut count: usize,
+        s: &mut Scratch,
+        subsets: &Subsets,
+        local: &mut HashMap<u128, SubsetSolve>,
+        out: &mut Out<A>,
+        stats: &mut SolveStats,
+    ) {
+        while count > 0 {
+            let bits = s.bits[s.pending[0] as usize];
+            // Split the pending pixels into this subset's group and the rest (kept in place:
+            // the rest's write index never passes the read index).
+            let (mut grouped, mut rest) = (0, 0);
+            for t in 0..count {
+                let j = s.pending[t];
+                if s.bits[j as usize] == bits {
+                    s.group[grouped] = j;
+                    grouped += 1;
+                } else {
+                    s.pending[rest] = j;
+                    rest += 1;
+                }
+            }
+            self.solve_group(bits, grouped, s, subsets, local, out);
+            stats.lights_used[bits.count_ones() as usize] += grouped;
+            count = rest;
+        }
+    }
+
+    /// Solves the `m` pixels of `s.group`, whose usable lights are `bits`, into `out`.
+    fn solve_group<A: AlbedoTexel>(
+        &self,
+        bits: u32,
+        m: usize,
+        s: &mut Scratch,
+        subsets: &Subsets,
+        local: &mut HashMap<u128, SubsetSolve>,
+        out: &mut Out<A>,
+    ) {
+        let used = bits.count_ones() as usize;
+        let subset = if used < self.config.min_lights { None } else { Some(subsets.get(bits as u128, local)) };
+        let Some(subset) = subset.filter(|s| s.usable) else {
+            for &j in &s.group[..m] {
+                let j = j as usize;
+                (out.normals[j], out.albedo[j], out.confidence[j]) = (Vec3::ZERO, A::ZERO, 0.0);
+            }
+            return;
+        };
+        {
+            let Scratch { r, group, bx, by, bz, brr, .. } = &mut *s;
+            let group = &group[..m];
+            let (gx, gy, gz, rr) = (&mut bx[..m], &mut by[..m], &mut bz[..m], &mut brr[..m]);
+            gx.fill(0.0);
+            gy.fill(0.0);
+            gz.fill(0.0);
+            rr.fill(0.0);
+            let lights = (0..self.k).filter(|i| bits >> i & 1 == 1);
+            for (i, c) in lights.zip(&subset.cols) {
+                let row: &[f32; CHUNK] = r[i * CHUNK..(i + 1) * CHUNK].try_into().expect("CHUNK readings per light");
+                for t in 0..m {
+                    // `& (CHUNK - 1)`: a no-op (pixels index a chunk) that drops the bounds check.
+                    let v = row[group[t] as usize & (CHUNK - 1)];
+                    gx[t] = gx[t] + c[0] * v;
+                    gy[t] = gy[t] + c[1] * v;
+                    gz[t] = gz[t] + c[2] * v;
+                    rr[t] = rr[t] + v * v;
+                }
+            }
+        }
+        let s: &Scratch = s;
+        let (group, gx, gy, gz, rr) = (&s.group[..m], &s.bx[..m], &s.by[..m], &s.bz[..m], &s.brr[..m]);
+        let weight = self.subset_weight(used, subset);
+        for t in 0..m {
+            let j = group[t] as usize;
+            let g = [gx[t], gy[t], gz[t]];
+            let len = Vec3::from(g).length();
+            let (normal, albedo, confidence) = if len > MIN_ALBEDO && len < f32::INFINITY {
+                let normal = Vec3::from(g) / len;
+                let confidence = weight * residual_factor(rr[t], subset.fitted_sq(g));
+                let albedo = if self.rgb { self.rgb_albedo(j, bits as u128, normal, s) } else { Vec3::splat(len) };
+                (normal, albedo, confidence)
+            } else {
+                (Vec3::ZERO, Vec3::ZERO, 0.0)
+            };
+            out.normals[j] = normal;
+            out.albedo[j] = A::rgb(albedo);
+            out.confidence[j] = confidence;
+        }
+    }
+
+    /// The confidence factors of a pixel solved from `used` lights forming `subset`: the
+    /// fraction of lights used times `min(1, cond(L_all) / cond(L_used))`.
+    fn subset_weight(&self, used: usize, subset: &SubsetSolve) -> f32 {
+        used as f32 / self.k as f32 * (self.full.condition / subset.condition).min(1.0) as f32
     }
 
     fn full_bits(&self) -> u128 {
@@ -1542,11 +1718,25 @@ mod fused {
         pub saturated_at: f32,
         pub shadow_abs: f32,
         pub shadow_rel: f32,
+        /// Robust only: whether a step whose pixels all drop readings, the same ones, is
+        /// reported as [`Step::Subset`] (at most 12 lights, so the usable set fits in the lanes).
+        pub group_subsets: bool,
+    }
+
+    /// What [`step`] did with its pixels.
+    pub(super) enum Step {
+        /// Solved from all lights and written; this many are invalid.
+        Solved(u32),
+        /// Not written: every pixel drops a reading and all have these usable lights.
+        Subset(u32),
+        /// Not written: some pixels drop readings, not all or not the same ones.
+        Declined,
     }
 
     /// Solves the [`STEP`] pixels from `p` into the three output slices (each `STEP` long) and
-    /// returns how many are invalid; with `ROBUST`, returns `None` without writing when any
-    /// pixel has a shadowed or saturated reading.
+    /// returns how many are invalid; with `ROBUST`, writes nothing when any pixel has a shadowed
+    /// or saturated reading, and returns the pixels' usable lights when they all share them
+    /// (`usable_bits`: `r_i >= threshold` and not saturated) and all drop some reading.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn step<T: Lanes, const ROBUST: bool>(
@@ -1556,7 +1746,7 @@ mod fused {
         normals: &mut [Vec3],
         albedo: &mut [f32],
         confidence: &mut [f32],
-    ) -> Option<u32> {
+    ) -> Step {
         assert!(normals.len() == STEP && albedo.len() == STEP && confidence.len() == STEP);
         let zero = _mm256_setzero_ps();
         let (mut gx, mut gy, mut gz, mut rr) = ([zero; 2], [zero; 2], [zero; 2], [zero; 2]);
@@ -1595,13 +1785,17 @@ mod fused {
             // Some reading is below `max(abs, rel * brightest)` iff the dimmest one is.
             let (abs, rel) = (_mm256_set1_ps(kernel.shadow_abs), _mm256_set1_ps(kernel.shadow_rel));
             let mut dropped = 0;
+            let mut threshold = [zero; 2];
             for h in 0..2 {
-                let threshold = _mm256_max_ps(_mm256_mul_ps(rel, hi[h]), abs);
-                let shadowed = _mm256_cmp_ps::<_CMP_LT_OQ>(lo[h], threshold);
-                dropped |= _mm256_movemask_ps(_mm256_or_ps(shadowed, saturated[h]));
+                threshold[h] = _mm256_max_ps(_mm256_mul_ps(rel, hi[h]), abs);
+                let shadowed = _mm256_cmp_ps::<_CMP_LT_OQ>(lo[h], threshold[h]);
+                dropped |= _mm256_movemask_ps(_mm256_or_ps(shadowed, saturated[h])) << (8 * h);
+            }
+            if dropped == 0xffff && kernel.group_subsets {
+                return common_usable(kernel, rows, p, threshold).map_or(Step::Declined, Step::Subset);
             }
             if dropped != 0 {
-                return None;
+                return Step::Declined;
             }
         }
         let m = kernel.gram.map(|v| _mm256_set1_ps(v));
@@ -1641,7 +1835,118 @@ mod fused {
                 _mm256_storeu_ps(confidence.as_mut_ptr().add(8 * h), keep(factor));
             }
         }
-        Some(invalid)
+        Step::Solved(invalid)
+    }
+
+    /// The usable lights (bit `i` for light `i`) of the [`STEP`] pixels at `p` given their shadow
+    /// thresholds, when all pixels have the same ones.
+    // Kept out of line: inlined into `step`, its constants would crowd the main loop's registers.
+    #[inline(never)]
+    #[target_feature(enable = "avx2,fma")]
+    fn common_usable<T: Lanes>(kernel: &Kernel, rows: &[&[T]], p: usize, threshold: [__m256; 2]) -> Option<u32> {
+        let saturated_at = _mm256_set1_ps(kernel.saturated_at);
+        let mut bits = [_mm256_setzero_si256(); 2];
+        for (i, row) in rows.iter().enumerate() {
+            let row = &row[p..p + STEP];
+            let bit = _mm256_set1_epi32(1 << i);
+            for h in 0..2 {
+                // SAFETY: `row` holds STEP = 16 samples; AVX2 is enabled here.
+                let raw = unsafe { T::load8(row.as_ptr().add(8 * h)) };
+                let saturated = _mm256_cmp_ps::<_CMP_GE_OQ>(raw, saturated_at);
+                let v = _mm256_mul_ps(raw, _mm256_set1_ps(kernel.gains[i]));
+                let ok = _mm256_andnot_ps(saturated, _mm256_cmp_ps::<_CMP_GE_OQ>(v, threshold[h]));
+                bits[h] = _mm256_or_si256(bits[h], _mm256_and_si256(_mm256_castps_si256(ok), bit));
+            }
+        }
+        let first = _mm256_cvtsi256_si32(bits[0]);
+        let all = _mm256_set1_epi32(first);
+        let same = _mm256_and_si256(_mm256_cmpeq_epi32(bits[0], all), _mm256_cmpeq_epi32(bits[1], all));
+        (_mm256_movemask_epi8(same) == -1).then_some(first as u32)
+    }
+
+    /// What [`subset_step`] applies: one subset's pseudo-inverse and confidence terms.
+    pub(super) struct SubsetKernel<'a> {
+        /// The subset's usable lights, bit `i` for light `i`.
+        pub bits: u32,
+        /// Column of the subset's pseudo-inverse per usable light, in light order.
+        pub cols: &'a [[f32; 3]],
+        /// Sample to reading scale per light.
+        pub gains: &'a [f32],
+        /// The subset's `L^T L`: xx, xy, xz, yy, yz, zz.
+        pub gram: [f32; 6],
+        /// Lights-used and conditioning factors of the confidence.
+        pub weight: f32,
+    }
+
+    /// Solves the [`STEP`] pixels from `p` with one subset of lights (what `finish_subset` does
+    /// per pixel, in the same operations: `g = g + c * r` light by light without fusing,
+    /// `n = g / |g|`, confidence `weight * residual_factor`), writes them and returns how many
+    /// are invalid.
+    #[inline(never)]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn subset_step<T: Lanes>(
+        kernel: &SubsetKernel,
+        rows: &[&[T]],
+        p: usize,
+        normals: &mut [Vec3],
+        albedo: &mut [f32],
+        confidence: &mut [f32],
+    ) -> u32 {
+        assert!(normals.len() == STEP && albedo.len() == STEP && confidence.len() == STEP);
+        let zero = _mm256_setzero_ps();
+        let (mut gx, mut gy, mut gz, mut rr) = ([zero; 2], [zero; 2], [zero; 2], [zero; 2]);
+        let used = rows.iter().enumerate().filter(|(i, _)| kernel.bits >> i & 1 == 1);
+        for ((i, row), c) in used.zip(kernel.cols) {
+            let row = &row[p..p + STEP];
+            let (cx, cy, cz) = (_mm256_set1_ps(c[0]), _mm256_set1_ps(c[1]), _mm256_set1_ps(c[2]));
+            let gain = _mm256_set1_ps(kernel.gains[i]);
+            for h in 0..2 {
+                // SAFETY: `row` holds STEP = 16 samples; AVX2 is enabled here.
+                let v = _mm256_mul_ps(unsafe { T::load8(row.as_ptr().add(8 * h)) }, gain);
+                gx[h] = _mm256_add_ps(gx[h], _mm256_mul_ps(cx, v));
+                gy[h] = _mm256_add_ps(gy[h], _mm256_mul_ps(cy, v));
+                gz[h] = _mm256_add_ps(gz[h], _mm256_mul_ps(cz, v));
+                rr[h] = _mm256_add_ps(rr[h], _mm256_mul_ps(v, v));
+            }
+        }
+        let m = kernel.gram.map(|v| _mm256_set1_ps(v));
+        let one = _mm256_set1_ps(1.0);
+        let excess_scale = _mm256_set1_ps(1.0 / (RESIDUAL_SCALE * RESIDUAL_SCALE));
+        let weight = _mm256_set1_ps(kernel.weight);
+        let mut invalid = 0;
+        for h in 0..2 {
+            let (x, y, z, rr) = (gx[h], gy[h], gz[h], rr[h]);
+            let mul = |a, b| _mm256_mul_ps(a, b);
+            let add = |a, b| _mm256_add_ps(a, b);
+            // `Vec3::length`: `sqrt((x x + y y) + z z)`.
+            let len = _mm256_sqrt_ps(add(add(mul(x, x), mul(y, y)), mul(z, z)));
+            let ok = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(len, _mm256_set1_ps(MIN_ALBEDO)),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(len, _mm256_set1_ps(f32::INFINITY)),
+            );
+            invalid += 8 - _mm256_movemask_ps(ok).count_ones();
+            // `gram_form` and `residual_factor`, in the same order.
+            let diagonal = add(add(mul(mul(m[0], x), x), mul(mul(m[3], y), y)), mul(mul(m[5], z), z));
+            let cross = add(add(mul(mul(m[1], x), y), mul(mul(m[2], x), z)), mul(mul(m[4], y), z));
+            let fitted = add(diagonal, mul(_mm256_set1_ps(2.0), cross));
+            let excess = mul(_mm256_max_ps(_mm256_sub_ps(rr, fitted), zero), excess_scale);
+            let factor =
+                _mm256_blendv_ps(one, _mm256_div_ps(rr, add(rr, excess)), _mm256_cmp_ps::<_CMP_GT_OQ>(rr, zero));
+            let keep = |v| _mm256_and_ps(ok, v);
+            let div = |a| _mm256_div_ps(a, len);
+            let (nx, ny, nz) = (keep(div(x)), keep(div(y)), keep(div(z)));
+            let [a, b, c] = interleave3(nx, ny, nz);
+            // SAFETY: as in `step`: half `h` writes texels 8h..8h+8 of slices of STEP texels.
+            unsafe {
+                let n = normals.as_mut_ptr().cast::<f32>().add(24 * h);
+                _mm256_storeu_ps(n, a);
+                _mm256_storeu_ps(n.add(8), b);
+                _mm256_storeu_ps(n.add(16), c);
+                _mm256_storeu_ps(albedo.as_mut_ptr().add(8 * h), keep(len));
+                _mm256_storeu_ps(confidence.as_mut_ptr().add(8 * h), keep(mul(weight, factor)));
+            }
+        }
+        invalid
     }
 
     /// `x0 y0 z0 x1 y1 z1 ... x7 y7 z7` from the three vectors, as three vectors.
@@ -1708,6 +2013,21 @@ mod tests {
             2 => Samples::U8(
                 (0..n).map(|p| if r(p).is_multiple_of(53) { 0 } else { 100 + (r(p) % 150) as u8 }).collect(),
             ),
+            // Readings dropped in runs of 16 pixels (one or two lights, some saturated, some
+            // runs with too few lights left), so that whole fused steps share a subset.
+            4 => Samples::U16((0..n).map(|p| block_shadowed(i, p, 30000 + (r(p) % 20000) as u16, 65535)).collect()),
+            // The same in floats, with a rare NaN breaking a run's common subset.
+            5 => Samples::F32(
+                (0..n)
+                    .map(|p| {
+                        if r(p).is_multiple_of(89) {
+                            f32::NAN
+                        } else {
+                            block_shadowed(i, p, 0.3 + (r(p) % 50) as f32 * 0.01, 1.5)
+                        }
+                    })
+                    .collect(),
+            ),
             _ => Samples::F32(
                 (0..n)
                     .map(|p| match r(p) % 61 {
@@ -1723,11 +2043,24 @@ mod tests {
         }
     }
 
+    /// Light `i`'s sample at pixel `p` for sample kinds 4 and 5: `lit`, or zero or `saturated`
+    /// depending on the run of 16 pixels.
+    fn block_shadowed<T: From<u8>>(i: usize, p: usize, lit: T, saturated: T) -> T {
+        let run = p / 16;
+        match run % 6 {
+            0 => lit,
+            1 | 2 if (run + i) % 5 == 0 => T::from(0),
+            3 if i == 2 => saturated,
+            4 if i < 6 => T::from(0),
+            _ => lit,
+        }
+    }
+
     /// Solves every band with the portable and (when the CPU has it) the AVX2 build, whose
     /// linear grey path is the fused kernel: same bits and the same counts.
     #[test]
     fn portable_and_vectorised_builds_agree_bitwise() {
-        for kind in 0..4 {
+        for kind in 0..6 {
             for (method, masked) in [(Method::LeastSquares, false), (Method::Robust, false), (Method::Robust, true)] {
                 // Unequal intensities for the even kinds: per-light scales inside `sum r^2`.
                 let intensity = |i: usize| if kind % 2 == 0 { 0.8 + 0.03 * i as f32 } else { 0.9 };
@@ -1769,6 +2102,68 @@ mod tests {
                 assert!(a.1.invalid_count < n / 2, "{what}");
                 assert!(a.1.lights_used[8] > n / 4, "{what}");
                 assert!(a.0.iter().all(|v| f32::from_bits(*v).is_finite()), "{what}");
+            }
+        }
+    }
+
+    /// Pixels with dropped readings solved in groups by subset ([`Plan::finish_subsets`]) get the
+    /// same bits as solved one at a time ([`Plan::finish_subset`]), in both builds, grey and RGB.
+    #[test]
+    fn grouped_subset_solves_match_per_pixel_ones_bitwise() {
+        for (kind, rgb, masked) in [
+            (0, false, false),
+            (0, false, true),
+            (1, true, false),
+            (2, false, false),
+            (3, false, false),
+            (3, true, true),
+        ] {
+            let channels = if rgb { Channels::Rgb } else { Channels::Gray };
+            let (w, h) = (37, 11);
+            let per = if rgb { 3 } else { 1 };
+            let photos =
+                (0..8).map(|i| Photo::new(w, h, channels, mixed_samples(kind, i, per * w * h)).unwrap()).collect();
+            let mut stack = PhotoStack::new(photos, (0..8).map(|i| i.to_string()).collect()).unwrap();
+            let (_, rig) = inputs_with(|i, n| mixed_samples(kind, i, n), |i| 0.8 + 0.03 * i as f32);
+            if masked {
+                stack = stack.with_mask(Grid::from_fn(w, h, |x, y| (x * 7 + y * 3) % 29 != 0)).unwrap();
+            }
+            let config = SolveConfig::default();
+            let lights = check_rig(&stack, &rig).unwrap();
+            let mut plan = Plan::new(&stack, &rig, &config, lights, None).unwrap();
+            assert!(plan.batch_subsets);
+            let directions = plan.lights.clone();
+            let subsets = Subsets::new(&directions, config.max_condition, config.cache_capacity);
+            let n = w * h;
+            let band = BAND_ROWS * w;
+            let mut run = |grouped: bool, vectorised: bool| {
+                plan.batch_subsets = grouped;
+                let (mut normals, mut albedo, mut conf) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![0.0f32; n]);
+                let mut scratch = Scratch::new(8, rgb);
+                let mut stats = SolveStats::empty(8);
+                for p0 in (0..n).step_by(band) {
+                    let end = (p0 + band).min(n);
+                    let out = Out {
+                        normals: &mut normals[p0..end],
+                        albedo: &mut albedo[p0..end],
+                        confidence: &mut conf[p0..end],
+                    };
+                    stats = stats.merge(if vectorised {
+                        plan.solve_band(p0, out, &mut scratch, &subsets)
+                    } else {
+                        plan.solve_band_portable(p0, out, &mut scratch, &subsets)
+                    });
+                }
+                let bits: Vec<u32> =
+                    normals.iter().chain(&albedo).flat_map(|v| v.to_array()).chain(conf).map(f32::to_bits).collect();
+                (bits, stats)
+            };
+            for vectorised in [false, true] {
+                let (a, b) = (run(false, vectorised), run(true, vectorised));
+                let what = format!("samples {kind}, rgb {rgb}, masked {masked}, vectorised {vectorised}");
+                assert_eq!(a, b, "{what}");
+                let subset_pixels: usize = a.1.lights_used[..8].iter().sum();
+                assert!(subset_pixels > n / 20 && a.1.lights_used[7] > 0, "{what}: {:?}", a.1);
             }
         }
     }
