@@ -33,6 +33,10 @@ enum Command {
     Samples(cmd::samples::Args),
     /// Run the whole pipeline on the bundled samples and report its accuracy.
     Demo(cmd::demo::Args),
+    /// Grow a normal or colour map from an exemplar (Wei-Levoy); `synth replay` copies another
+    /// map through the coordinate map of a run.
+    #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+    Synth(cmd::synth::Args),
 }
 
 fn main() {
@@ -44,6 +48,7 @@ fn main() {
         Command::Batch(args) => cmd::batch::run(args, &out),
         Command::Samples(args) => cmd::samples::run(args, &out),
         Command::Demo(args) => cmd::demo::run(args, &out),
+        Command::Synth(args) => cmd::synth::run(args, &out),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -3,13 +3,30 @@
 use crate::{Error, Result};
 
 /// How the nearest exemplar neighbourhood is found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Search {
     /// Exhaustive L2 scan over every candidate: the reference every faster mode is measured against.
     Exact,
     /// PCA projection to `dims` dimensions (1..=32), a kd-tree query there, and the `rerank` best
     /// tree candidates re-scored in the full neighbourhood space.
     Approximate { dims: usize, rerank: usize },
+    /// k-coherence (Tong et al. 2002): every exemplar candidate carries its `k` (1..=64) most
+    /// similar candidates by full `N x N` (+ coarser `M x M`) neighbourhood, itself first. A texel's
+    /// candidates are, for each synthesised causal neighbour, its source shifted back and that
+    /// source's set; all are scored in the full causal feature space.
+    ///
+    /// `fallback`: when `Some(ratio)`, a texel whose best candidate's squared distance exceeds
+    /// `ratio` times the level's typical squared distance (the median, over exemplar candidates,
+    /// of the causal-feature distance to the most similar other candidate) is also searched with
+    /// the PCA kd-tree of `dims` / `rerank` (as [`Search::Approximate`], bounded by the best
+    /// distance so far). `None` never queries a tree (a texel without any synthesised neighbour,
+    /// i.e. the first of each level, is scanned exhaustively).
+    KCoherence { k: usize, fallback: Option<f32>, dims: usize, rerank: usize },
+}
+
+impl Search {
+    /// k-coherence with `k` = 4 and no tree fallback (the fastest mode).
+    pub const K_COHERENCE: Search = Search::KCoherence { k: 4, fallback: None, dims: 8, rerank: 8 };
 }
 
 /// Options of [`crate::synthesize`].
@@ -25,9 +42,10 @@ pub struct SynthConfig {
     pub neighbourhood: usize,
     /// Side of the full neighbourhood at the coarser level (odd).
     pub parent: usize,
-    /// Nearest-neighbourhood search mode.
+    /// Nearest-neighbourhood search mode (default [`Search::K_COHERENCE`]: k = 4, no fallback).
     pub search: Search,
-    /// Add Ashikhmin coherence candidates (approximate search only).
+    /// Add Ashikhmin coherence candidates ([`Search::Approximate`] only; k-coherence always uses
+    /// them).
     pub coherence: bool,
     /// Exemplar neighbourhoods wrap around the exemplar (otherwise only texels whose whole
     /// neighbourhood lies inside are candidates).
@@ -46,7 +64,7 @@ impl Default for SynthConfig {
             levels: 3,
             neighbourhood: 5,
             parent: 3,
-            search: Search::Approximate { dims: 8, rerank: 8 },
+            search: Search::K_COHERENCE,
             coherence: true,
             exemplar_wrap: false,
             seed: 0,
@@ -96,7 +114,15 @@ impl SynthConfig {
         if self.levels == 0 {
             return Err(Error::config("levels", 0, "at least one level is needed"));
         }
-        if let Search::Approximate { dims, rerank } = self.search {
+        if let Search::KCoherence { k, fallback, .. } = self.search {
+            if !(1..=64).contains(&k) {
+                return Err(Error::config("k", k, "must be between 1 and 64"));
+            }
+            if let Some(ratio) = fallback.filter(|r| !(r.is_finite() && *r >= 0.0)) {
+                return Err(Error::config("fallback", ratio, "must be a finite ratio >= 0"));
+            }
+        }
+        if let Search::Approximate { dims, rerank } | Search::KCoherence { dims, rerank, .. } = self.search {
             if !(1..=32).contains(&dims) {
                 return Err(Error::config("dims", dims, "must be between 1 and 32"));
             }
@@ -147,6 +173,11 @@ impl SynthConfig {
             Search::Approximate { dims, .. } => {
                 4 * dim + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
             }
+            Search::KCoherence { k, dims, .. } => {
+                // Causal and full features, the sets, and one tree at a time (full, then causal).
+                let full = 3 * (self.neighbourhood * self.neighbourhood + self.parent * self.parent) as u64;
+                4 * dim + 4 * full + 8 * k as u64 + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
+            }
         };
         let exemplar = texels.saturating_mul(12 * 4 / 3 + per_candidate);
         output.saturating_add(exemplar)
@@ -178,5 +209,12 @@ mod tests {
         assert!(bad(|c| c.width = 0).contains("0x8"));
         assert!(bad(|c| c.search = Search::Approximate { dims: 33, rerank: 1 }).contains("dims = 33"));
         assert!(bad(|c| c.levels = 0).contains("levels"));
+        let kc = |k, fallback| Search::KCoherence { k, fallback, dims: 8, rerank: 8 };
+        let mut c = SynthConfig { search: kc(0, None), ..SynthConfig::new(8, 8) };
+        assert!(c.validate(32, 32).unwrap_err().to_string().contains("k = 0"));
+        c.search = kc(4, Some(f32::NAN));
+        assert!(c.validate(32, 32).unwrap_err().to_string().contains("fallback = NaN"));
+        c.search = kc(4, Some(2.0));
+        assert!(c.validate(32, 32).is_ok());
     }
 }

@@ -12,6 +12,9 @@ use skinkit_maps::Grid;
 
 use crate::neighbourhood::{Neighbourhood, distance2};
 
+/// Floats summed between two checks of [`ExemplarLevel::distance2_below`].
+const EXIT_CHUNK: usize = 12;
+
 /// Candidates per rayon task in the exhaustive scan.
 const SCAN_CHUNK: usize = 256;
 
@@ -108,6 +111,21 @@ impl ExemplarLevel {
     /// Squared L2 distance from `query` to candidate `i`'s feature.
     pub fn distance2(&self, i: usize, query: &[f32]) -> f32 {
         distance2(self.feature(i), query)
+    }
+
+    /// [`Self::distance2`], abandoned once the partial sum exceeds `bound`: the result is the exact
+    /// distance (same bits) when it is at most `bound`, and some value above `bound` otherwise.
+    pub fn distance2_below(&self, i: usize, query: &[f32], bound: f32) -> f32 {
+        let mut d = 0.0f32;
+        for (a, b) in self.feature(i).chunks(EXIT_CHUNK).zip(query.chunks(EXIT_CHUNK)) {
+            for (p, q) in a.iter().zip(b) {
+                d += (p - q) * (p - q);
+            }
+            if d > bound {
+                break;
+            }
+        }
+        d
     }
 
     /// The candidate nearest to `query` by exhaustive scan (parallel over candidates; ties go to

@@ -28,7 +28,17 @@ impl Neighbourhood {
         Neighbourhood { causal, parent }
     }
 
-    /// Offsets `[dx, dy]` of the causal texels, in feature order.
+    /// A full (non-causal) `n x n` window, centre included, joined with a full `m x m` coarser
+    /// window when `has_parent`: the shape k-coherence sets are built with (Tong et al. 2002).
+    pub fn full(n: usize, m: usize, has_parent: bool) -> Self {
+        let r = (n / 2) as isize;
+        let mut nb = Neighbourhood::new(n, m, has_parent);
+        nb.causal = (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| [dx, dy])).collect();
+        nb
+    }
+
+    /// Offsets `[dx, dy]` of the current-level texels (the causal ones, or the whole window for
+    /// [`Self::full`]), in feature order.
     pub fn causal(&self) -> &[[isize; 2]] {
         &self.causal
     }
@@ -86,6 +96,10 @@ mod tests {
         assert_eq!(nb.parent().len(), 9);
         assert_eq!(nb.dim(), 3 * 21);
         assert_eq!(Neighbourhood::new(3, 3, false).dim(), 12);
+        let full = Neighbourhood::full(5, 3, true);
+        assert_eq!(full.causal().len(), 25);
+        assert_eq!(full.causal()[12], [0, 0]);
+        assert_eq!(full.dim(), 3 * 34);
     }
 
     #[test]

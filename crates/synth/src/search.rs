@@ -4,6 +4,10 @@
 //! Raw neighbourhoods have about 60 dimensions, where an exact kd-tree is no faster than a linear
 //! scan (REFERENCE.md, synthesis); the projected tree returns a few candidates which the caller
 //! re-scores in the full space.
+//!
+//! [`KCoherenceSets`] (Tong et al. 2002, "Synthesis of bidirectional texture functions on arbitrary
+//! surfaces") precompute, per exemplar candidate, the candidates with the most similar full
+//! neighbourhoods, so synthesis can draw its candidates from coherent sources alone.
 
 use std::num::NonZero;
 
@@ -165,6 +169,62 @@ impl ApproximateIndex {
         let d = self.pca.dims().max(1);
         self.pca.project(query, &mut q[..self.pca.dims()]);
         self.tree.nearest(&q[..d], radius2, self.rerank, out);
+    }
+}
+
+/// k-coherence sets (Tong et al. 2002) of one exemplar level: for every candidate, itself and the
+/// `k - 1` other candidates whose full neighbourhoods are nearest.
+pub struct KCoherenceSets {
+    k: usize,
+    sets: Vec<u32>,
+    typical: f32,
+}
+
+impl KCoherenceSets {
+    /// Builds the sets from `full` (the level's candidates with full-window features) and measures
+    /// the typical causal distance on `causal` (the same candidates, causal features).
+    ///
+    /// The similar candidates come from a PCA-`dims` kd-tree over `full` whose `max(2 k, 16)`
+    /// nearest are re-scored in the full space (exact when the level has no more candidates than
+    /// that); ties go to the lower index. Every candidate is independent, so the result does not
+    /// depend on the thread count.
+    pub fn new(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, dims: usize) -> Self {
+        debug_assert_eq!(full.len(), causal.len());
+        let k = k.max(1);
+        let pool = (2 * k).max(16);
+        let index = ApproximateIndex::new(full, dims, pool);
+        let mut sets = vec![0u32; full.len() * k];
+        sets.par_chunks_mut(k).enumerate().for_each_init(Vec::new, |found, (i, set)| {
+            found.clear();
+            index.candidates(full.feature(i), f32::INFINITY, found);
+            let mut scored: Vec<(f32, usize)> =
+                found.iter().filter(|&&j| j != i).map(|&j| (full.distance2(j, full.feature(i)), j)).collect();
+            scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            set[0] = i as u32;
+            for (s, slot) in set[1..].iter_mut().enumerate() {
+                // Fewer neighbours than k (tiny levels): repeat the candidate itself.
+                *slot = scored.get(s).map_or(i, |c| c.1) as u32;
+            }
+        });
+        let mut nearest: Vec<f32> = (0..causal.len())
+            .filter(|&i| k > 1 && sets[i * k + 1] as usize != i)
+            .map(|i| causal.distance2(sets[i * k + 1] as usize, causal.feature(i)))
+            .collect();
+        nearest.sort_by(f32::total_cmp);
+        let typical = nearest.get(nearest.len() / 2).copied().unwrap_or(0.0);
+        KCoherenceSets { k, sets, typical }
+    }
+
+    /// The set of candidate `i`: `i` itself first, then its most similar candidates.
+    pub fn set(&self, i: usize) -> &[u32] {
+        &self.sets[i * self.k..(i + 1) * self.k]
+    }
+
+    /// The level's typical squared causal distance: the median, over candidates, of the distance
+    /// between a candidate's causal feature and that of its most similar other candidate (0 when
+    /// `k` = 1 or the level has a single candidate).
+    pub fn typical(&self) -> f32 {
+        self.typical
     }
 }
 

@@ -5,6 +5,11 @@
 //! by the exemplar texel whose neighbourhood ([`crate::neighbourhood`]) is nearest in L2. The
 //! output is toroidal, so results tile.
 //!
+//! With [`Search::KCoherence`] (Tong et al. 2002) a texel's candidates are, for each synthesised
+//! causal neighbour, its source shifted back and that source's k-coherence set
+//! ([`crate::search::KCoherenceSets`]), each scored once with an early-exit distance (exact at or
+//! below the best so far, so the choice equals a full scoring of the same candidates).
+//!
 //! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, and the
 //! exhaustive scan over candidates for one texel. The texel loop itself stays sequential: each
 //! texel's causal neighbourhood holds the texels synthesised just before it.
@@ -24,7 +29,7 @@ use skinkit_maps::{Grid, NormalMap};
 use crate::config::{Search, SynthConfig, half};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::neighbourhood::Neighbourhood;
-use crate::search::ApproximateIndex;
+use crate::search::{ApproximateIndex, KCoherenceSets};
 use crate::{Error, Result};
 
 /// The result of [`synthesize`].
@@ -169,15 +174,13 @@ fn synthesize_level(
         config.neighbourhood,
         config.exemplar_wrap,
     );
-    let index = match config.search {
-        Search::Exact => None,
-        Search::Approximate { dims, rerank } => Some(ApproximateIndex::new(&ex, dims, rerank)),
-    };
+    let (index, sets) = build_search(pyramid, level, coarser.is_some(), &ex, config);
     let mut out = histogram_noise(&pyramid[level], w, h, config.seed, level);
     let mut coords = Grid::filled(w, h, [0u32; 2]);
     let mut done = Grid::filled(w, h, false);
     let mut query = vec![0.0f32; nb.dim()];
     let mut candidates = Vec::new();
+    let mut seen = vec![usize::MAX; if sets.is_some() { ex.len() } else { 0 }];
     for y in 0..h {
         for x in 0..w {
             let (xi, yi) = (x as isize, y as isize);
@@ -188,22 +191,39 @@ fn synthesize_level(
                 |sx, sy| coarser.map_or(Vec3::ZERO, |c| *c.get_wrapped(sx, sy)),
                 &mut query,
             );
-            let best = match &index {
-                None => ex.nearest_exact(&query),
-                Some(index) => {
-                    candidates.clear();
+            let score = |&i: &usize| (ex.distance2(i, &query), i);
+            candidates.clear();
+            let best = match (&index, &sets) {
+                (_, Some(sets)) => {
+                    coherence_candidates(&ex, &nb, &coords, &done, xi, yi, &mut candidates);
+                    // Each candidate is scored once per texel (`seen` holds the last texel that
+                    // scored it); the result does not depend on the order, only the work does.
+                    let texel = y * w + x;
+                    let mut best = (f32::INFINITY, usize::MAX);
+                    for &source in &candidates {
+                        for &j in sets.set(source) {
+                            let j = j as usize;
+                            if std::mem::replace(&mut seen[j], texel) != texel {
+                                best = better(best, (ex.distance2_below(j, &query, best.0), j));
+                            }
+                        }
+                    }
+                    let Search::KCoherence { fallback, .. } = config.search else { unreachable!() };
+                    match (&index, fallback) {
+                        _ if best.1 == usize::MAX => ex.nearest_exact(&query),
+                        (Some(index), Some(ratio)) if best.0 > ratio * sets.typical() => {
+                            tree_refine(index, &query, best, &score, &mut candidates)
+                        }
+                        _ => best.1,
+                    }
+                }
+                (None, None) => ex.nearest_exact(&query),
+                (Some(index), None) => {
                     if config.coherence {
                         coherence_candidates(&ex, &nb, &coords, &done, xi, yi, &mut candidates);
                     }
-                    let score = |&i: &usize| (ex.distance2(i, &query), i);
                     let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
-                    // Tree candidates farther than the best coherent one (in projected distance, a
-                    // lower bound of the full one) cannot win: search only within that radius. The
-                    // margin covers the rounding of the f32 projection.
-                    let radius2 = coherent.0 * (1.0 + 1e-4) + 1e-6;
-                    let first = candidates.len();
-                    index.candidates(&query, radius2, &mut candidates);
-                    candidates[first..].iter().map(score).fold(coherent, better).1
+                    tree_refine(index, &query, coherent, &score, &mut candidates)
                 }
             };
             *out.get_mut(x, y) = ex.texel(best);
@@ -213,6 +233,50 @@ fn synthesize_level(
         progress(level, (y + 1) as f32 / h as f32);
     }
     (out, coords)
+}
+
+/// The search structures a level needs: the PCA kd-tree (approximate search, or k-coherence with a
+/// fallback) and the k-coherence sets.
+fn build_search(
+    pyramid: &[Grid<Vec3>],
+    level: usize,
+    has_parent: bool,
+    ex: &ExemplarLevel,
+    config: &SynthConfig,
+) -> (Option<ApproximateIndex>, Option<KCoherenceSets>) {
+    match config.search {
+        Search::Exact => (None, None),
+        Search::Approximate { dims, rerank } => (Some(ApproximateIndex::new(ex, dims, rerank)), None),
+        Search::KCoherence { k, fallback, dims, rerank } => {
+            let full_nb = Neighbourhood::full(config.neighbourhood, config.parent, has_parent);
+            let full = ExemplarLevel::new(
+                pyramid[level].clone(),
+                pyramid.get(level + 1).filter(|_| has_parent),
+                &full_nb,
+                config.neighbourhood,
+                config.exemplar_wrap,
+            );
+            let sets = KCoherenceSets::new(&full, ex, k, dims);
+            drop(full);
+            (fallback.map(|_| ApproximateIndex::new(ex, dims, rerank)), Some(sets))
+        }
+    }
+}
+
+/// The best of `best` and the tree's candidates for `query`. Tree candidates farther than `best`
+/// (in projected distance, a lower bound of the full one) cannot win, so the tree is searched only
+/// within that radius; the margin covers the rounding of the f32 projection.
+fn tree_refine(
+    index: &ApproximateIndex,
+    query: &[f32],
+    best: (f32, usize),
+    score: &dyn Fn(&usize) -> (f32, usize),
+    candidates: &mut Vec<usize>,
+) -> usize {
+    let radius2 = best.0 * (1.0 + 1e-4) + 1e-6;
+    let first = candidates.len();
+    index.candidates(query, radius2, candidates);
+    candidates[first..].iter().map(score).fold(best, better).1
 }
 
 /// Ashikhmin (2001) candidates: for each already synthesised causal neighbour at offset `(dx, dy)`,

@@ -3,7 +3,10 @@
 
 use glam::Vec3;
 use skinkit_maps::Grid;
+use skinkit_synth::energy::window_energy;
+use skinkit_synth::exemplar::ExemplarLevel;
 use skinkit_synth::neighbourhood::Neighbourhood;
+use skinkit_synth::search::KCoherenceSets;
 use skinkit_synth::synthesis::histogram_noise;
 use skinkit_synth::{Error, Search, SynthConfig, replay, synthesize, synthesize_normals};
 
@@ -23,6 +26,8 @@ fn config(w: usize, h: usize, search: Search) -> SynthConfig {
 fn quiet(_: usize, _: f32) {}
 
 const APPROX: Search = Search::Approximate { dims: 8, rerank: 4 };
+const KCOH: Search = Search::KCoherence { k: 4, fallback: None, dims: 8, rerank: 4 };
+const KCOH_FALLBACK: Search = Search::KCoherence { k: 4, fallback: Some(1.0), dims: 8, rerank: 4 };
 
 fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
     rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(f)
@@ -31,7 +36,7 @@ fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
 #[test]
 fn same_bits_on_one_and_two_threads() {
     let ex = pattern(16, 16);
-    for search in [Search::Exact, APPROX] {
+    for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let c = config(24, 24, search);
         let one = on_threads(1, || synthesize(&ex, &c, &quiet).unwrap());
         let two = on_threads(2, || synthesize(&ex, &c, &quiet).unwrap());
@@ -46,7 +51,7 @@ fn same_bits_on_one_and_two_threads() {
 #[test]
 fn output_texels_are_copies_of_their_coords() {
     let ex = pattern(16, 16);
-    for search in [Search::Exact, APPROX] {
+    for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let s = synthesize(&ex, &config(24, 24, search), &quiet).unwrap();
         assert_eq!(s.texels.size(), (24, 24));
         for y in 0..24 {
@@ -113,7 +118,7 @@ fn exact_search_equals_a_brute_force_scan() {
 fn constant_exemplar_gives_constant_output() {
     let v = Vec3::new(0.2, -0.4, 0.9);
     let ex = Grid::filled(12, 12, v);
-    for search in [Search::Exact, APPROX] {
+    for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let s = synthesize(&ex, &config(10, 7, search), &quiet).unwrap();
         assert!(s.texels.as_slice().iter().all(|t| *t == v), "{search:?}");
     }
@@ -129,7 +134,7 @@ fn exemplar_smaller_than_the_neighbourhood_is_refused() {
 #[test]
 fn one_by_one_output_and_non_square_exemplar() {
     let ex = pattern(21, 9);
-    for search in [Search::Exact, APPROX] {
+    for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let s = synthesize(&ex, &config(1, 1, search), &quiet).unwrap();
         assert_eq!(s.texels.size(), (1, 1));
         assert!(s.texels.get(0, 0).is_finite());
@@ -216,9 +221,99 @@ fn outputs_over_the_memory_limit_are_refused_with_the_estimate() {
 fn non_finite_exemplar_texels_are_zeroed_with_a_warning() {
     let mut ex = pattern(12, 12);
     *ex.get_mut(5, 5) = Vec3::new(f32::NAN, 0.0, f32::INFINITY);
-    for search in [Search::Exact, APPROX] {
+    for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let s = synthesize(&ex, &config(9, 9, search), &quiet).unwrap();
         assert!(s.texels.as_slice().iter().all(|t| t.is_finite()), "{search:?}");
         assert!(s.warnings.iter().any(|w| w.contains("1 exemplar texels were not finite")), "{:?}", s.warnings);
     }
+}
+
+#[test]
+fn k_coherence_with_a_zero_fallback_and_full_rerank_equals_exact() {
+    // A zero ratio sends every texel whose best coherent candidate is not a perfect match to the
+    // tree, which then returns every candidate within the bound: the exact answer.
+    let ex = pattern(16, 16);
+    let exact = synthesize(&ex, &config(12, 12, Search::Exact), &quiet).unwrap();
+    let c = config(12, 12, Search::KCoherence { k: 3, fallback: Some(0.0), dims: 3, rerank: 144 });
+    assert_eq!(synthesize(&ex, &c, &quiet).unwrap().coords, exact.coords);
+}
+
+#[test]
+fn k_coherence_sets_are_the_nearest_full_windows() {
+    // 8x8 without wrap, 5x5 windows: 4 x 4 = 16 candidates, all within the sets' re-scored pool
+    // (max(2 k, 16) = 18 for k = 9), so the sets are exact.
+    let ex = pattern(8, 8);
+    let k = 9;
+    let full = ExemplarLevel::new(ex.clone(), None, &Neighbourhood::full(5, 3, false), 5, false);
+    let causal = ExemplarLevel::new(ex.clone(), None, &Neighbourhood::new(5, 3, false), 5, false);
+    let sets = KCoherenceSets::new(&full, &causal, k, 8);
+    let window_distance = |(ax, ay): (usize, usize), (bx, by): (usize, usize)| {
+        let mut d = 0.0f32;
+        for dy in 0..5 {
+            for dx in 0..5 {
+                let diff = *ex.get(ax + dx - 2, ay + dy - 2) - *ex.get(bx + dx - 2, by + dy - 2);
+                d += diff.length_squared();
+            }
+        }
+        d
+    };
+    let cells: Vec<(usize, usize)> = (2..6).flat_map(|y| (2..6).map(move |x| (x, y))).collect();
+    for (i, &a) in cells.iter().enumerate() {
+        let mut others: Vec<(f32, usize)> =
+            cells.iter().enumerate().filter(|&(j, _)| j != i).map(|(j, &b)| (window_distance(a, b), j)).collect();
+        others.sort_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+        let expect: Vec<u32> =
+            std::iter::once(i).chain(others[..k - 1].iter().map(|o| o.1)).map(|j| j as u32).collect();
+        assert_eq!(sets.set(i), expect.as_slice(), "candidate {i} at {a:?}");
+    }
+    assert!(sets.typical() > 0.0);
+}
+
+#[test]
+fn window_energy_matches_a_brute_force_scan() {
+    let ex = pattern(9, 8);
+    let out = histogram_noise(&ex, 6, 5, 3, 0);
+    let brute = |stride: usize| {
+        let mut sum = 0.0f64;
+        let mut count = 0;
+        for y in (0..5).step_by(stride) {
+            for x in (0..6).step_by(stride) {
+                let mut best = f32::INFINITY;
+                for ey in 1..7isize {
+                    for ex_x in 1..8isize {
+                        let mut d = 0.0;
+                        for dy in -1..=1isize {
+                            for dx in -1..=1isize {
+                                let a = *out.get_wrapped(x as isize + dx, y as isize + dy);
+                                let b = *ex.get((ex_x + dx) as usize, (ey + dy) as usize);
+                                d += (a - b).length_squared();
+                            }
+                        }
+                        best = best.min(d);
+                    }
+                }
+                sum += best as f64;
+                count += 1;
+            }
+        }
+        sum / count as f64
+    };
+    for stride in [1, 2] {
+        let e = window_energy(&out, &ex, 3, stride);
+        let b = brute(stride);
+        assert!((e - b).abs() <= 1e-5 * b, "stride {stride}: {e} vs {b}");
+    }
+    // An output cut from the exemplar's interior matches it exactly away from its wrapped edges.
+    let crop = Grid::from_fn(5, 4, |x, y| *ex.get(x + 2, y + 2));
+    assert!(window_energy(&crop, &ex, 1, 1) == 0.0);
+}
+
+#[test]
+fn k_coherence_beats_noise_on_window_energy() {
+    let ex = pattern(24, 24);
+    let c = SynthConfig { levels: 2, search: KCOH, ..SynthConfig::new(32, 32) };
+    let s = synthesize(&ex, &c, &quiet).unwrap();
+    let synthesized = window_energy(&s.texels, &ex, 5, 1);
+    let noise = window_energy(&histogram_noise(&ex, 32, 32, 0, 0), &ex, 5, 1);
+    assert!(synthesized < 0.5 * noise, "{synthesized} vs noise {noise}");
 }

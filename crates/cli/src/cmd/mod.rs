@@ -5,3 +5,4 @@ pub mod capture;
 pub mod demo;
 pub mod rig;
 pub mod samples;
+pub mod synth;

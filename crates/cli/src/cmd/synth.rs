@@ -1,0 +1,538 @@
+//! `skinkit synth`: grow a normal or colour map from an exemplar by Wei-Levoy multiresolution
+//! synthesis (Haro et al. 2001, section 4.1; issue 3), and `skinkit synth replay`: copy another map
+//! of the exemplar's size (an albedo registered with the normals) through the coordinate map of a
+//! run, so it stays in register with the synthesised output.
+//!
+//! The coordinate map is a 16-bit RGB PNG of the output's size: red holds the exemplar column
+//! (x, 0 at the left) and green the exemplar row (y, 0 at the top) of the texel each output texel
+//! copies; blue is 0. Exemplars wider or taller than 65535 texels cannot be described this way and
+//! are refused when `--coords` is asked for.
+
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::ProgressBar;
+use serde::Serialize;
+use skinkit_maps::io::{self, Limits, PngLayout};
+use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
+use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
+use skinkit_synth::{Search, SynthConfig};
+
+use crate::output::Output;
+use crate::pipeline;
+
+/// The largest exemplar side a 16-bit coordinate map can address.
+pub const MAX_COORD_SIDE: usize = u16::MAX as usize;
+
+/// Steps of each level's progress bar (the library reports a fraction per output row).
+const PROGRESS_STEPS: u64 = 1000;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Exemplar: a normal map (PNG 8/16-bit or EXR), or with `--kind color` a colour image.
+    #[arg(value_name = "EXEMPLAR", required = true)]
+    pub exemplar: Option<PathBuf>,
+    /// Output map (.png, 16-bit, or .exr, float).
+    #[arg(long, value_name = "OUT", required = true)]
+    pub out: Option<PathBuf>,
+    /// Output size in texels, `WIDTHxHEIGHT` (e.g. 512x512).
+    #[arg(long, value_name = "WxH", value_parser = parse_size, required = true)]
+    pub size: Option<(usize, usize)>,
+    /// Pyramid levels (1 = single resolution); clamped, with a warning, to what the exemplar allows.
+    #[arg(long, default_value_t = 3, value_name = "L")]
+    pub levels: usize,
+    /// Side of the causal neighbourhood at each level (odd, at least 3).
+    #[arg(long, default_value_t = 5, value_name = "N", alias = "neighbourhood")]
+    pub neighborhood: usize,
+    /// Side of the full neighbourhood taken from the coarser level (odd).
+    #[arg(long, default_value_t = 3, value_name = "M")]
+    pub parent: usize,
+    /// Approximate search: PCA dimensions of the kd-tree (1..=32).
+    #[arg(long, default_value_t = 8, value_name = "D", conflicts_with = "exact")]
+    pub dims: usize,
+    /// Approximate search: tree candidates re-scored in the full neighbourhood space.
+    #[arg(long, default_value_t = 8, value_name = "K", conflicts_with = "exact")]
+    pub rerank: usize,
+    /// Exhaustive search over every exemplar neighbourhood (slow; the reference).
+    #[arg(long)]
+    pub exact: bool,
+    /// Do not add Ashikhmin coherence candidates (approximate search).
+    #[arg(long)]
+    pub no_coherence: bool,
+    /// Let exemplar neighbourhoods wrap around the exemplar (for tileable exemplars).
+    #[arg(long)]
+    pub exemplar_wrap: bool,
+    /// Seed of the initial noise: the same seed gives the same output, bit for bit.
+    #[arg(long, default_value_t = 0, value_name = "S")]
+    pub seed: u64,
+    #[command(flatten)]
+    pub map: MapArgs,
+    /// Also write the coordinate map (16-bit RGB PNG: R = exemplar x, G = exemplar y, B = 0).
+    #[arg(long, value_name = "FILE")]
+    pub coords: Option<PathBuf>,
+    /// Also write the report (sizes, options, timings, quality metrics) as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+}
+
+/// How maps are read and written: shared by `synth` and `synth replay`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MapArgs {
+    /// What the maps hold: unit normals or linear colour.
+    #[arg(long, default_value = "normal", value_parser = ["normal", "color"])]
+    pub kind: String,
+    /// Green channel convention of normal maps read and written.
+    #[arg(long, default_value = "up", value_parser = ["up", "down"])]
+    pub green: String,
+    /// How 8/16-bit colour values relate to light (colour maps only; outputs are linear).
+    #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
+    pub transfer: String,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// Copy a map of the exemplar's size through a coordinate map written by `synth --coords`.
+    Replay(ReplayArgs),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ReplayArgs {
+    /// Coordinate map written by `skinkit synth --coords`.
+    #[arg(long, value_name = "FILE")]
+    pub coords: PathBuf,
+    /// Map of the exemplar's size to copy (normal map, or colour with `--kind color`).
+    #[arg(long, value_name = "MAP")]
+    pub source: PathBuf,
+    /// Output map (.png, 16-bit, or .exr).
+    #[arg(long, value_name = "OUT")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub map: MapArgs,
+}
+
+/// Parses `WIDTHxHEIGHT` (`512x512`; `X` works too) into two positive sides.
+pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("`{text}` is not a size: expected WIDTHxHEIGHT with positive integers, e.g. 512x512");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = |s: &str| s.trim().parse::<usize>().ok().filter(|&v| v > 0);
+    match (side(w), side(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(bad()),
+    }
+}
+
+/// An exemplar, a source or an output in memory.
+enum Map {
+    Normal(NormalMap),
+    Color(ColorMap),
+}
+
+impl Map {
+    fn size(&self) -> (usize, usize) {
+        match self {
+            Map::Normal(n) => n.size(),
+            Map::Color(c) => c.size(),
+        }
+    }
+}
+
+impl MapArgs {
+    fn encoding(&self) -> Result<NormalEncoding> {
+        let green: GreenAxis = self.green.parse().map_err(anyhow::Error::msg)?;
+        Ok(NormalEncoding { green })
+    }
+
+    fn is_color(&self) -> bool {
+        self.kind == "color"
+    }
+
+    /// Reads a normal map, or a colour image as linear RGB (grey replicated).
+    fn read(&self, path: &Path) -> Result<Map> {
+        let limits = Limits::default();
+        if !self.is_color() {
+            let map = io::read_normal_map(path, self.encoding()?, &limits)
+                .with_context(|| format!("cannot read normal map {}", path.display()))?;
+            return Ok(Map::Normal(map));
+        }
+        let transfer = if self.transfer == "srgb" { Transfer::Srgb } else { Transfer::Linear };
+        let photo = io::read_photo(path, &limits)
+            .with_context(|| format!("cannot read colour image {}", path.display()))?
+            .with_transfer(transfer);
+        let rgb = photo.channels() == Channels::Rgb;
+        let color = Grid::from_fn(photo.width(), photo.height(), |x, y| {
+            let i = y * photo.width() + x;
+            if rgb {
+                Vec3::new(photo.linear(3 * i), photo.linear(3 * i + 1), photo.linear(3 * i + 2))
+            } else {
+                Vec3::splat(photo.linear(i))
+            }
+        });
+        Ok(Map::Color(color))
+    }
+
+    fn write(&self, path: &Path, map: &Map) -> Result<()> {
+        match map {
+            Map::Normal(n) => io::write_normal_map(path, n, self.encoding()?, 16),
+            Map::Color(c) => io::write_color_map(path, c, 16),
+        }
+        .with_context(|| format!("cannot write {}", path.display()))
+    }
+}
+
+/// Refuses output names that are neither `.png` nor `.exr`, before any work is done.
+fn check_map_extension(path: &Path) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if ext != "png" && ext != "exr" {
+        bail!("{}: output maps are written as .png (16-bit) or .exr", path.display());
+    }
+    Ok(())
+}
+
+/// The options as run, for the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct OptionsReport {
+    pub kind: String,
+    pub levels_requested: usize,
+    pub levels: usize,
+    pub neighborhood: usize,
+    pub parent: usize,
+    /// `exact` or `approximate` (the library's name for any other mode).
+    pub search: String,
+    pub dims: Option<usize>,
+    pub rerank: Option<usize>,
+    pub coherence: bool,
+    pub exemplar_wrap: bool,
+    pub seed: u64,
+}
+
+/// Quality of the output against its exemplar (see `skinkit_synth::metrics`).
+#[derive(Clone, Debug, Serialize)]
+pub struct QualityReport {
+    /// Normal maps: mean Wasserstein-1 distance of the slope histograms (slope units).
+    pub slope_distance: Option<f64>,
+    /// Colour maps: mean Wasserstein-1 distance of the channel histograms.
+    pub channel_distance: Option<f64>,
+    /// Mean decades between the radial power spectra.
+    pub spectrum_distance: f64,
+    /// Squared differences across the output's wrap-around seam over interior ones (~1 tiles).
+    pub seam_energy_ratio: f64,
+    /// The same for the exemplar, for comparison.
+    pub exemplar_seam_energy_ratio: f64,
+    /// Texels of the largest verbatim copied block.
+    pub largest_block: usize,
+    /// Mean copied block size in texels.
+    pub mean_block: f64,
+    /// Distinct copy offsets.
+    pub distinct_offsets: usize,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Seconds {
+    /// Per pyramid level, `[0]` the finest.
+    pub levels: Vec<f64>,
+    /// Reading, synthesis, metrics and writing.
+    pub total: f64,
+}
+
+/// What `--report` and `--json` hold.
+#[derive(Clone, Debug, Serialize)]
+pub struct SynthReport {
+    pub exemplar: String,
+    pub out: String,
+    pub coords: Option<String>,
+    pub exemplar_width: usize,
+    pub exemplar_height: usize,
+    pub width: usize,
+    pub height: usize,
+    pub options: OptionsReport,
+    pub seconds: Seconds,
+    pub warnings: Vec<String>,
+    pub quality: QualityReport,
+}
+
+pub fn run(args: Args, out: &Output) -> Result<i32> {
+    match args.command {
+        Some(Command::Replay(replay)) => run_replay(replay, out),
+        None => run_synth(args, out),
+    }
+}
+
+/// The library options the flags ask for.
+fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
+    SynthConfig {
+        width,
+        height,
+        levels: args.levels,
+        neighbourhood: args.neighborhood,
+        parent: args.parent,
+        search: if args.exact { Search::Exact } else { Search::Approximate { dims: args.dims, rerank: args.rerank } },
+        coherence: !args.no_coherence,
+        exemplar_wrap: args.exemplar_wrap,
+        seed: args.seed,
+        ..SynthConfig::default()
+    }
+}
+
+/// One progress bar per pyramid level, each created when its level starts.
+struct LevelBars<'a> {
+    out: &'a Output,
+    current: RefCell<Option<(usize, ProgressBar)>>,
+}
+
+impl LevelBars<'_> {
+    fn update(&self, level: usize, fraction: f32) {
+        let mut current = self.current.borrow_mut();
+        if current.as_ref().is_none_or(|(l, _)| *l != level) {
+            if let Some((_, bar)) = current.take() {
+                bar.finish();
+            }
+            *current = Some((level, self.out.progress(PROGRESS_STEPS, &format!("level {level}"))));
+        }
+        if let Some((_, bar)) = current.as_ref() {
+            bar.set_position((fraction.clamp(0.0, 1.0) * PROGRESS_STEPS as f32).round() as u64);
+        }
+    }
+
+    fn finish(&self) {
+        if let Some((_, bar)) = self.current.borrow_mut().take() {
+            bar.finish();
+        }
+    }
+}
+
+fn run_synth(args: Args, out: &Output) -> Result<i32> {
+    let start = Instant::now();
+    let (Some(exemplar_path), Some(out_path), Some(size)) = (&args.exemplar, &args.out, args.size) else {
+        bail!("synth needs EXEMPLAR, --out and --size");
+    };
+    check_map_extension(out_path)?;
+    if let Some(coords) = &args.coords
+        && coords.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png")
+    {
+        bail!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
+    }
+    let exemplar = args.map.read(exemplar_path)?;
+    let (ew, eh) = exemplar.size();
+    if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
+        bail!(
+            "{}: exemplar {ew}x{eh} is too large for a 16-bit coordinate map (sides up to {MAX_COORD_SIDE})",
+            exemplar_path.display()
+        );
+    }
+    let requested = config(&args, size);
+    let context = || format!("cannot synthesise from {}", exemplar_path.display());
+    let (validated, _) = requested.validate(ew, eh).with_context(context)?;
+    let bars = LevelBars { out, current: RefCell::new(None) };
+    let progress = |level: usize, fraction: f32| bars.update(level, fraction);
+    let (output, coords, warnings, level_seconds) = match &exemplar {
+        Map::Normal(n) => {
+            let s = skinkit_synth::synthesize_normals(n, &requested, &progress).with_context(context)?;
+            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds)
+        }
+        Map::Color(c) => {
+            let s = skinkit_synth::synthesize(c, &requested, &progress).with_context(context)?;
+            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds)
+        }
+    };
+    bars.finish();
+    for w in &warnings {
+        out.warn(w);
+    }
+    let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap);
+    args.map.write(out_path, &output)?;
+    if let Some(path) = &args.coords {
+        write_coords(path, &coords)?;
+    }
+    let report = SynthReport {
+        exemplar: exemplar_path.display().to_string(),
+        out: out_path.display().to_string(),
+        coords: args.coords.as_ref().map(|p| p.display().to_string()),
+        exemplar_width: ew,
+        exemplar_height: eh,
+        width: size.0,
+        height: size.1,
+        options: options_report(&args, &validated),
+        seconds: Seconds { levels: level_seconds, total: start.elapsed().as_secs_f64() },
+        warnings,
+        quality,
+    };
+    if let Some(path) = &args.report {
+        pipeline::write_json(path, &report)?;
+    }
+    out.result(&report, || human(&report));
+    Ok(0)
+}
+
+fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
+    let (search, dims, rerank) = match run.search {
+        Search::Exact => ("exact".to_owned(), None, None),
+        Search::Approximate { dims, rerank } => ("approximate".to_owned(), Some(dims), Some(rerank)),
+        // Modes the flags cannot select yet (the library may grow more): named as the library does.
+        #[allow(unreachable_patterns)]
+        other => (format!("{other:?}"), None, None),
+    };
+    OptionsReport {
+        kind: args.map.kind.clone(),
+        levels_requested: args.levels,
+        levels: run.levels,
+        neighborhood: run.neighbourhood,
+        parent: run.parent,
+        search,
+        dims,
+        rerank,
+        coherence: run.coherence,
+        exemplar_wrap: run.exemplar_wrap,
+        seed: run.seed,
+    }
+}
+
+fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wrap: bool) -> QualityReport {
+    let bins = DEFAULT_SPECTRUM_BINS;
+    let copies = metrics::copy_statistics(coords, exemplar.size(), wrap);
+    let (slope, channel, spectrum, seam, exemplar_seam) = match (exemplar, output) {
+        (Map::Normal(e), Map::Normal(o)) => (
+            Some(metrics::slope_distance(o, e)),
+            None,
+            metrics::normal_spectrum_distance(o, e, bins),
+            metrics::normal_seam_energy(o).ratio,
+            metrics::normal_seam_energy(e).ratio,
+        ),
+        (Map::Color(e), Map::Color(o)) => (
+            None,
+            Some(metrics::channel_distance(o, e)),
+            metrics::color_spectrum_distance(o, e, bins),
+            metrics::seam_energy(o).ratio,
+            metrics::seam_energy(e).ratio,
+        ),
+        _ => unreachable!("the output has the exemplar's kind"),
+    };
+    QualityReport {
+        slope_distance: slope,
+        channel_distance: channel,
+        spectrum_distance: spectrum,
+        seam_energy_ratio: seam,
+        exemplar_seam_energy_ratio: exemplar_seam,
+        largest_block: copies.largest_block,
+        mean_block: copies.mean_block,
+        distinct_offsets: copies.distinct_offsets,
+    }
+}
+
+fn human(r: &SynthReport) -> String {
+    let q = &r.quality;
+    let histogram = match (q.slope_distance, q.channel_distance) {
+        (Some(d), _) => format!("slope distance {d:.4}"),
+        (_, Some(d)) => format!("channel distance {d:.4}"),
+        _ => String::new(),
+    };
+    format!(
+        "{}: {}x{} from {}x{} in {} levels, {:.2} s\n{histogram}, spectrum distance {:.3}, seam ratio {:.2} \
+         (exemplar {:.2}), largest copied block {} texels, mean {:.1}",
+        r.out,
+        r.width,
+        r.height,
+        r.exemplar_width,
+        r.exemplar_height,
+        r.options.levels,
+        r.seconds.total,
+        q.spectrum_distance,
+        q.seam_energy_ratio,
+        q.exemplar_seam_energy_ratio,
+        q.largest_block,
+        q.mean_block
+    )
+}
+
+/// Writes a coordinate map: 16-bit RGB PNG, R = exemplar x, G = exemplar y, B = 0.
+fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
+    let (w, h) = coords.size();
+    io::write_png_rows(path, w, h, PngLayout::Rgb16, |y, row| {
+        for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
+            // Sides were checked against MAX_COORD_SIDE, so coordinates fit.
+            px.copy_from_slice(&[c[0] as u16, c[1] as u16, 0]);
+        }
+    })
+    .with_context(|| format!("cannot write coordinate map {}", path.display()))
+}
+
+/// Reads a coordinate map written by [`write_coords`].
+fn read_coords(path: &Path) -> Result<Grid<[u32; 2]>> {
+    let photo = io::read_photo(path, &Limits::default())
+        .with_context(|| format!("cannot read coordinate map {}", path.display()))?;
+    let (Channels::Rgb, Samples::U16(samples)) = (photo.channels(), photo.samples()) else {
+        bail!(
+            "{}: not a coordinate map (expected a 16-bit RGB PNG from `skinkit synth --coords`, got {}-bit {:?})",
+            path.display(),
+            photo.bit_depth(),
+            photo.channels()
+        );
+    };
+    let texels = samples.chunks_exact(3).map(|c| [c[0] as u32, c[1] as u32]).collect();
+    Ok(Grid::from_vec(photo.width(), photo.height(), texels)?)
+}
+
+/// What `synth replay --json` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplayReport {
+    pub coords: String,
+    pub source: String,
+    pub out: String,
+    pub kind: String,
+    pub width: usize,
+    pub height: usize,
+    pub seconds: f64,
+}
+
+fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
+    let start = Instant::now();
+    check_map_extension(&args.out)?;
+    let coords = read_coords(&args.coords)?;
+    let source = args.map.read(&args.source)?;
+    let (sw, sh) = source.size();
+    let context = || {
+        format!(
+            "cannot replay {} on {} ({sw}x{sh}): the source must have the exemplar's size",
+            args.coords.display(),
+            args.source.display()
+        )
+    };
+    let replayed = match &source {
+        Map::Normal(n) => {
+            let grid = skinkit_synth::replay(&coords, n.grid()).with_context(context)?;
+            Map::Normal(NormalMap::from_unit_grid(grid)?)
+        }
+        Map::Color(c) => Map::Color(skinkit_synth::replay(&coords, c).with_context(context)?),
+    };
+    args.map.write(&args.out, &replayed)?;
+    let (width, height) = coords.size();
+    let report = ReplayReport {
+        coords: args.coords.display().to_string(),
+        source: args.source.display().to_string(),
+        out: args.out.display().to_string(),
+        kind: args.map.kind.clone(),
+        width,
+        height,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    out.result(&report, || format!("{}: {width}x{height} replayed from {}", report.out, report.source));
+    Ok(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_and_bad_ones_explain_the_format() {
+        assert_eq!(parse_size("512x256"), Ok((512, 256)));
+        assert_eq!(parse_size("7X3"), Ok((7, 3)));
+        for bad in ["512", "0x4", "ax4", "4x", "-1x3", "4x4x4"] {
+            let e = parse_size(bad).unwrap_err();
+            assert!(e.contains(bad) && e.contains("WIDTHxHEIGHT"), "{bad}: {e}");
+        }
+    }
+}

@@ -1,0 +1,192 @@
+//! End-to-end tests of `skinkit synth` and `skinkit synth replay`: outputs, coordinate maps and
+//! reports written, runs reproducible by seed, replay in register with the output, and clear errors.
+//! Runs stay tiny (48x48 from a 32x32 crop of a sample mold's truth map).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use skinkit_maps::io::{self, Limits};
+use skinkit_maps::{Grid, NormalEncoding, NormalMap, Vec3};
+
+fn skinkit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn truth(region: &str) -> NormalMap {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region).join("truth.png");
+    io::read_normal_map(&path, NormalEncoding::default(), &Limits::default()).unwrap()
+}
+
+/// A `side x side` crop of a sample mold's truth normals, written as a 16-bit PNG.
+fn normal_exemplar(dir: &Path, region: &str, side: usize) -> PathBuf {
+    let crop = truth(region).grid().crop(40, 60, side, side).unwrap();
+    let path = dir.join(format!("{region}-{side}.png"));
+    io::write_normal_map(&path, &NormalMap::from_unit_grid(crop).unwrap(), NormalEncoding::default(), 16).unwrap();
+    path
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `synth` of `exemplar` to `out` (48x48), with extra flags; asserts success.
+fn synth(exemplar: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["synth", s(exemplar), "--out", s(out), "--size", "48x48", "--quiet"];
+    args.extend_from_slice(extra);
+    let o = skinkit(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    o
+}
+
+#[test]
+fn synth_writes_output_coords_and_report_with_finite_metrics() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 32);
+    let (out, coords, report) = (tmp.path().join("out.png"), tmp.path().join("c.png"), tmp.path().join("r.json"));
+    let o = skinkit(&[
+        "synth",
+        s(&exemplar),
+        "--out",
+        s(&out),
+        "--size",
+        "48x40",
+        "--levels",
+        "9",
+        "--coords",
+        s(&coords),
+        "--report",
+        s(&report),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
+    let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(printed["quality"], saved["quality"]);
+    assert_eq!((saved["width"].as_u64(), saved["height"].as_u64()), (Some(48), Some(40)));
+    assert_eq!(saved["exemplar_width"], 32);
+    // 32 -> 16 -> 8 -> 4: a 5x5 neighbourhood allows 3 levels; 9 is clamped with a warning.
+    assert_eq!(saved["options"]["levels_requested"], 9);
+    assert_eq!(saved["options"]["levels"], 3);
+    assert_eq!(saved["seconds"]["levels"].as_array().unwrap().len(), 3);
+    assert!(saved["warnings"][0].as_str().unwrap().contains("clamped"), "{saved}");
+    let q = &saved["quality"];
+    for key in ["slope_distance", "spectrum_distance", "seam_energy_ratio", "mean_block"] {
+        let v = q[key].as_f64().unwrap_or_else(|| panic!("{key} missing or not finite: {q}"));
+        assert!(v.is_finite() && v >= 0.0, "{key} = {v}");
+    }
+    assert!(q["channel_distance"].is_null());
+    let largest = q["largest_block"].as_u64().unwrap();
+    assert!((1..=48 * 40).contains(&largest));
+
+    let map = io::read_normal_map(&out, NormalEncoding::default(), &Limits::default()).unwrap();
+    assert_eq!(map.size(), (48, 40));
+    let c = io::read_photo(&coords, &Limits::default()).unwrap();
+    assert_eq!((c.width(), c.height(), c.bit_depth()), (48, 40, 16));
+    // Every output texel is the exemplar texel its coordinates name (R = x, G = y, B = 0).
+    let ex = io::read_normal_map(&exemplar, NormalEncoding::default(), &Limits::default()).unwrap();
+    for i in 0..48 * 40 {
+        let (x, y, b) = (c.samples().get(3 * i), c.samples().get(3 * i + 1), c.samples().get(3 * i + 2));
+        assert!(x < 32.0 && y < 32.0 && b == 0.0);
+        assert_eq!(map.get(i % 48, i / 48), ex.get(x as usize, y as usize), "texel {i}");
+    }
+}
+
+#[test]
+fn same_seed_gives_same_bytes_and_another_seed_differs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "forehead", 32);
+    let [a, b, c] = ["a.png", "b.png", "c.png"].map(|f| tmp.path().join(f));
+    synth(&exemplar, &a, &["--seed", "7"]);
+    synth(&exemplar, &b, &["--seed", "7", "--threads", "1"]);
+    synth(&exemplar, &c, &["--seed", "8"]);
+    let read = |p: &Path| std::fs::read(p).unwrap();
+    assert_eq!(read(&a), read(&b), "same seed, different thread count");
+    assert_ne!(read(&a), read(&c), "different seeds");
+}
+
+#[test]
+fn replay_of_the_coords_on_the_exemplar_reproduces_the_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "nose", 32);
+    let (out, coords, again) = (tmp.path().join("out.png"), tmp.path().join("c.png"), tmp.path().join("again.png"));
+    synth(&exemplar, &out, &["--coords", s(&coords), "--exact", "--levels", "2"]);
+    let o = skinkit(&["synth", "replay", "--coords", s(&coords), "--source", s(&exemplar), "--out", s(&again)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+
+    // A source of another size than the exemplar: refused, naming both files.
+    let small = normal_exemplar(tmp.path(), "cheek", 8);
+    let bad = tmp.path().join("bad.png");
+    let o = skinkit(&["synth", "replay", "--coords", s(&coords), "--source", s(&small), "--out", s(&bad)]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("c.png") && e.contains("cheek-8.png") && e.contains("exemplar's size"), "{e}");
+    assert!(!bad.exists());
+}
+
+#[test]
+fn color_exemplars_synthesise_and_replay() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A colour image made from the normals: (n + 1) / 2, written as a 16-bit linear PNG.
+    let crop = truth("cheek").grid().crop(100, 100, 32, 32).unwrap();
+    let color: Grid<Vec3> = crop.map(|n| (*n + Vec3::ONE) * 0.5);
+    let exemplar = tmp.path().join("color.png");
+    io::write_color_map(&exemplar, &color, 16).unwrap();
+    let (out, coords, report) = (tmp.path().join("out.png"), tmp.path().join("c.png"), tmp.path().join("r.json"));
+    synth(&exemplar, &out, &["--kind", "color", "--coords", s(&coords), "--report", s(&report)]);
+    let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let q = &saved["quality"];
+    assert!(q["slope_distance"].is_null());
+    for key in ["channel_distance", "spectrum_distance", "seam_energy_ratio"] {
+        assert!(q[key].as_f64().is_some_and(f64::is_finite), "{key}: {q}");
+    }
+    let again = tmp.path().join("again.png");
+    let o = skinkit(&[
+        "synth",
+        "replay",
+        "--kind",
+        "color",
+        "--coords",
+        s(&coords),
+        "--source",
+        s(&exemplar),
+        "--out",
+        s(&again),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+}
+
+#[test]
+fn an_exemplar_smaller_than_the_neighbourhood_is_a_clear_input_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 3);
+    let out = tmp.path().join("out.png");
+    let o = skinkit(&["synth", s(&exemplar), "--out", s(&out), "--size", "8x8"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("cheek-3.png") && e.contains("3x3 is smaller than the 5x5 neighbourhood"), "{e}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn missing_exemplar_and_bad_size_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out.png");
+    let missing = tmp.path().join("missing.png");
+    let o = skinkit(&["synth", s(&missing), "--out", s(&out), "--size", "8x8"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing.png"), "{}", stderr(&o));
+
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 8);
+    for size in ["64", "0x8", "8xq", "8x8x8"] {
+        let o = skinkit(&["synth", s(&exemplar), "--out", s(&out), "--size", size]);
+        assert_eq!(o.status.code(), Some(2), "--size {size}");
+        assert!(stderr(&o).contains("WIDTHxHEIGHT"), "{}", stderr(&o));
+    }
+    assert!(!out.exists());
+}
