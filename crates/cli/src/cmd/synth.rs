@@ -51,7 +51,13 @@ pub struct Args {
     /// Side of the full neighbourhood taken from the coarser level (odd).
     #[arg(long, default_value_t = 3, value_name = "M")]
     pub parent: usize,
-    /// Approximate search: PCA dimensions of the kd-tree (1..=32).
+    /// k-coherence search (the default): candidates per source texel (Tong et al. 2002).
+    #[arg(long = "k", default_value_t = 4, value_name = "K", conflicts_with_all = ["exact", "pca"])]
+    pub k: usize,
+    /// Search a PCA-projected kd-tree (plus Ashikhmin coherence) instead of k-coherence sets.
+    #[arg(long, conflicts_with = "exact")]
+    pub pca: bool,
+    /// PCA dimensions of the kd-tree (1..=32), for `--pca` and for building k-coherence sets.
     #[arg(long, default_value_t = 8, value_name = "D", conflicts_with = "exact")]
     pub dims: usize,
     /// Approximate search: tree candidates re-scored in the full neighbourhood space.
@@ -200,7 +206,7 @@ pub struct OptionsReport {
     pub levels: usize,
     pub neighborhood: usize,
     pub parent: usize,
-    /// `exact` or `approximate` (the library's name for any other mode).
+    /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
     pub search: String,
     pub dims: Option<usize>,
     pub rerank: Option<usize>,
@@ -269,7 +275,13 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         levels: args.levels,
         neighbourhood: args.neighborhood,
         parent: args.parent,
-        search: if args.exact { Search::Exact } else { Search::Approximate { dims: args.dims, rerank: args.rerank } },
+        search: if args.exact {
+            Search::Exact
+        } else if args.pca {
+            Search::Approximate { dims: args.dims, rerank: args.rerank }
+        } else {
+            Search::KCoherence { k: args.k, fallback: None, dims: args.dims, rerank: args.rerank }
+        },
         coherence: !args.no_coherence,
         exemplar_wrap: args.exemplar_wrap,
         seed: args.seed,
@@ -371,6 +383,7 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
     let (search, dims, rerank) = match run.search {
         Search::Exact => ("exact".to_owned(), None, None),
         Search::Approximate { dims, rerank } => ("approximate".to_owned(), Some(dims), Some(rerank)),
+        Search::KCoherence { k, dims, rerank, .. } => (format!("k-coherence (k = {k})"), Some(dims), Some(rerank)),
         // Modes the flags cannot select yet (the library may grow more): named as the library does.
         #[allow(unreachable_patterns)]
         other => (format!("{other:?}"), None, None),
