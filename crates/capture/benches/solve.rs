@@ -4,51 +4,10 @@
 //! rate shows.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use glam::Vec3;
-use skinkit_capture::solve::{Method, PhotoStack, SolveConfig, no_progress, solve, solve_into};
-use skinkit_capture::{Light, Rig};
-use skinkit_maps::{Channels, Photo, Samples};
+use skinkit_capture::solve::{Method, SolveConfig, no_progress, solve, solve_into};
 
-fn ring(k: usize, theta: f32) -> Rig {
-    let t = theta.to_radians();
-    let lights = (0..k)
-        .map(|i| {
-            let a = std::f32::consts::TAU * i as f32 / k as f32;
-            Light {
-                direction: Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()),
-                intensity: Vec3::ONE,
-                position: None,
-            }
-        })
-        .collect();
-    Rig { lights, ..Rig::default() }
-}
-
-/// A bumpy surface lit by `rig`; with `shadows`, about 6% of readings are zeroed in patches.
-fn photos(size: usize, rig: &Rig, shadows: bool) -> PhotoStack {
-    let normal = |x: usize, y: usize| {
-        let (u, v) = (x as f32 * 0.05, y as f32 * 0.043);
-        Vec3::new(0.3 * u.sin(), 0.25 * v.cos(), 1.0).normalize()
-    };
-    let normals: Vec<Vec3> = (0..size * size).map(|p| normal(p % size, p / size)).collect();
-    let photos = rig
-        .lights
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let samples = (0..size * size)
-                .map(|p| {
-                    let (x, y) = (p % size, p / size);
-                    let occluded = shadows && ((x / 16 + 3 * (y / 16) + 5 * i) % 16 == 0);
-                    let v = if occluded { 0.0 } else { 0.7 * normals[p].dot(l.direction).max(0.0) };
-                    (v * 65535.0) as u16
-                })
-                .collect();
-            Photo::new(size, size, Channels::Gray, Samples::U16(samples)).unwrap()
-        })
-        .collect();
-    PhotoStack::new(photos, (0..rig.lights.len()).map(|i| format!("{i}.png")).collect()).unwrap()
-}
+mod common;
+use common::{photos, ring};
 
 fn bench_solve(c: &mut Criterion) {
     let size = 2048;
