@@ -228,6 +228,23 @@ fn demo_reports_every_mold_with_both_solvers() {
         assert!(m["mean_error_deg"].as_f64().unwrap().is_finite());
     }
     assert!(tmp.path().join("demo-report.json").is_file());
+    // Each mold's robust map grown to the default 1024x1024, albedo and coordinates beside it.
+    let growths = report["growths"].as_array().unwrap();
+    assert_eq!(growths.len(), 4);
+    for g in growths {
+        let region = g["region"].as_str().unwrap();
+        assert_eq!((g["width"].as_u64(), g["height"].as_u64()), (Some(1024), Some(1024)), "{region}");
+        let slope = g["quality"]["slope_distance"].as_f64().unwrap();
+        assert!(slope.is_finite() && slope < 0.1, "{region}: slope distance {slope}");
+        let dir = tmp.path().join("synth").join(region);
+        for name in ["normal.png", "albedo.png", "coords.png"] {
+            assert!(dir.join(name).is_file(), "{region}/{name} missing");
+        }
+        let normals =
+            skinkit_maps::io::read_normal_map(&dir.join("normal.png"), Default::default(), &Default::default())
+                .unwrap();
+        assert_eq!(normals.size(), (1024, 1024));
+    }
 }
 
 /// Writes `count` 16-bit photos of a flat RGB patch lit by the rig's lights, plus its rig.

@@ -1,16 +1,24 @@
 //! `skinkit demo`: the pipeline that exists, run over the bundled samples. Today that is capture
 //! of every sample mold with both solvers, each result's error against its ground truth, and what
-//! the robust solver's accuracy costs in time.
+//! the robust solver's accuracy costs in time; then each mold's robust normal map grown to
+//! 1024x1024 by synthesis, its albedo replayed through the same coordinate map, with the quality
+//! metrics of every growth.
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use serde::Serialize;
+use skinkit_capture::solve::AlbedoMap;
+use skinkit_maps::NormalEncoding;
+use skinkit_maps::io;
+use skinkit_synth::SynthConfig;
 
 use super::batch::session_in;
 use super::capture::SolveArgs;
+use super::synth::{Map, QualityReport, parse_size, quality, write_coords};
 use crate::output::Output;
-use crate::pipeline::{self, CaptureOptions};
+use crate::pipeline::{self, CaptureOptions, Captured};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -20,6 +28,12 @@ pub struct Args {
     /// Folder of sample molds (default: the repository's samples/molds).
     #[arg(long, value_name = "DIR")]
     pub samples: Option<PathBuf>,
+    /// Size each mold's captured map is grown to.
+    #[arg(long, default_value = "1024x1024", value_parser = parse_size, value_name = "WxH")]
+    pub synth_size: (usize, usize),
+    /// Seed of the syntheses.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
 }
 
 #[derive(Serialize)]
@@ -35,8 +49,19 @@ struct MoldResult {
 }
 
 #[derive(Serialize)]
+struct GrowthResult {
+    region: String,
+    width: usize,
+    height: usize,
+    seconds: f64,
+    quality: QualityReport,
+    output: String,
+}
+
+#[derive(Serialize)]
 struct DemoReport {
     molds: Vec<MoldResult>,
+    growths: Vec<GrowthResult>,
 }
 
 /// The repository's sample molds, found from the source tree this binary was built from, or in the
@@ -69,8 +94,9 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         .filter(|p| p.is_dir())
         .collect();
     regions.sort();
-    let bar = out.progress(regions.len() as u64 * 2, "demo");
+    let bar = out.progress(regions.len() as u64 * 3, "demo");
     let mut molds = Vec::new();
+    let mut growths = Vec::new();
     for dir in &regions {
         let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let session = session_in(dir)?;
@@ -92,10 +118,15 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                 output: target.display().to_string(),
             });
             bar.inc(1);
+            if solver == "robust" {
+                let target = args.out.join("synth").join(&region);
+                growths.push(grow(&region, &captured, args.synth_size, args.seed, &target)?);
+                bar.inc(1);
+            }
         }
     }
     bar.finish_and_clear();
-    let report = DemoReport { molds };
+    let report = DemoReport { molds, growths };
     pipeline::write_json(&args.out.join("demo-report.json"), &report)?;
     out.result(&report, || {
         let mut s = format!(
@@ -114,7 +145,53 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                 m.solve_seconds * 1e3
             );
         }
+        s += &format!(
+            "\n{:<14} {:>10} {:>8} {:>10} {:>10} {:>9}\n",
+            "grown", "size", "seconds", "slope W1", "spectrum", "largest"
+        );
+        for g in &report.growths {
+            s += &format!(
+                "{:<14} {:>10} {:>8.2} {:>10.4} {:>10.3} {:>9}\n",
+                g.region,
+                format!("{}x{}", g.width, g.height),
+                g.seconds,
+                g.quality.slope_distance.unwrap_or(f64::NAN),
+                g.quality.spectrum_distance,
+                g.quality.largest_block
+            );
+        }
         s + &format!("outputs and demo-report.json in {}", args.out.display())
     });
     Ok(0)
+}
+
+/// Grows a captured mold's normal map to `size` with the default synthesis options, replays its
+/// albedo through the same coordinates, and writes normal.png (16-bit), albedo.png and coords.png.
+fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir: &Path) -> Result<GrowthResult> {
+    let start = Instant::now();
+    let config = SynthConfig { seed, ..SynthConfig::new(size.0, size.1) };
+    let exemplar = &captured.solution.normals;
+    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {})
+        .with_context(|| format!("cannot grow the {region} mold's normal map"))?;
+    let seconds = start.elapsed().as_secs_f64();
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let normal = dir.join("normal.png");
+    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16)
+        .with_context(|| format!("cannot write {}", normal.display()))?;
+    let albedo = dir.join("albedo.png");
+    match &captured.solution.albedo {
+        AlbedoMap::Gray(map) => io::write_scalar_png(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
+        AlbedoMap::Rgb(map) => io::write_color_map(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
+    }
+    .with_context(|| format!("cannot write {}", albedo.display()))?;
+    write_coords(&dir.join("coords.png"), &grown.coords)?;
+    let quality = quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false);
+    Ok(GrowthResult {
+        region: region.to_owned(),
+        width: size.0,
+        height: size.1,
+        seconds,
+        quality,
+        output: normal.display().to_string(),
+    })
 }

@@ -132,7 +132,7 @@ pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
 }
 
 /// An exemplar, a source or an output in memory.
-enum Map {
+pub(crate) enum Map {
     Normal(NormalMap),
     Color(ColorMap),
 }
@@ -403,7 +403,9 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
     }
 }
 
-fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wrap: bool) -> QualityReport {
+/// The quality metrics of an output against its exemplar (slopes or channels, spectrum, tiling,
+/// copied blocks).
+pub(crate) fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wrap: bool) -> QualityReport {
     let bins = DEFAULT_SPECTRUM_BINS;
     let copies = metrics::copy_statistics(coords, exemplar.size(), wrap);
     let (slope, channel, spectrum, seam, exemplar_seam) = match (exemplar, output) {
@@ -461,7 +463,7 @@ fn human(r: &SynthReport) -> String {
 }
 
 /// Writes a coordinate map: 16-bit RGB PNG, R = exemplar x, G = exemplar y, B = 0.
-fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
+pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
     let (w, h) = coords.size();
     io::write_png_rows(path, w, h, PngLayout::Rgb16, |y, row| {
         for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
