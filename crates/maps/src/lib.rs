@@ -20,6 +20,7 @@ pub mod io;
 pub mod normal;
 pub mod photo;
 pub mod pyramid;
+pub mod resample;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};
