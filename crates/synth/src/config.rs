@@ -50,6 +50,11 @@ pub struct SynthConfig {
     /// Exemplar neighbourhoods wrap around the exemplar (otherwise only texels whose whole
     /// neighbourhood lies inside are candidates).
     pub exemplar_wrap: bool,
+    /// Correction passes per level (0..=16; Wei and Levoy 2000's multi-pass extension, Lefebvre and
+    /// Hoppe 2005's correction): after the causal scanline pass, every texel is chosen again with
+    /// its full (non-causal) `N x N` neighbourhood, centre included, in [`CORRECTION_STRIDE`]`^2`
+    /// interleaved sub-passes (see [`crate::synthesis`]).
+    pub corrections: usize,
     /// Seed of the initial noise.
     pub seed: u64,
     /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
@@ -67,11 +72,22 @@ impl Default for SynthConfig {
             search: Search::K_COHERENCE,
             coherence: true,
             exemplar_wrap: false,
+            corrections: DEFAULT_CORRECTIONS,
             seed: 0,
             memory_limit: 8 << 30,
         }
     }
 }
+
+/// Default of [`SynthConfig::corrections`], chosen by measurement (see the crate's status notes).
+pub const DEFAULT_CORRECTIONS: usize = 1;
+
+/// Most correction passes [`SynthConfig::validate`] accepts.
+pub const MAX_CORRECTIONS: usize = 16;
+
+/// Side of the interleaving of a correction pass: texels with equal `(x mod s, y mod s)` form
+/// one sub-pass, chosen together from the state the previous sub-passes left.
+pub const CORRECTION_STRIDE: usize = 3;
 
 /// The side of the next coarser pyramid level.
 pub(crate) fn half(side: usize) -> usize {
@@ -113,6 +129,9 @@ impl SynthConfig {
         }
         if self.levels == 0 {
             return Err(Error::config("levels", 0, "at least one level is needed"));
+        }
+        if self.corrections > MAX_CORRECTIONS {
+            return Err(Error::config("corrections", self.corrections, format!("at most {MAX_CORRECTIONS} passes")));
         }
         if let Search::KCoherence { k, fallback, .. } = self.search {
             if !(1..=64).contains(&k) {
@@ -179,7 +198,20 @@ impl SynthConfig {
                 4 * dim + 4 * full + 8 * k as u64 + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
             }
         };
-        let exemplar = texels.saturating_mul(12 * 4 / 3 + per_candidate);
+        // Correction passes keep full-window features (k-coherence has them already) and, for
+        // approximate search, a second projection and tree.
+        let full = 3 * (self.neighbourhood * self.neighbourhood + self.parent * self.parent) as u64;
+        let correction = match self.search {
+            _ if self.corrections == 0 => 0,
+            Search::Exact => 4 * full,
+            Search::Approximate { dims, .. } => {
+                4 * full + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
+            }
+            Search::KCoherence { fallback, dims, .. } => {
+                fallback.map_or(0, |_| 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8)
+            }
+        };
+        let exemplar = texels.saturating_mul(12 * 4 / 3 + per_candidate + correction);
         output.saturating_add(exemplar)
     }
 }
@@ -216,5 +248,6 @@ mod tests {
         assert!(c.validate(32, 32).unwrap_err().to_string().contains("fallback = NaN"));
         c.search = kc(4, Some(2.0));
         assert!(c.validate(32, 32).is_ok());
+        assert!(bad(|c| c.corrections = 17).contains("corrections = 17"));
     }
 }

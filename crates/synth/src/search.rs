@@ -178,6 +178,7 @@ pub struct KCoherenceSets {
     k: usize,
     sets: Vec<u32>,
     typical: f32,
+    typical_full: f32,
 }
 
 impl KCoherenceSets {
@@ -206,13 +207,16 @@ impl KCoherenceSets {
                 *slot = scored.get(s).map_or(i, |c| c.1) as u32;
             }
         });
-        let mut nearest: Vec<f32> = (0..causal.len())
-            .filter(|&i| k > 1 && sets[i * k + 1] as usize != i)
-            .map(|i| causal.distance2(sets[i * k + 1] as usize, causal.feature(i)))
-            .collect();
-        nearest.sort_by(f32::total_cmp);
-        let typical = nearest.get(nearest.len() / 2).copied().unwrap_or(0.0);
-        KCoherenceSets { k, sets, typical }
+        let median = |level: &ExemplarLevel| {
+            let mut nearest: Vec<f32> = (0..level.len())
+                .filter(|&i| k > 1 && sets[i * k + 1] as usize != i)
+                .map(|i| level.distance2(sets[i * k + 1] as usize, level.feature(i)))
+                .collect();
+            nearest.sort_by(f32::total_cmp);
+            nearest.get(nearest.len() / 2).copied().unwrap_or(0.0)
+        };
+        let (typical, typical_full) = (median(causal), median(full));
+        KCoherenceSets { k, sets, typical, typical_full }
     }
 
     /// The set of candidate `i`: `i` itself first, then its most similar candidates.
@@ -225,6 +229,11 @@ impl KCoherenceSets {
     /// `k` = 1 or the level has a single candidate).
     pub fn typical(&self) -> f32 {
         self.typical
+    }
+
+    /// [`Self::typical`] for the full-window features (the correction passes' fallback threshold).
+    pub fn typical_full(&self) -> f32 {
+        self.typical_full
     }
 }
 

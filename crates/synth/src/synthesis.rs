@@ -10,9 +10,25 @@
 //! ([`crate::search::KCoherenceSets`]), each scored once with an early-exit distance (exact at or
 //! below the best so far, so the choice equals a full scoring of the same candidates).
 //!
-//! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, and the
-//! exhaustive scan over candidates for one texel. The texel loop itself stays sequential: each
-//! texel's causal neighbourhood holds the texels synthesised just before it.
+//! Correction passes ([`SynthConfig::corrections`]; Wei and Levoy 2000's multi-pass extension,
+//! Ashikhmin 2001, Lefebvre and Hoppe 2005): after the causal pass, every texel of the level is
+//! chosen again by its full `N x N` neighbourhood (centre included, toroidal) joined with the
+//! coarser `M x M` window, against exemplar candidates with full-window features: exhaustively
+//! ([`Search::Exact`]), through a PCA kd-tree built on the full features plus coherence candidates
+//! ([`Search::Approximate`]), or from the k-coherence sets of every neighbour's source shifted
+//! back, the texel's own current source among them ([`Search::KCoherence`]; its fallback tree is
+//! also built on full features, thresholded by the full-window typical distance). A pass is split
+//! into [`CORRECTION_STRIDE`]`^2` interleaved sub-passes by `(x mod s, y mod s)`, in row-major
+//! order of the residues; a sub-pass reads the state the previous sub-passes left (a snapshot for
+//! its own texels), chooses its texels in parallel and then writes them, so the result is the
+//! same on any thread count. With `s` = 3 most texels of a sub-pass see already corrected
+//! neighbours on two sides (a Jacobi update, `s` = 1, and `s` = 2 or 5 measured slightly worse).
+//!
+//! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, the
+//! exhaustive scan over candidates for one texel, and the texels of a correction sub-pass. The
+//! causal texel loop stays sequential: each texel's causal neighbourhood holds the texels
+//! synthesised just before it, including, through the toroidal wrap, the end of the previous row,
+//! so a row cannot start before the previous one is finished (see the crate's status notes).
 //!
 //! Normal maps are synthesised as unnormalised vectors, so pyramid averages stay meaningful. The
 //! finest level copies exemplar texels verbatim, so the output of a unit exemplar is unit (or
@@ -26,7 +42,9 @@ use rand_chacha::ChaCha8Rng;
 use skinkit_maps::pyramid::{Border, gaussian};
 use skinkit_maps::{Grid, NormalMap};
 
-use crate::config::{Search, SynthConfig, half};
+use rayon::prelude::*;
+
+use crate::config::{CORRECTION_STRIDE, Search, SynthConfig, half};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::neighbourhood::Neighbourhood;
 use crate::search::{ApproximateIndex, KCoherenceSets};
@@ -157,7 +175,8 @@ pub fn histogram_noise(exemplar: &Grid<Vec3>, width: usize, height: usize, seed:
     Grid::from_vec(width, height, data).expect("length is width * height")
 }
 
-/// Synthesises one output level given the finished coarser one.
+/// Synthesises one output level given the finished coarser one: the causal scanline pass, then
+/// `config.corrections` correction passes.
 fn synthesize_level(
     pyramid: &[Grid<Vec3>],
     level: usize,
@@ -174,13 +193,41 @@ fn synthesize_level(
         config.neighbourhood,
         config.exemplar_wrap,
     );
-    let (index, sets) = build_search(pyramid, level, coarser.is_some(), &ex, config);
+    let search = build_search(pyramid, level, coarser.is_some(), &ex, config);
+    // Progress counts rows: `h` for the causal pass and `h` for each correction pass.
+    let total = (h * (1 + config.corrections)) as f32;
+    let report = |units: usize| progress(level, units as f32 / total);
+    let (mut out, mut coords) = causal_pass(pyramid, level, (w, h), coarser, &nb, &ex, &search, config, &report);
+    drop(ex);
+    if config.corrections > 0 {
+        let full_nb = Neighbourhood::full(config.neighbourhood, config.parent, coarser.is_some());
+        let level = CorrectionLevel { coarser, nb: &full_nb, search: &search, config };
+        level.run(&mut out, &mut coords, &report);
+    }
+    (out, coords)
+}
+
+/// The causal scanline pass of one level: every texel, in scanline order, copies the exemplar
+/// texel whose causal neighbourhood is nearest. Sequential: each texel's neighbourhood holds the
+/// texels chosen just before it.
+#[allow(clippy::too_many_arguments)]
+fn causal_pass(
+    pyramid: &[Grid<Vec3>],
+    level: usize,
+    (w, h): (usize, usize),
+    coarser: Option<&Grid<Vec3>>,
+    nb: &Neighbourhood,
+    ex: &ExemplarLevel,
+    search: &LevelSearch,
+    config: &SynthConfig,
+    report: &dyn Fn(usize),
+) -> (Grid<Vec3>, Grid<[u32; 2]>) {
     let mut out = histogram_noise(&pyramid[level], w, h, config.seed, level);
     let mut coords = Grid::filled(w, h, [0u32; 2]);
     let mut done = Grid::filled(w, h, false);
     let mut query = vec![0.0f32; nb.dim()];
     let mut candidates = Vec::new();
-    let mut seen = vec![usize::MAX; if sets.is_some() { ex.len() } else { 0 }];
+    let mut seen = vec![usize::MAX; if search.sets.is_some() { ex.len() } else { 0 }];
     for y in 0..h {
         for x in 0..w {
             let (xi, yi) = (x as isize, y as isize);
@@ -193,9 +240,9 @@ fn synthesize_level(
             );
             let score = |&i: &usize| (ex.distance2(i, &query), i);
             candidates.clear();
-            let best = match (&index, &sets) {
+            let best = match (&search.index, &search.sets) {
                 (_, Some(sets)) => {
-                    coherence_candidates(&ex, &nb, &coords, &done, xi, yi, &mut candidates);
+                    coherence_candidates(ex, nb, &coords, Some(&done), xi, yi, &mut candidates);
                     // Each candidate is scored once per texel (`seen` holds the last texel that
                     // scored it); the result does not depend on the order, only the work does.
                     let texel = y * w + x;
@@ -209,7 +256,7 @@ fn synthesize_level(
                         }
                     }
                     let Search::KCoherence { fallback, .. } = config.search else { unreachable!() };
-                    match (&index, fallback) {
+                    match (&search.index, fallback) {
                         _ if best.1 == usize::MAX => ex.nearest_exact(&query),
                         (Some(index), Some(ratio)) if best.0 > ratio * sets.typical() => {
                             tree_refine(index, &query, best, &score, &mut candidates)
@@ -220,7 +267,7 @@ fn synthesize_level(
                 (None, None) => ex.nearest_exact(&query),
                 (Some(index), None) => {
                     if config.coherence {
-                        coherence_candidates(&ex, &nb, &coords, &done, xi, yi, &mut candidates);
+                        coherence_candidates(ex, nb, &coords, Some(&done), xi, yi, &mut candidates);
                     }
                     let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
                     tree_refine(index, &query, coherent, &score, &mut candidates)
@@ -230,35 +277,188 @@ fn synthesize_level(
             *coords.get_mut(x, y) = ex.position(best);
             *done.get_mut(x, y) = true;
         }
-        progress(level, (y + 1) as f32 / h as f32);
+        report(y + 1);
     }
     (out, coords)
 }
 
-/// The search structures a level needs: the PCA kd-tree (approximate search, or k-coherence with a
-/// fallback) and the k-coherence sets.
+/// The search structures of one level.
+struct LevelSearch {
+    /// PCA kd-tree over causal features (approximate search, or k-coherence with a fallback).
+    index: Option<ApproximateIndex>,
+    /// k-coherence sets (k-coherence only).
+    sets: Option<KCoherenceSets>,
+    /// The candidates with full-window features (kept when the level has correction passes).
+    full: Option<ExemplarLevel>,
+    /// PCA kd-tree over full features (correction passes of approximate search and of k-coherence
+    /// with a fallback).
+    full_index: Option<ApproximateIndex>,
+}
+
+/// The search structures a level needs: the PCA kd-trees (approximate search, or k-coherence with
+/// a fallback), the k-coherence sets and, for correction passes, the full-window candidates.
 fn build_search(
     pyramid: &[Grid<Vec3>],
     level: usize,
     has_parent: bool,
     ex: &ExemplarLevel,
     config: &SynthConfig,
-) -> (Option<ApproximateIndex>, Option<KCoherenceSets>) {
-    match config.search {
-        Search::Exact => (None, None),
-        Search::Approximate { dims, rerank } => (Some(ApproximateIndex::new(ex, dims, rerank)), None),
+) -> LevelSearch {
+    let corrections = config.corrections > 0;
+    let need_full = corrections || matches!(config.search, Search::KCoherence { .. });
+    let full = need_full.then(|| {
+        ExemplarLevel::new(
+            pyramid[level].clone(),
+            pyramid.get(level + 1).filter(|_| has_parent),
+            &Neighbourhood::full(config.neighbourhood, config.parent, has_parent),
+            config.neighbourhood,
+            config.exemplar_wrap,
+        )
+    });
+    let full_tree =
+        |dims, rerank| full.as_ref().filter(|_| corrections).map(|f| ApproximateIndex::new(f, dims, rerank));
+    let (index, sets, full_index) = match config.search {
+        Search::Exact => (None, None, None),
+        Search::Approximate { dims, rerank } => {
+            (Some(ApproximateIndex::new(ex, dims, rerank)), None, full_tree(dims, rerank))
+        }
         Search::KCoherence { k, fallback, dims, rerank } => {
-            let full_nb = Neighbourhood::full(config.neighbourhood, config.parent, has_parent);
-            let full = ExemplarLevel::new(
-                pyramid[level].clone(),
-                pyramid.get(level + 1).filter(|_| has_parent),
-                &full_nb,
-                config.neighbourhood,
-                config.exemplar_wrap,
-            );
-            let sets = KCoherenceSets::new(&full, ex, k, dims);
-            drop(full);
-            (fallback.map(|_| ApproximateIndex::new(ex, dims, rerank)), Some(sets))
+            let sets = KCoherenceSets::new(full.as_ref().expect("built for k-coherence"), ex, k, dims);
+            let index = fallback.map(|_| ApproximateIndex::new(ex, dims, rerank));
+            (index, Some(sets), fallback.and_then(|_| full_tree(dims, rerank)))
+        }
+    };
+    LevelSearch { index, sets, full: full.filter(|_| corrections), full_index }
+}
+
+/// What the correction passes of one level read.
+struct CorrectionLevel<'a> {
+    coarser: Option<&'a Grid<Vec3>>,
+    /// The full `N x N` (+ coarser `M x M`) shape.
+    nb: &'a Neighbourhood,
+    search: &'a LevelSearch,
+    config: &'a SynthConfig,
+}
+
+/// Per-thread buffers of a correction pass.
+#[derive(Default)]
+struct Scratch {
+    query: Vec<f32>,
+    sources: Vec<usize>,
+    candidates: Vec<usize>,
+    seen: Seen,
+}
+
+/// Marks of the candidates already scored for the current texel.
+#[derive(Default)]
+struct Seen {
+    marks: Vec<u32>,
+    stamp: u32,
+}
+
+impl Seen {
+    /// A fresh stamp for the next texel, over `len` candidates.
+    fn next(&mut self, len: usize) -> u32 {
+        if self.marks.len() != len || self.stamp == u32::MAX {
+            self.marks.clear();
+            self.marks.resize(len, 0);
+            self.stamp = 0;
+        }
+        self.stamp += 1;
+        self.stamp
+    }
+}
+
+impl CorrectionLevel<'_> {
+    /// Runs `config.corrections` passes over the level in place. Each pass is split into
+    /// `CORRECTION_STRIDE^2` sub-passes by `(x mod s, y mod s)`, in row-major order of the
+    /// residues; a sub-pass chooses all its texels in parallel from the state the previous
+    /// sub-passes left, then writes them, so the result does not depend on the thread count.
+    fn run(&self, out: &mut Grid<Vec3>, coords: &mut Grid<[u32; 2]>, report: &dyn Fn(usize)) {
+        let full = self.search.full.as_ref().expect("built for corrections");
+        let (w, h) = out.size();
+        let s = CORRECTION_STRIDE;
+        for pass in 0..self.config.corrections {
+            for sub in 0..s * s {
+                let (ox, oy) = (sub % s, sub / s);
+                let rows: Vec<usize> = (oy..h).step_by(s).collect();
+                let (read_out, read_coords) = (&*out, &*coords);
+                let chosen: Vec<Vec<usize>> = rows
+                    .par_iter()
+                    .map_init(Scratch::default, |scratch, &y| {
+                        (ox..w)
+                            .step_by(s)
+                            .map(|x| self.choose(x as isize, y as isize, read_out, read_coords, scratch))
+                            .collect()
+                    })
+                    .collect();
+                for (&y, row) in rows.iter().zip(&chosen) {
+                    for (x, &best) in (ox..w).step_by(s).zip(row) {
+                        *out.get_mut(x, y) = full.texel(best);
+                        *coords.get_mut(x, y) = full.position(best);
+                    }
+                }
+                report(h * (1 + pass) + (sub + 1) * h / (s * s));
+            }
+        }
+    }
+
+    /// The candidate texel `(x, y)` copies, chosen by its full neighbourhood in `out`.
+    fn choose(&self, x: isize, y: isize, out: &Grid<Vec3>, coords: &Grid<[u32; 2]>, scratch: &mut Scratch) -> usize {
+        let full = self.search.full.as_ref().expect("built for corrections");
+        let Scratch { query, sources, candidates, seen } = scratch;
+        query.resize(self.nb.dim(), 0.0);
+        self.nb.gather(
+            x,
+            y,
+            |sx, sy| *out.get_wrapped(sx, sy),
+            |sx, sy| self.coarser.map_or(Vec3::ZERO, |c| *c.get_wrapped(sx, sy)),
+            query,
+        );
+        let query = &*query;
+        let score = |&i: &usize| (full.distance2(i, query), i);
+        candidates.clear();
+        match (self.config.search, &self.search.sets) {
+            (Search::KCoherence { fallback, .. }, Some(sets)) => {
+                sources.clear();
+                coherence_candidates(full, self.nb, coords, None, x, y, sources);
+                // The texel's current source is usually close to the best: scoring it first makes
+                // the early exit cut the others sooner. Each candidate is scored once (`seen`);
+                // the minimum does not depend on the order.
+                let stamp = seen.next(full.len());
+                let [cx, cy] = *coords.get_wrapped(x, y);
+                let mut best = match full.index_of(cx as isize, cy as isize) {
+                    Some(i) => {
+                        seen.marks[i] = stamp;
+                        (full.distance2(i, query), i)
+                    }
+                    None => (f32::INFINITY, usize::MAX),
+                };
+                for &source in sources.iter() {
+                    for &j in sets.set(source) {
+                        let j = j as usize;
+                        if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
+                            best = better(best, (full.distance2_below(j, query, best.0), j));
+                        }
+                    }
+                }
+                match (&self.search.full_index, fallback) {
+                    _ if best.1 == usize::MAX => full.nearest_exact(query),
+                    (Some(index), Some(ratio)) if best.0 > ratio * sets.typical_full() => {
+                        tree_refine(index, query, best, &score, candidates)
+                    }
+                    _ => best.1,
+                }
+            }
+            (Search::Approximate { .. }, _) => {
+                if self.config.coherence {
+                    coherence_candidates(full, self.nb, coords, None, x, y, candidates);
+                }
+                let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
+                let index = self.search.full_index.as_ref().expect("built for corrections");
+                tree_refine(index, query, coherent, &score, candidates)
+            }
+            _ => full.nearest_exact(query),
         }
     }
 }
@@ -279,19 +479,20 @@ fn tree_refine(
     candidates[first..].iter().map(score).fold(best, better).1
 }
 
-/// Ashikhmin (2001) candidates: for each already synthesised causal neighbour at offset `(dx, dy)`,
-/// the exemplar texel at its source shifted back by `(dx, dy)`.
+/// Ashikhmin (2001) candidates: for each already synthesised neighbour at offset `(dx, dy)` in `nb`
+/// (every neighbour when `done` is `None`), the exemplar texel at its source shifted back by
+/// `(dx, dy)`.
 fn coherence_candidates(
     ex: &ExemplarLevel,
     nb: &Neighbourhood,
     coords: &Grid<[u32; 2]>,
-    done: &Grid<bool>,
+    done: Option<&Grid<bool>>,
     x: isize,
     y: isize,
     out: &mut Vec<usize>,
 ) {
     for &[dx, dy] in nb.causal() {
-        if !*done.get_wrapped(x + dx, y + dy) {
+        if done.is_some_and(|d| !*d.get_wrapped(x + dx, y + dy)) {
             continue;
         }
         let [sx, sy] = *coords.get_wrapped(x + dx, y + dy);
