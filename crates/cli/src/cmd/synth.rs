@@ -51,6 +51,9 @@ pub struct Args {
     /// Side of the full neighbourhood taken from the coarser level (odd).
     #[arg(long, default_value_t = 3, value_name = "M")]
     pub parent: usize,
+    /// Correction passes per level: every texel chosen again by its full (non-causal) window.
+    #[arg(long, default_value_t = skinkit_synth::config::DEFAULT_CORRECTIONS, value_name = "P")]
+    pub corrections: usize,
     /// k-coherence search (the default): candidates per source texel (Tong et al. 2002).
     #[arg(long = "k", default_value_t = 4, value_name = "K", conflicts_with_all = ["exact", "pca"])]
     pub k: usize,
@@ -206,6 +209,7 @@ pub struct OptionsReport {
     pub levels: usize,
     pub neighborhood: usize,
     pub parent: usize,
+    pub corrections: usize,
     /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
     pub search: String,
     pub dims: Option<usize>,
@@ -275,6 +279,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         levels: args.levels,
         neighbourhood: args.neighborhood,
         parent: args.parent,
+        corrections: args.corrections,
         search: if args.exact {
             Search::Exact
         } else if args.pca {
@@ -394,6 +399,7 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         levels: run.levels,
         neighborhood: run.neighbourhood,
         parent: run.parent,
+        corrections: run.corrections,
         search,
         dims,
         rerank,
