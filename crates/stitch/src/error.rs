@@ -17,6 +17,12 @@ pub enum Error {
     /// An error from the `synth` crate.
     #[error(transparent)]
     Synth(#[from] skinkit_synth::Error),
+    /// Pieces the spline cannot blend.
+    #[error(transparent)]
+    Spline(#[from] crate::spline::SplineError),
+    /// A seam measurement that cannot be made.
+    #[error(transparent)]
+    Seam(#[from] crate::seam::SeamError),
     /// A layout file that is not valid TOML or does not match the layout's keys.
     #[error("{}: {message}", origin.display())]
     Toml { origin: PathBuf, message: String },

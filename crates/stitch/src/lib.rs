@@ -6,6 +6,7 @@
 //! the regions are joined by an N-way Burt-Adelson multiresolution spline ([`spline`]). [`seam`]
 //! measures what is left of the boundaries.
 
+pub mod compose;
 pub mod curve;
 pub mod error;
 pub mod layout;
@@ -13,4 +14,5 @@ pub mod partition;
 pub mod seam;
 pub mod spline;
 
+pub use compose::{ComposeOptions, Composed, compose};
 pub use error::{Error, Result};

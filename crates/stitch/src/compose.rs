@@ -1,0 +1,270 @@
+//! The whole stitching step: a layout and one exemplar per region in, one face normal map out
+//! (Haro et al. 2001, section 4.2).
+//!
+//! 1. Partition the map by nearest seed point, boundaries warped into random curves
+//!    ([`Partition::build`]); texels outside the layout's coverage mask get no region.
+//! 2. Choose the spline's levels: `--levels`, or the REFERENCE rule on the narrowest region
+//!    ([`spline::levels_for_overlap`] of its bounding box's short side), capped at
+//!    [`MAX_AUTO_LEVELS`].
+//! 3. Resample each exemplar to the map's scale ([`skinkit_maps::resample`]), so pores keep their
+//!    physical size, and synthesise it over its region's bounding box grown by the spline's
+//!    margin ([`spline::piece_rect`]), each region with its own seed, regions in parallel.
+//! 4. Join the pieces with the N-way multiresolution spline ([`spline::blend`]) and measure the
+//!    seams ([`seam::measure`]).
+//!
+//! Memory follows the pieces (each region's box plus margin), not regions x map.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+use skinkit_maps::resample::{resample_normals, scaled_size};
+use skinkit_maps::{Grid, NormalMap};
+use skinkit_synth::SynthConfig;
+
+use crate::curve::CurveParams;
+use crate::layout::Layout;
+use crate::partition::Partition;
+use crate::seam::{self, SeamReport};
+use crate::spline::{self, Blend, Piece, Rect, SplineConfig};
+use crate::{Error, Result};
+
+/// The most spline levels chosen automatically (a transition about 2^7 texels wide).
+pub const MAX_AUTO_LEVELS: usize = 6;
+
+/// Label of texels outside the coverage mask (no region: zero normal in the output).
+pub const NO_REGION: u16 = u16::MAX;
+
+/// Options of [`compose`].
+#[derive(Clone, Debug)]
+pub struct ComposeOptions {
+    /// The boundary curves (amplitude 0: straight boundaries).
+    pub curve: CurveParams,
+    /// Spline levels; `None` chooses them from the narrowest region.
+    pub levels: Option<usize>,
+    /// `false`: hard labels, no spline (`--no-blend`).
+    pub blend: bool,
+    /// Synthesis options of every region (size and seed are set per region).
+    pub synth: SynthConfig,
+    /// Seed of the run: mixed with each region's own seed (or index).
+    pub seed: u64,
+    /// Band width of the seam metric, texels.
+    pub seam_band: usize,
+}
+
+impl Default for ComposeOptions {
+    fn default() -> Self {
+        ComposeOptions {
+            curve: CurveParams::new(0.0, 0),
+            levels: None,
+            blend: true,
+            synth: SynthConfig::default(),
+            seed: 0,
+            seam_band: 4,
+        }
+    }
+}
+
+impl ComposeOptions {
+    /// The default curve amplitude for a map `width` texels wide: 64 texels at 4096, scaled with
+    /// the map.
+    pub fn default_amplitude(width: usize) -> f64 {
+        (64.0 * width as f64 / 4096.0).max(1.0)
+    }
+}
+
+/// What [`compose`] did for one region.
+#[derive(Clone, Debug, Serialize)]
+pub struct RegionReport {
+    pub name: String,
+    /// Texels labelled with the region (covered texels only).
+    pub texels: usize,
+    /// The rectangle synthesised for it (`None`: the region has no texels).
+    pub piece: Option<Rect>,
+    /// Exemplar size after resampling to the map's scale.
+    pub exemplar_size: (usize, usize),
+    pub seed: u64,
+    pub synthesis_seconds: f64,
+    pub warnings: Vec<String>,
+}
+
+/// Wall-clock seconds per stage.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ComposeSeconds {
+    pub partition: f64,
+    pub resample: f64,
+    pub synthesis: f64,
+    pub blend: f64,
+    pub seams: f64,
+}
+
+/// The result of [`compose`].
+#[derive(Clone, Debug)]
+pub struct Composed {
+    pub normals: NormalMap,
+    /// Region index per texel ([`NO_REGION`] outside the coverage mask).
+    pub labels: Grid<u16>,
+    /// Spline levels used (1 with `blend = false`).
+    pub levels: usize,
+    pub regions: Vec<RegionReport>,
+    pub seams: SeamReport,
+    pub seconds: ComposeSeconds,
+}
+
+/// A region's synthesis seed: the run's seed mixed with the region's own (or its index), so
+/// `--seed` changes every region and regions sharing a mold do not repeat each other.
+pub fn region_seed(run: u64, region: usize, own: Option<u64>) -> u64 {
+    let mut z = run ^ own.unwrap_or(region as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    // splitmix64 finaliser
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Stitches one synthesis per region of `layout` into a face map. `exemplars[i]` is region `i`'s
+/// normal map at the region's `exemplar_mm_per_texel`; `progress(name)` is called as each region's
+/// synthesis ends.
+///
+/// # Errors
+/// A count of exemplars that is not the count of regions, bad seed points or curve parameters, a
+/// coverage mask that is unreadable or of another size, an exemplar too small to synthesise from
+/// after resampling, a level count the regions cannot hold.
+pub fn compose(
+    layout: &Layout,
+    exemplars: &[NormalMap],
+    options: &ComposeOptions,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Composed> {
+    let regions = layout.regions.len();
+    if exemplars.len() != regions {
+        return Err(Error::InvalidParameter(format!(
+            "{}: {regions} regions but {} exemplars were given",
+            layout.origin.display(),
+            exemplars.len()
+        )));
+    }
+    let (w, h) = (layout.width, layout.height);
+    let mut seconds = ComposeSeconds::default();
+
+    let t = Instant::now();
+    let mut partition = Partition::build(w, h, regions, &layout.seed_points(), &options.curve)?;
+    let coverage = layout.load_coverage()?;
+    let labels = match &coverage {
+        Some(mask) => {
+            partition.restrict_to(mask)?;
+            let mut labels = partition.labels().clone();
+            labels.as_mut_slice().par_iter_mut().zip(mask.as_slice().par_iter()).for_each(|(l, &covered)| {
+                if !covered {
+                    *l = NO_REGION;
+                }
+            });
+            labels
+        }
+        None => partition.labels().clone(),
+    };
+    seconds.partition = t.elapsed().as_secs_f64();
+
+    let bboxes: Vec<Option<Rect>> = partition
+        .areas()
+        .iter()
+        .map(|a| a.bbox.map(|b| Rect { x0: b.x, y0: b.y, width: b.width, height: b.height }))
+        .collect();
+    let levels = if !options.blend {
+        1
+    } else {
+        match options.levels {
+            Some(l) => l,
+            None => {
+                let narrowest = bboxes.iter().flatten().map(|b| b.width.min(b.height)).min().unwrap_or(1);
+                spline::levels_for_overlap(narrowest).min(MAX_AUTO_LEVELS)
+            }
+        }
+    };
+    if levels == 0 || levels > spline::MAX_LEVELS {
+        return Err(Error::InvalidParameter(format!("spline levels = {levels}: must be 1 to {}", spline::MAX_LEVELS)));
+    }
+
+    let t = Instant::now();
+    let resampled: Vec<NormalMap> = layout
+        .regions
+        .par_iter()
+        .zip(exemplars.par_iter())
+        .map(|(region, ex)| {
+            let (ew, eh) = ex.size();
+            let (rw, rh) = scaled_size(ew, eh, region.exemplar_mm_per_texel, layout.mm_per_texel);
+            resample_normals(ex, rw, rh).map_err(Error::from)
+        })
+        .collect::<Result<_>>()?;
+    seconds.resample = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let grown: Vec<(Piece, RegionReport)> = (0..regions)
+        .into_par_iter()
+        .map(|i| grow_region(layout, i, &resampled[i], bboxes[i], levels, partition.areas()[i].texels, options))
+        .map(|r| {
+            if let Ok((_, report)) = &r {
+                progress(&report.name);
+            }
+            r
+        })
+        .collect::<Result<_>>()?;
+    seconds.synthesis = t.elapsed().as_secs_f64();
+    let (pieces, reports): (Vec<Piece>, Vec<RegionReport>) = grown.into_iter().unzip();
+
+    let t = Instant::now();
+    let config = SplineConfig { levels, blend: Blend::NormalVectors };
+    let blended = spline::blend(&labels, &pieces, &config)?;
+    drop(pieces);
+    let normals = NormalMap::from_unit_grid(blended)?;
+    seconds.blend = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let seams = seam::measure(&labels, normals.grid(), regions, options.seam_band.max(1))?;
+    seconds.seams = t.elapsed().as_secs_f64();
+    Ok(Composed { normals, labels, levels, regions: reports, seams, seconds })
+}
+
+/// Synthesises region `i` over its piece rectangle (an empty piece for a region without texels).
+fn grow_region(
+    layout: &Layout,
+    i: usize,
+    exemplar: &NormalMap,
+    bbox: Option<Rect>,
+    levels: usize,
+    texels: usize,
+    options: &ComposeOptions,
+) -> Result<(Piece, RegionReport)> {
+    let region = &layout.regions[i];
+    let seed = region_seed(options.seed, i, region.seed);
+    let mut report = RegionReport {
+        name: region.name.clone(),
+        texels,
+        piece: None,
+        exemplar_size: exemplar.size(),
+        seed,
+        synthesis_seconds: 0.0,
+        warnings: Vec::new(),
+    };
+    let Some(bbox) = bbox else {
+        return Ok((Piece::new(0, 0, Grid::filled(0, 0, glam::Vec3::ZERO)), report));
+    };
+    let rect = spline::piece_rect(bbox, levels, layout.width, layout.height);
+    let t = Instant::now();
+    let config = SynthConfig { width: rect.width, height: rect.height, seed, ..options.synth.clone() };
+    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {}).map_err(|e| {
+        Error::InvalidParameter(format!(
+            "{}: region `{}`: cannot synthesise {}x{} from its {}x{} exemplar (after resampling to {} mm per texel): {e}",
+            layout.origin.display(),
+            region.name,
+            rect.width,
+            rect.height,
+            exemplar.width(),
+            exemplar.height(),
+            layout.mm_per_texel
+        ))
+    })?;
+    report.synthesis_seconds = t.elapsed().as_secs_f64();
+    report.warnings = grown.warnings;
+    report.piece = Some(rect);
+    Ok((Piece::new(rect.x0, rect.y0, grown.normals.grid().clone()), report))
+}
