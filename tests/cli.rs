@@ -245,6 +245,14 @@ fn demo_reports_every_mold_with_both_solvers() {
                 .unwrap();
         assert_eq!(normals.size(), (1024, 1024));
     }
+    // The sample face, stitched at 2048x1024 from the seven regions of samples/face/layout.toml.
+    let face = &report["face"];
+    assert_eq!((face["width"].as_u64(), face["height"].as_u64()), (Some(2048), Some(1024)));
+    assert_eq!(face["regions"].as_array().unwrap().len(), 7);
+    assert!(face["seams"]["summary"]["mean_jump_degrees"].as_f64().unwrap().is_finite());
+    for name in ["normal.png", "normal.exr", "labels.png", "report.json"] {
+        assert!(tmp.path().join("face").join(name).is_file(), "face/{name} missing");
+    }
 }
 
 /// Writes `count` 16-bit photos of a flat RGB patch lit by the rig's lights, plus its rig.

@@ -31,12 +31,17 @@ enum Command {
     Batch(cmd::batch::Args),
     /// Regenerate the bundled sample molds (rendered from synthetic skin heightfields).
     Samples(cmd::samples::Args),
-    /// Run the whole pipeline on the bundled samples and report its accuracy.
+    /// Run the whole pipeline on the bundled samples (capture, growth, face) and report its accuracy.
     Demo(cmd::demo::Args),
     /// Grow a normal or colour map from an exemplar (Wei-Levoy); `synth replay` copies another
     /// map through the coordinate map of a run.
     #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
     Synth(cmd::synth::Args),
+    /// Stitch one synthesis per face region into a face normal map (multiresolution spline along
+    /// random curves).
+    Stitch(cmd::stitch::StitchArgs),
+    /// Capture, grow and stitch a face layout in one go into a folder of maps and a report.
+    Face(cmd::stitch::FaceArgs),
 }
 
 fn main() {
@@ -49,6 +54,8 @@ fn main() {
         Command::Samples(args) => cmd::samples::run(args, &out),
         Command::Demo(args) => cmd::demo::run(args, &out),
         Command::Synth(args) => cmd::synth::run(args, &out),
+        Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
+        Command::Face(args) => cmd::stitch::run_face(args, &out),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -69,6 +69,19 @@ pub struct SolveArgs {
 }
 
 impl SolveArgs {
+    /// The command's defaults with `solver` (what `demo` and `face` capture with).
+    pub fn defaults(solver: &str) -> Self {
+        SolveArgs {
+            solver: solver.into(),
+            detrend_block: 50,
+            shadow_threshold: None,
+            shadow_relative: None,
+            saturation: None,
+            transfer: "linear".into(),
+            green: "up".into(),
+        }
+    }
+
     /// The validated library options.
     pub fn options(&self) -> Result<CaptureOptions> {
         let defaults = SolveConfig::default();

@@ -2,7 +2,8 @@
 //! of every sample mold with both solvers, each result's error against its ground truth, and what
 //! the robust solver's accuracy costs in time; then each mold's robust normal map grown to
 //! 1024x1024 by synthesis, its albedo replayed through the same coordinate map, with the quality
-//! metrics of every growth.
+//! metrics of every growth; then the sample face (`samples/face/layout.toml`, seven regions)
+//! stitched at 2048x1024 (`--full`: 4096x2048) from the molds just captured.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -16,6 +17,7 @@ use skinkit_synth::SynthConfig;
 
 use super::batch::session_in;
 use super::capture::SolveArgs;
+use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
 use super::synth::{Map, QualityReport, parse_size, quality, write_coords};
 use crate::output::Output;
 use crate::pipeline::{self, CaptureOptions, Captured};
@@ -34,6 +36,9 @@ pub struct Args {
     /// Seed of the syntheses.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Stitch the sample face map at 4096x2048 (default 2048x1024).
+    #[arg(long)]
+    pub full: bool,
 }
 
 #[derive(Serialize)]
@@ -62,6 +67,7 @@ struct GrowthResult {
 struct DemoReport {
     molds: Vec<MoldResult>,
     growths: Vec<GrowthResult>,
+    face: Option<FaceReport>,
 }
 
 /// The repository's sample molds, found from the source tree this binary was built from, or in the
@@ -72,16 +78,7 @@ fn default_samples() -> PathBuf {
 }
 
 fn options(solver: &str) -> Result<CaptureOptions> {
-    let args = SolveArgs {
-        solver: solver.into(),
-        detrend_block: 50,
-        shadow_threshold: None,
-        shadow_relative: None,
-        saturation: None,
-        transfer: "linear".into(),
-        green: "up".into(),
-    };
-    args.options()
+    SolveArgs::defaults(solver).options()
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
@@ -97,6 +94,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let bar = out.progress(regions.len() as u64 * 3, "demo");
     let mut molds = Vec::new();
     let mut growths = Vec::new();
+    let mut cache = CaptureCache::new();
     for dir in &regions {
         let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let session = session_in(dir)?;
@@ -121,12 +119,32 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             if solver == "robust" {
                 let target = args.out.join("synth").join(&region);
                 growths.push(grow(&region, &captured, args.synth_size, args.seed, &target)?);
+                cache.insert(dir.canonicalize().unwrap_or_else(|_| dir.clone()), captured.solution.normals.clone());
                 bar.inc(1);
             }
         }
     }
     bar.finish_and_clear();
-    let report = DemoReport { molds, growths };
+    let layout = samples.join("../face/layout.toml");
+    let face = if layout.is_file() {
+        let size = if args.full { (4096, 2048) } else { (2048, 1024) };
+        out.note(format!("stitching the sample face at {}x{}", size.0, size.1));
+        let options = StitchOptions {
+            layout,
+            size: Some(size),
+            seed: args.seed,
+            levels: None,
+            curve_amplitude: None,
+            straight: false,
+            no_blend: false,
+            seam_band: 4,
+        };
+        Some(face_to_dir(&options, &args.out.join("face"), &mut cache, out, Instant::now())?)
+    } else {
+        out.note(format!("no face layout at {}: the face map is skipped", layout.display()));
+        None
+    };
+    let report = DemoReport { molds, growths, face };
     pipeline::write_json(&args.out.join("demo-report.json"), &report)?;
     out.result(&report, || {
         let mut s = format!(
@@ -158,6 +176,18 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                 g.quality.slope_distance.unwrap_or(f64::NAN),
                 g.quality.spectrum_distance,
                 g.quality.largest_block
+            );
+        }
+        if let Some(f) = &report.face {
+            s += &format!(
+                "\nface {}x{}: {} regions, {} spline levels, seam gradient ratio {:.2}, mean jump {:.2} deg, {:.1} s\n",
+                f.width,
+                f.height,
+                f.regions.len(),
+                f.levels,
+                f.seams.summary.mean_gradient_ratio.unwrap_or(f64::NAN),
+                f.seams.summary.mean_jump_degrees,
+                f.seconds.total
             );
         }
         s + &format!("outputs and demo-report.json in {}", args.out.display())

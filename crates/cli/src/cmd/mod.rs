@@ -5,4 +5,5 @@ pub mod capture;
 pub mod demo;
 pub mod rig;
 pub mod samples;
+pub mod stitch;
 pub mod synth;

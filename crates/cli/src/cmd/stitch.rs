@@ -1,0 +1,363 @@
+//! `skinkit stitch` and `skinkit face`: one synthesis per face region, joined by a multiresolution
+//! spline along random curves (Haro et al. 2001, section 4.2; issue 4).
+//!
+//! `stitch` writes one map (and, if asked, the labels and a report); `face` writes a folder with
+//! the map as 16-bit PNG and float EXR, the labels, every region's exemplar at the map's scale and
+//! the report. Both capture the regions that name a photo session first (robust solver, detrend
+//! block 50), in memory.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use serde::Serialize;
+use skinkit_maps::io::{self, Limits, PngLayout};
+use skinkit_maps::{Grid, NormalEncoding, NormalMap};
+use skinkit_stitch::compose::{ComposeSeconds, NO_REGION, RegionReport};
+use skinkit_stitch::curve::CurveParams;
+use skinkit_stitch::layout::{ExemplarSource, Layout};
+use skinkit_stitch::seam::SeamReport;
+use skinkit_stitch::{ComposeOptions, compose};
+use skinkit_synth::SynthConfig;
+
+use super::batch::session_in;
+use super::capture::SolveArgs;
+use super::synth::parse_size;
+use crate::output::Output;
+use crate::pipeline;
+
+/// Options shared by `stitch` and `face`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct StitchOptions {
+    /// The face layout (TOML): size, scale, regions with exemplars and seed points.
+    #[arg(long, value_name = "FILE")]
+    pub layout: PathBuf,
+    /// Output size (overrides the layout's; points keep their UV place, the scale follows).
+    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    pub size: Option<(usize, usize)>,
+    /// Seed of the curves and of every region's synthesis.
+    #[arg(long, default_value_t = 0, value_name = "S")]
+    pub seed: u64,
+    /// Spline levels (default: from the narrowest region, at most 6).
+    #[arg(long, value_name = "L")]
+    pub levels: Option<usize>,
+    /// Largest displacement of the random boundary curves, texels (default 64 at 4096 wide,
+    /// scaled with the map).
+    #[arg(long, value_name = "A", conflicts_with = "straight")]
+    pub curve_amplitude: Option<f64>,
+    /// Straight boundaries (the nearest-point partition as it is).
+    #[arg(long)]
+    pub straight: bool,
+    /// No spline: every texel from its own region (hard boundaries).
+    #[arg(long)]
+    pub no_blend: bool,
+    /// Band width of the seam metric, texels.
+    #[arg(long, default_value_t = 4, value_name = "W")]
+    pub seam_band: usize,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct StitchArgs {
+    #[command(flatten)]
+    pub options: StitchOptions,
+    /// The face normal map (.png: 16-bit, .exr: float).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Also write the region labels (8-bit RGB PNG, one colour per region, black outside coverage).
+    #[arg(long, value_name = "FILE")]
+    pub labels: Option<PathBuf>,
+    /// Also write the report (JSON).
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct FaceArgs {
+    #[command(flatten)]
+    pub options: StitchOptions,
+    /// Output folder.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+/// Seconds per stage of a face.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FaceSeconds {
+    /// Reading exemplar maps and capturing sessions.
+    pub exemplars: f64,
+    #[serde(flatten)]
+    pub compose: ComposeSeconds,
+    pub write: f64,
+    pub total: f64,
+}
+
+/// What `--report`, `--json` and `face`'s report.json hold.
+#[derive(Clone, Debug, Serialize)]
+pub struct FaceReport {
+    pub layout: String,
+    pub out: String,
+    pub width: usize,
+    pub height: usize,
+    pub mm_per_texel: f64,
+    pub levels: usize,
+    pub curve_amplitude: f64,
+    pub blend: bool,
+    pub seed: u64,
+    pub regions: Vec<RegionReport>,
+    pub seams: SeamReport,
+    pub seconds: FaceSeconds,
+    pub peak_memory_mib: Option<f64>,
+}
+
+/// A stitched face in memory, with what the report needs.
+pub struct Face {
+    pub layout: Layout,
+    pub exemplars: Vec<NormalMap>,
+    pub composed: skinkit_stitch::Composed,
+    pub amplitude: f64,
+    pub seconds_exemplars: f64,
+}
+
+/// Captured sessions by folder, so a mold used by several regions (or already captured by the
+/// demo) is captured once.
+pub type CaptureCache = BTreeMap<PathBuf, NormalMap>;
+
+pub fn run_stitch(args: StitchArgs, out: &Output) -> Result<i32> {
+    let start = Instant::now();
+    check_extension(&args.out, &["png", "exr"])?;
+    if let Some(labels) = &args.labels {
+        check_extension(labels, &["png"])?;
+    }
+    let face = build(&args.options, &mut CaptureCache::new(), out)?;
+    let t = Instant::now();
+    write_map(&args.out, &face.composed.normals)?;
+    if let Some(path) = &args.labels {
+        write_labels(path, &face.composed.labels)?;
+    }
+    let report = report(&args.options, &face, &args.out, t.elapsed().as_secs_f64(), start);
+    if let Some(path) = &args.report {
+        pipeline::write_json(path, &report)?;
+    }
+    out.result(&report, || human(&report));
+    Ok(0)
+}
+
+pub fn run_face(args: FaceArgs, out: &Output) -> Result<i32> {
+    let start = Instant::now();
+    let report = face_to_dir(&args.options, &args.out, &mut CaptureCache::new(), out, start)?;
+    out.result(&report, || human(&report));
+    Ok(0)
+}
+
+/// Builds a face and writes its folder: normal.png (16-bit), normal.exr, labels.png,
+/// exemplars/<region>.png and report.json.
+pub fn face_to_dir(
+    options: &StitchOptions,
+    dir: &Path,
+    cache: &mut CaptureCache,
+    out: &Output,
+    start: Instant,
+) -> Result<FaceReport> {
+    let face = build(options, cache, out)?;
+    let t = Instant::now();
+    std::fs::create_dir_all(dir.join("exemplars"))
+        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let normal = dir.join("normal.png");
+    let map = &face.composed.normals;
+    let (png, exr) = rayon::join(|| write_map(&normal, map), || write_map(&dir.join("normal.exr"), map));
+    png?;
+    exr?;
+    write_labels(&dir.join("labels.png"), &face.composed.labels)?;
+    for (region, ex) in face.layout.regions.iter().zip(&face.exemplars) {
+        write_map(&dir.join("exemplars").join(format!("{}.png", region.name)), ex)?;
+    }
+    let report = report(options, &face, &normal, t.elapsed().as_secs_f64(), start);
+    pipeline::write_json(&dir.join("report.json"), &report)?;
+    Ok(report)
+}
+
+/// Loads the layout, reads or captures every exemplar and stitches.
+pub fn build(options: &StitchOptions, cache: &mut CaptureCache, out: &Output) -> Result<Face> {
+    let mut layout = Layout::load(&options.layout)?;
+    if let Some((w, h)) = options.size {
+        layout = layout.with_size(w, h)?;
+    }
+    let t = Instant::now();
+    let exemplars = exemplars(&layout, cache, out)?;
+    let seconds_exemplars = t.elapsed().as_secs_f64();
+    let amplitude = if options.straight {
+        0.0
+    } else {
+        options.curve_amplitude.unwrap_or_else(|| ComposeOptions::default_amplitude(layout.width))
+    };
+    let compose_options = ComposeOptions {
+        curve: CurveParams::new(amplitude, options.seed),
+        levels: options.levels,
+        blend: !options.no_blend,
+        synth: SynthConfig::default(),
+        seed: options.seed,
+        seam_band: options.seam_band,
+    };
+    let bar = out.progress(layout.regions.len() as u64, "regions");
+    let composed = compose(&layout, &exemplars, &compose_options, &|_| bar.inc(1))
+        .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
+    bar.finish_and_clear();
+    for r in &composed.regions {
+        for w in &r.warnings {
+            out.warn(format!("region `{}`: {w}", r.name));
+        }
+    }
+    Ok(Face { layout, exemplars, composed, amplitude, seconds_exemplars })
+}
+
+/// Each region's exemplar: a normal map read from disk, or a session captured (once per folder).
+fn exemplars(layout: &Layout, cache: &mut CaptureCache, out: &Output) -> Result<Vec<NormalMap>> {
+    let options = SolveArgs::defaults("robust").options()?;
+    let mut maps = Vec::with_capacity(layout.regions.len());
+    for region in &layout.regions {
+        let map = match &region.exemplar {
+            ExemplarSource::NormalMap(path) => io::read_normal_map(path, NormalEncoding::default(), &Limits::default())
+                .with_context(|| {
+                    format!("{}: region `{}`: cannot read its exemplar", layout.origin.display(), region.name)
+                })?,
+            ExemplarSource::Session(dir) => {
+                let key = dir.canonicalize().unwrap_or_else(|_| dir.clone());
+                if let Some(map) = cache.get(&key) {
+                    map.clone()
+                } else {
+                    out.note(format!("capturing {} for region `{}`", dir.display(), region.name));
+                    let context = || {
+                        format!(
+                            "{}: region `{}`: cannot capture {}",
+                            layout.origin.display(),
+                            region.name,
+                            dir.display()
+                        )
+                    };
+                    let session = session_in(dir).with_context(context)?;
+                    let captured = pipeline::capture(&session, &options, &|_| {}).with_context(context)?;
+                    let map = captured.solution.normals;
+                    cache.insert(key, map.clone());
+                    map
+                }
+            }
+        };
+        maps.push(map);
+    }
+    Ok(maps)
+}
+
+fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: Instant) -> FaceReport {
+    let c = &face.composed;
+    FaceReport {
+        layout: options.layout.display().to_string(),
+        out: out.display().to_string(),
+        width: face.layout.width,
+        height: face.layout.height,
+        mm_per_texel: face.layout.mm_per_texel,
+        levels: c.levels,
+        curve_amplitude: face.amplitude,
+        blend: !options.no_blend,
+        seed: options.seed,
+        regions: c.regions.clone(),
+        seams: c.seams.clone(),
+        seconds: FaceSeconds {
+            exemplars: face.seconds_exemplars,
+            compose: c.seconds.clone(),
+            write,
+            total: start.elapsed().as_secs_f64(),
+        },
+        peak_memory_mib: pipeline::peak_memory_mib(),
+    }
+}
+
+fn human(r: &FaceReport) -> String {
+    let s = &r.seams.summary;
+    let ratio = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.2}"));
+    let mut text = format!(
+        "{}: {}x{} face map, {} regions, {} spline levels, curve amplitude {:.0}, {:.1} s\n",
+        r.out,
+        r.width,
+        r.height,
+        r.regions.len(),
+        r.levels,
+        r.curve_amplitude,
+        r.seconds.total
+    );
+    text += &format!(
+        "seams: {} boundaries, band/interior gradient {} (max {}), spread {}, jump mean {:.2} max {:.1} deg\n",
+        s.boundaries,
+        ratio(s.mean_gradient_ratio),
+        ratio(s.max_gradient_ratio),
+        ratio(s.mean_std_ratio),
+        s.mean_jump_degrees,
+        s.max_jump_degrees
+    );
+    let t = &r.seconds;
+    text + &format!(
+        "seconds: exemplars {:.2}, partition {:.2}, resample {:.2}, synthesis {:.2}, blend {:.2}, seams {:.2}, write {:.2}",
+        t.exemplars,
+        t.compose.partition,
+        t.compose.resample,
+        t.compose.synthesis,
+        t.compose.blend,
+        t.compose.seams,
+        t.write
+    )
+}
+
+fn check_extension(path: &Path, allowed: &[&str]) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    if !allowed.contains(&ext.as_str()) {
+        bail!("{}: unsupported output format (use {})", path.display(), allowed.join(" or "));
+    }
+    Ok(())
+}
+
+fn write_map(path: &Path, map: &NormalMap) -> Result<()> {
+    let bits = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) { 32 } else { 16 };
+    io::write_normal_map(path, map, NormalEncoding::default(), bits)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// A distinct, stable colour per region index (golden-angle hues); black for no region.
+fn label_colour(label: u16) -> [u16; 3] {
+    if label == NO_REGION {
+        return [0, 0, 0];
+    }
+    let hue = (label as f32 * 0.618_034).fract() * 6.0;
+    let f = |n: f32| {
+        let k = (n + hue) % 6.0;
+        let v = 1.0 - (k.min(4.0 - k).clamp(0.0, 1.0)) * 0.75;
+        (v * 255.0).round() as u16
+    };
+    [f(5.0), f(3.0), f(1.0)]
+}
+
+fn write_labels(path: &Path, labels: &Grid<u16>) -> Result<()> {
+    let (w, h) = labels.size();
+    io::write_png_rows(path, w, h, PngLayout::Rgb8, |y, row| {
+        for (px, &l) in row.chunks_exact_mut(3).zip(labels.row(y)) {
+            px.copy_from_slice(&label_colour(l));
+        }
+    })
+    .with_context(|| format!("cannot write {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn label_colours_differ_for_the_first_regions() {
+        let colours: Vec<[u16; 3]> = (0..12).map(label_colour).collect();
+        for (i, a) in colours.iter().enumerate() {
+            assert!(a.iter().all(|&c| c <= 255));
+            for b in &colours[..i] {
+                assert_ne!(a, b);
+            }
+        }
+        assert_eq!(label_colour(NO_REGION), [0, 0, 0]);
+    }
+}
