@@ -1,0 +1,15 @@
+//! The bundled renderer (Haro et al. 2001, section 5, on today's hardware): scenes, meshes,
+//! texture-space frames, the Lafortune skin BRDF with its CPU reference, and the wgpu passes.
+//!
+//! Geometry side: [`scene`] (TOML scenes), [`mesh`] (OBJ and glTF loading), [`frames`] (the
+//! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
+//! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
+//! (device, offscreen targets, the base pass).
+
+pub mod brdf;
+pub mod frames;
+pub mod gpu;
+pub mod head;
+pub mod mesh;
+pub mod scene;
+pub mod shading;
