@@ -55,7 +55,14 @@ pub struct SynthConfig {
     /// its full (non-causal) `N x N` neighbourhood, centre included, in [`CORRECTION_STRIDE`]`^2`
     /// interleaved sub-passes (see [`crate::synthesis`]).
     pub corrections: usize,
-    /// Seed of the initial noise.
+    /// Occurrence (histogram) penalty `lambda` (Kopf et al. 2007, section 4.3; 0 = off): a
+    /// candidate whose exemplar texel the level already copies more than its share (output texels
+    /// over candidates) has its squared distance multiplied by `1 + lambda * (count - share)`.
+    /// Greedy nearest-neighbour search otherwise keeps picking the most typical (flat) texels and
+    /// loses sparse features such as pores and furrows. Counts grow in scanline order in the causal
+    /// pass and are taken from the state at the start of each correction sub-pass.
+    pub occurrence_penalty: f32,
+    /// Seed of the initial state (random exemplar positions, see [`crate::synthesis::random_copies`]).
     pub seed: u64,
     /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
     pub memory_limit: u64,
@@ -73,6 +80,7 @@ impl Default for SynthConfig {
             coherence: true,
             exemplar_wrap: false,
             corrections: DEFAULT_CORRECTIONS,
+            occurrence_penalty: DEFAULT_OCCURRENCE_PENALTY,
             seed: 0,
             memory_limit: 8 << 30,
         }
@@ -81,6 +89,10 @@ impl Default for SynthConfig {
 
 /// Default of [`SynthConfig::corrections`], chosen by measurement (see the crate's status notes).
 pub const DEFAULT_CORRECTIONS: usize = 1;
+
+/// Default of [`SynthConfig::occurrence_penalty`], chosen by measurement (see the crate's status
+/// notes).
+pub const DEFAULT_OCCURRENCE_PENALTY: f32 = 4.0;
 
 /// Most correction passes [`SynthConfig::validate`] accepts.
 pub const MAX_CORRECTIONS: usize = 16;
@@ -132,6 +144,9 @@ impl SynthConfig {
         }
         if self.corrections > MAX_CORRECTIONS {
             return Err(Error::config("corrections", self.corrections, format!("at most {MAX_CORRECTIONS} passes")));
+        }
+        if !(self.occurrence_penalty.is_finite() && self.occurrence_penalty >= 0.0) {
+            return Err(Error::config("occurrence_penalty", self.occurrence_penalty, "must be finite and >= 0"));
         }
         if let Search::KCoherence { k, fallback, .. } = self.search {
             if !(1..=64).contains(&k) {
@@ -198,12 +213,14 @@ impl SynthConfig {
                 4 * dim + 4 * full + 8 * k as u64 + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
             }
         };
-        // Correction passes keep full-window features (k-coherence has them already) and, for
-        // approximate search, a second projection and tree.
+        // Full-window features (the causal pass's edge texels and the correction passes;
+        // k-coherence has them already) and, for approximate search with correction passes, a
+        // second projection and tree.
         let full = 3 * (self.neighbourhood * self.neighbourhood + self.parent * self.parent) as u64;
         let correction = match self.search {
-            _ if self.corrections == 0 => 0,
             Search::Exact => 4 * full,
+            Search::Approximate { .. } if self.corrections == 0 => 4 * full,
+            _ if self.corrections == 0 => 0,
             Search::Approximate { dims, .. } => {
                 4 * full + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
             }

@@ -55,6 +55,11 @@ impl ExemplarLevel {
         ExemplarLevel { texels, x0: r, y0: r, cols, rows, wrap, dim, features }
     }
 
+    /// Distance of the candidate rectangle from the level's border (0 when the exemplar wraps).
+    pub fn margin(&self) -> usize {
+        self.x0
+    }
+
     /// Number of candidates.
     pub fn len(&self) -> usize {
         self.cols * self.rows
@@ -128,13 +133,33 @@ impl ExemplarLevel {
         d
     }
 
+    /// [`Self::distance2`] over the texel slots of the feature whose `active` entry is true (one
+    /// entry per texel, 3 floats each); the others are left out of the sum.
+    pub fn distance2_masked(&self, i: usize, query: &[f32], active: &[bool]) -> f32 {
+        // Summed float by float in index order, as `distance2`.
+        let pairs = self.feature(i).chunks_exact(3).zip(query.chunks_exact(3)).zip(active);
+        let mut d = 0.0f32;
+        for ((a, b), _) in pairs.filter(|(_, on)| **on) {
+            for (p, q) in a.iter().zip(b) {
+                d += (p - q) * (p - q);
+            }
+        }
+        d
+    }
+
     /// The candidate nearest to `query` by exhaustive scan (parallel over candidates; ties go to
     /// the lowest index, so the answer does not depend on the thread count).
     pub fn nearest_exact(&self, query: &[f32]) -> usize {
+        self.nearest_by(|i| self.distance2(i, query))
+    }
+
+    /// The candidate of smallest `score` by exhaustive scan (parallel; ties go to the lowest
+    /// index, so the answer does not depend on the thread count).
+    pub fn nearest_by(&self, score: impl Fn(usize) -> f32 + Sync) -> usize {
         (0..self.len())
             .into_par_iter()
             .with_min_len(SCAN_CHUNK)
-            .map(|i| (self.distance2(i, query), i))
+            .map(|i| (score(i), i))
             .reduce(|| (f32::INFINITY, usize::MAX), better)
             .1
     }

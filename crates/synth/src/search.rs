@@ -84,6 +84,11 @@ impl Pca {
         Pca { mean: mean.iter().map(|&m| m as f32).collect(), axes, dim, dims, variances }
     }
 
+    /// The mean feature the projection is centred on.
+    pub fn mean(&self) -> &[f32] {
+        &self.mean
+    }
+
     /// Number of output dimensions.
     pub fn dims(&self) -> usize {
         self.dims

@@ -1,9 +1,25 @@
 //! Wei-Levoy multiresolution synthesis (Wei and Levoy 2000; Haro et al. 2001, section 4.1).
 //!
-//! Coarse to fine over Gaussian pyramids of exemplar and output: each output level starts as noise
-//! with the exemplar level's per-channel histogram, then its texels are replaced in scanline order
-//! by the exemplar texel whose neighbourhood ([`crate::neighbourhood`]) is nearest in L2. The
-//! output is toroidal, so results tile.
+//! Coarse to fine over Gaussian pyramids of exemplar and output: each output level starts as
+//! copies of seeded random exemplar texels ([`random_copies`]), then its texels are replaced in
+//! scanline order by the exemplar texel whose neighbourhood ([`crate::neighbourhood`]) is nearest
+//! in L2. The output is toroidal, so results tile.
+//!
+//! Edges of the causal pass: an interior texel sees exactly its causal window synthesised. A texel
+//! in the first or last `N / 2` rows or columns is scored instead with its full `N x N` window
+//! (against full-window exemplar features) restricted to the neighbours already synthesised at
+//! this level: wrapped neighbours not yet synthesised are left out (they used to be initial noise,
+//! which put a seam at the wrap-around column), wrapped ones synthesised already (the first
+//! columns and rows, seen from the last) are added. At the coarsest level the rows above the first
+//! read the initial copies, the level's only source of variety.
+//!
+//! Occurrence penalty ([`SynthConfig::occurrence_penalty`]; Kopf et al. 2007, "Solid texture
+//! synthesis from 2D exemplars", section 4.3): greedy L2 search regresses to the most typical,
+//! nearly flat texels (before it, a few were copied 250-390 times where 4 was the share, and the
+//! outputs kept 35-65 % of the exemplar's rms slope). A candidate's squared distance is multiplied
+//! by `1 + lambda * max(0, count - share)`, with `count` the copies of its texel at this level so
+//! far (scanline order in the causal pass; the state at the start of each correction sub-pass,
+//! not counting the texel itself, so the result stays independent of the thread count).
 //!
 //! With [`Search::KCoherence`] (Tong et al. 2002) a texel's candidates are, for each synthesised
 //! causal neighbour, its source shifted back and that source's k-coherence set
@@ -155,7 +171,8 @@ pub fn replay<T: Clone + Send + Sync>(coords: &Grid<[u32; 2]>, map: &Grid<T>) ->
 
 /// Output noise whose per-channel histogram is the exemplar level's: each channel of each texel is
 /// an independent draw from the exemplar's empirical distribution of that channel (inverse CDF of
-/// a uniform), seeded by `seed` with one ChaCha stream per level.
+/// a uniform), seeded by `seed` with one ChaCha stream per level. (The initial state of a level
+/// before [`random_copies`] replaced it; kept as the noise baseline of the energy tests.)
 pub fn histogram_noise(exemplar: &Grid<Vec3>, width: usize, height: usize, seed: u64, level: usize) -> Grid<Vec3> {
     let sorted: [Vec<f32>; 3] = std::array::from_fn(|c| {
         let mut v: Vec<f32> = exemplar.as_slice().iter().map(|t| t[c]).collect();
@@ -185,7 +202,7 @@ fn synthesize_level(
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
-    let nb = Neighbourhood::new(config.neighbourhood, config.parent, coarser.is_some());
+    let nb = shape(config, false, coarser.is_some());
     let ex = ExemplarLevel::new(
         pyramid[level].clone(),
         pyramid.get(level + 1).filter(|_| coarser.is_some()),
@@ -197,14 +214,20 @@ fn synthesize_level(
     // Progress counts rows: `h` for the causal pass and `h` for each correction pass.
     let total = (h * (1 + config.corrections)) as f32;
     let report = |units: usize| progress(level, units as f32 / total);
-    let (mut out, mut coords) = causal_pass(pyramid, level, (w, h), coarser, &nb, &ex, &search, config, &report);
+    let (mut out, mut coords) = causal_pass(level, (w, h), coarser, &nb, &ex, &search, config, &report);
     drop(ex);
     if config.corrections > 0 {
-        let full_nb = Neighbourhood::full(config.neighbourhood, config.parent, coarser.is_some());
+        let full_nb = shape(config, true, coarser.is_some());
         let level = CorrectionLevel { coarser, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
+}
+
+/// The causal (or, `full`, the full) neighbourhood shape of a level.
+fn shape(config: &SynthConfig, full: bool, has_parent: bool) -> Neighbourhood {
+    let (n, m) = (config.neighbourhood, config.parent);
+    if full { Neighbourhood::full(n, m, has_parent) } else { Neighbourhood::new(n, m, has_parent) }
 }
 
 /// The causal scanline pass of one level: every texel, in scanline order, copies the exemplar
@@ -212,7 +235,6 @@ fn synthesize_level(
 /// texels chosen just before it.
 #[allow(clippy::too_many_arguments)]
 fn causal_pass(
-    pyramid: &[Grid<Vec3>],
     level: usize,
     (w, h): (usize, usize),
     coarser: Option<&Grid<Vec3>>,
@@ -222,27 +244,57 @@ fn causal_pass(
     config: &SynthConfig,
     report: &dyn Fn(usize),
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
-    let mut out = histogram_noise(&pyramid[level], w, h, config.seed, level);
-    let mut coords = Grid::filled(w, h, [0u32; 2]);
+    let full = search.full.as_ref().expect("always built");
+    let (mut out, mut coords) = random_copies(ex.texels(), ex.margin(), w, h, config.seed, level);
+    let coarsest = coarser.is_none();
+    let full_nb = shape(config, true, !coarsest);
+    let r = (config.neighbourhood / 2) as isize;
     let mut done = Grid::filled(w, h, false);
     let mut query = vec![0.0f32; nb.dim()];
+    let mut full_query = vec![0.0f32; full_nb.dim()];
+    let mut active = vec![true; full_nb.dim() / 3];
+    let mut tree_active = vec![true; nb.dim() / 3];
     let mut candidates = Vec::new();
     let mut seen = vec![usize::MAX; if search.sets.is_some() { ex.len() } else { 0 }];
+    let mut occurrence = Occurrence::new(ex.len(), w * h, config.occurrence_penalty);
+    let parent = |sx, sy| coarser.map_or(Vec3::ZERO, |c: &Grid<Vec3>| *c.get_wrapped(sx, sy));
     for y in 0..h {
         for x in 0..w {
             let (xi, yi) = (x as isize, y as isize);
-            nb.gather(
-                xi,
-                yi,
-                |sx, sy| *out.get_wrapped(sx, sy),
-                |sx, sy| coarser.map_or(Vec3::ZERO, |c| *c.get_wrapped(sx, sy)),
-                &mut query,
-            );
-            let score = |&i: &usize| (ex.distance2(i, &query), i);
+            nb.gather(xi, yi, |sx, sy| *out.get_wrapped(sx, sy), parent, &mut query);
+            // Interior texels see exactly their causal window synthesised. Near the edges the
+            // wrapped window differs: causal neighbours not synthesised yet are left out, and
+            // neighbours past the end of the row or column that are synthesised already (wrapped
+            // to the first ones) are added, so the texel is scored with the full window masked
+            // by what exists. At the coarsest level the rows above the first wrap to the initial
+            // state, which is read (the level's only source of variety).
+            let edge = x < r as usize || y < r as usize || x + r as usize >= w || y + r as usize >= h;
+            let masked = edge && {
+                let known = |&[dx, dy]: &[isize; 2]| *done.get_wrapped(xi + dx, yi + dy) || (coarsest && yi + dy < 0);
+                active.iter_mut().zip(full_nb.causal()).for_each(|(slot, o)| *slot = known(o));
+                tree_active.iter_mut().zip(nb.causal()).for_each(|(slot, o)| *slot = known(o));
+                let causal = |&[dx, dy]: &[isize; 2]| dy < 0 || (dy == 0 && dx < 0);
+                full_nb.causal().iter().zip(&active).any(|(o, &on)| on != causal(o))
+            };
+            let (scorer, shape, tree_query) = if masked {
+                full_nb.gather(xi, yi, |sx, sy| *out.get_wrapped(sx, sy), parent, &mut full_query);
+                let scorer = Scorer {
+                    ex: full,
+                    query: &full_query,
+                    active: Some(&active[..]),
+                    occurrence: &occurrence,
+                    own: None,
+                };
+                (scorer, &full_nb, TreeQuery { query: &query, active: Some(&tree_active[..]) })
+            } else {
+                let scorer = Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None };
+                (scorer, nb, TreeQuery { query: &query, active: None })
+            };
+            let score = |&i: &usize| (scorer.score(i), i);
             candidates.clear();
             let best = match (&search.index, &search.sets) {
                 (_, Some(sets)) => {
-                    coherence_candidates(ex, nb, &coords, Some(&done), xi, yi, &mut candidates);
+                    coherence_candidates(ex, shape, &coords, Some(&done), xi, yi, &mut candidates);
                     // Each candidate is scored once per texel (`seen` holds the last texel that
                     // scored it); the result does not depend on the order, only the work does.
                     let texel = y * w + x;
@@ -251,35 +303,159 @@ fn causal_pass(
                         for &j in sets.set(source) {
                             let j = j as usize;
                             if std::mem::replace(&mut seen[j], texel) != texel {
-                                best = better(best, (ex.distance2_below(j, &query, best.0), j));
+                                best = better(best, (scorer.score_below(j, best.0), j));
                             }
                         }
                     }
                     let Search::KCoherence { fallback, .. } = config.search else { unreachable!() };
+                    let typical = if masked { sets.typical_full() } else { sets.typical() };
                     match (&search.index, fallback) {
-                        _ if best.1 == usize::MAX => ex.nearest_exact(&query),
-                        (Some(index), Some(ratio)) if best.0 > ratio * sets.typical() => {
-                            tree_refine(index, &query, best, &score, &mut candidates)
+                        _ if best.1 == usize::MAX => scorer.nearest_exact(),
+                        (Some(index), Some(ratio)) if best.0 > ratio * typical => {
+                            tree_refine(index, &tree_query, best, &score, &mut candidates)
                         }
                         _ => best.1,
                     }
                 }
-                (None, None) => ex.nearest_exact(&query),
+                (None, None) => scorer.nearest_exact(),
                 (Some(index), None) => {
                     if config.coherence {
-                        coherence_candidates(ex, nb, &coords, Some(&done), xi, yi, &mut candidates);
+                        coherence_candidates(ex, shape, &coords, Some(&done), xi, yi, &mut candidates);
                     }
                     let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
-                    tree_refine(index, &query, coherent, &score, &mut candidates)
+                    tree_refine(index, &tree_query, coherent, &score, &mut candidates)
                 }
             };
             *out.get_mut(x, y) = ex.texel(best);
             *coords.get_mut(x, y) = ex.position(best);
             *done.get_mut(x, y) = true;
+            occurrence.add(best);
         }
         report(y + 1);
     }
     (out, coords)
+}
+
+/// What a kd-tree is queried with: a causal feature, and which of its texel slots hold
+/// synthesised texels (`None`: all).
+struct TreeQuery<'a> {
+    query: &'a [f32],
+    active: Option<&'a [bool]>,
+}
+
+/// The occurrence (histogram) penalty of Kopf et al. 2007, section 4.3: a candidate whose
+/// exemplar texel the level already copies more often than its share has its squared distance
+/// multiplied by `1 + lambda * max(0, count - expected)`.
+struct Occurrence {
+    counts: Vec<u32>,
+    /// Copies per candidate if every candidate were used equally: output texels / candidates.
+    expected: f32,
+    lambda: f32,
+}
+
+impl Occurrence {
+    /// Zero counts over `candidates`, for a level of `texels` output texels.
+    fn new(candidates: usize, texels: usize, lambda: f32) -> Self {
+        let counts = vec![0; if lambda > 0.0 { candidates } else { 0 }];
+        Occurrence { counts, expected: texels as f32 / candidates.max(1) as f32, lambda }
+    }
+
+    /// The counts of the sources in `coords` (positions that are not candidates are not counted).
+    fn of(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, lambda: f32) -> Self {
+        let mut o = Occurrence::new(full.len(), coords.len(), lambda);
+        if lambda > 0.0 {
+            for &[x, y] in coords.as_slice() {
+                if let Some(i) = full.index_of(x as isize, y as isize) {
+                    o.counts[i] += 1;
+                }
+            }
+        }
+        o
+    }
+
+    /// Counts one more copy of candidate `i`.
+    fn add(&mut self, i: usize) {
+        if let Some(c) = self.counts.get_mut(i) {
+            *c += 1;
+        }
+    }
+
+    /// The factor on candidate `i`'s squared distance; `own` (a texel's current source in a
+    /// correction pass) is counted without the texel itself.
+    fn factor(&self, i: usize, own: Option<usize>) -> f32 {
+        if self.lambda <= 0.0 {
+            return 1.0;
+        }
+        let count = self.counts[i] - u32::from(own == Some(i));
+        1.0 + self.lambda * (count as f32 - self.expected).max(0.0)
+    }
+}
+
+/// How one texel scores candidates: squared distance over the active part of its feature (all of
+/// it unless `active` says otherwise), times the occurrence factor.
+struct Scorer<'a> {
+    ex: &'a ExemplarLevel,
+    query: &'a [f32],
+    /// Per texel slot of the feature, whether it counts (`None`: every slot).
+    active: Option<&'a [bool]>,
+    occurrence: &'a Occurrence,
+    own: Option<usize>,
+}
+
+impl Scorer<'_> {
+    /// The score of candidate `i`.
+    fn score(&self, i: usize) -> f32 {
+        let d = match self.active {
+            Some(active) => self.ex.distance2_masked(i, self.query, active),
+            None => self.ex.distance2(i, self.query),
+        };
+        d * self.occurrence.factor(i, self.own)
+    }
+
+    /// The score of candidate `i` when it is at most `best`, `f32::INFINITY` otherwise (the
+    /// distance is abandoned early once it cannot win).
+    fn score_below(&self, i: usize, best: f32) -> f32 {
+        let f = self.occurrence.factor(i, self.own);
+        let bound = best / f;
+        let d = match self.active {
+            Some(active) => self.ex.distance2_masked(i, self.query, active),
+            None => self.ex.distance2_below(i, self.query, bound),
+        };
+        if d > bound { f32::INFINITY } else { d * f }
+    }
+
+    /// The best candidate of the level by exhaustive scan.
+    fn nearest_exact(&self) -> usize {
+        self.ex.nearest_by(|i| self.score(i))
+    }
+}
+
+/// The initial state of an output level: texels copied from seeded random candidate positions of
+/// an exemplar level (`texels`; candidates are the positions at least `margin` from its border),
+/// one ChaCha stream per level, and those positions. Its texels are real exemplar texels, pores
+/// and furrows included, rather than independent per-channel noise; the causal pass reads them
+/// only at the coarsest level, through the rows above the first.
+pub fn random_copies(
+    texels: &Grid<Vec3>,
+    margin: usize,
+    width: usize,
+    height: usize,
+    seed: u64,
+    level: usize,
+) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    let (ew, eh) = texels.size();
+    let (cols, rows) = (ew.saturating_sub(2 * margin).max(1), eh.saturating_sub(2 * margin).max(1));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(level as u64);
+    let picks: Vec<[u32; 2]> = (0..width * height)
+        .map(|_| {
+            let i = rng.random_range(0..cols * rows);
+            [(margin + i % cols).min(ew - 1) as u32, (margin + i / cols).min(eh - 1) as u32]
+        })
+        .collect();
+    let copies = picks.iter().map(|&[x, y]| *texels.get(x as usize, y as usize)).collect();
+    let grid = Grid::from_vec(width, height, copies).expect("length is width * height");
+    (grid, Grid::from_vec(width, height, picks).expect("length is width * height"))
 }
 
 /// The search structures of one level.
@@ -288,7 +464,8 @@ struct LevelSearch {
     index: Option<ApproximateIndex>,
     /// k-coherence sets (k-coherence only).
     sets: Option<KCoherenceSets>,
-    /// The candidates with full-window features (kept when the level has correction passes).
+    /// The candidates with full-window features (the causal pass's texels next to already
+    /// synthesised wrapped neighbours, and the correction passes).
     full: Option<ExemplarLevel>,
     /// PCA kd-tree over full features (correction passes of approximate search and of k-coherence
     /// with a fallback).
@@ -305,16 +482,13 @@ fn build_search(
     config: &SynthConfig,
 ) -> LevelSearch {
     let corrections = config.corrections > 0;
-    let need_full = corrections || matches!(config.search, Search::KCoherence { .. });
-    let full = need_full.then(|| {
-        ExemplarLevel::new(
-            pyramid[level].clone(),
-            pyramid.get(level + 1).filter(|_| has_parent),
-            &Neighbourhood::full(config.neighbourhood, config.parent, has_parent),
-            config.neighbourhood,
-            config.exemplar_wrap,
-        )
-    });
+    let full = Some(ExemplarLevel::new(
+        pyramid[level].clone(),
+        pyramid.get(level + 1).filter(|_| has_parent),
+        &shape(config, true, has_parent),
+        config.neighbourhood,
+        config.exemplar_wrap,
+    ));
     let full_tree =
         |dims, rerank| full.as_ref().filter(|_| corrections).map(|f| ApproximateIndex::new(f, dims, rerank));
     let (index, sets, full_index) = match config.search {
@@ -328,7 +502,7 @@ fn build_search(
             (index, Some(sets), fallback.and_then(|_| full_tree(dims, rerank)))
         }
     };
-    LevelSearch { index, sets, full: full.filter(|_| corrections), full_index }
+    LevelSearch { index, sets, full, full_index }
 }
 
 /// What the correction passes of one level read.
@@ -383,12 +557,13 @@ impl CorrectionLevel<'_> {
                 let (ox, oy) = (sub % s, sub / s);
                 let rows: Vec<usize> = (oy..h).step_by(s).collect();
                 let (read_out, read_coords) = (&*out, &*coords);
+                let occurrence = Occurrence::of(full, read_coords, self.config.occurrence_penalty);
                 let chosen: Vec<Vec<usize>> = rows
                     .par_iter()
                     .map_init(Scratch::default, |scratch, &y| {
                         (ox..w)
                             .step_by(s)
-                            .map(|x| self.choose(x as isize, y as isize, read_out, read_coords, scratch))
+                            .map(|x| self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, scratch))
                             .collect()
                     })
                     .collect();
@@ -404,7 +579,16 @@ impl CorrectionLevel<'_> {
     }
 
     /// The candidate texel `(x, y)` copies, chosen by its full neighbourhood in `out`.
-    fn choose(&self, x: isize, y: isize, out: &Grid<Vec3>, coords: &Grid<[u32; 2]>, scratch: &mut Scratch) -> usize {
+    #[allow(clippy::too_many_arguments)]
+    fn choose(
+        &self,
+        x: isize,
+        y: isize,
+        out: &Grid<Vec3>,
+        coords: &Grid<[u32; 2]>,
+        occurrence: &Occurrence,
+        scratch: &mut Scratch,
+    ) -> usize {
         let full = self.search.full.as_ref().expect("built for corrections");
         let Scratch { query, sources, candidates, seen } = scratch;
         query.resize(self.nb.dim(), 0.0);
@@ -415,8 +599,10 @@ impl CorrectionLevel<'_> {
             |sx, sy| self.coarser.map_or(Vec3::ZERO, |c| *c.get_wrapped(sx, sy)),
             query,
         );
-        let query = &*query;
-        let score = |&i: &usize| (full.distance2(i, query), i);
+        let [cx, cy] = *coords.get_wrapped(x, y);
+        let own = full.index_of(cx as isize, cy as isize);
+        let scorer = Scorer { ex: full, query, active: None, occurrence, own };
+        let score = |&i: &usize| (scorer.score(i), i);
         candidates.clear();
         match (self.config.search, &self.search.sets) {
             (Search::KCoherence { fallback, .. }, Some(sets)) => {
@@ -426,11 +612,10 @@ impl CorrectionLevel<'_> {
                 // the early exit cut the others sooner. Each candidate is scored once (`seen`);
                 // the minimum does not depend on the order.
                 let stamp = seen.next(full.len());
-                let [cx, cy] = *coords.get_wrapped(x, y);
-                let mut best = match full.index_of(cx as isize, cy as isize) {
+                let mut best = match own {
                     Some(i) => {
                         seen.marks[i] = stamp;
-                        (full.distance2(i, query), i)
+                        (scorer.score(i), i)
                     }
                     None => (f32::INFINITY, usize::MAX),
                 };
@@ -438,14 +623,14 @@ impl CorrectionLevel<'_> {
                     for &j in sets.set(source) {
                         let j = j as usize;
                         if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
-                            best = better(best, (full.distance2_below(j, query, best.0), j));
+                            best = better(best, (scorer.score_below(j, best.0), j));
                         }
                     }
                 }
                 match (&self.search.full_index, fallback) {
-                    _ if best.1 == usize::MAX => full.nearest_exact(query),
+                    _ if best.1 == usize::MAX => scorer.nearest_exact(),
                     (Some(index), Some(ratio)) if best.0 > ratio * sets.typical_full() => {
-                        tree_refine(index, query, best, &score, candidates)
+                        tree_refine(index, &TreeQuery { query, active: None }, best, &score, candidates)
                     }
                     _ => best.1,
                 }
@@ -456,26 +641,39 @@ impl CorrectionLevel<'_> {
                 }
                 let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
                 let index = self.search.full_index.as_ref().expect("built for corrections");
-                tree_refine(index, query, coherent, &score, candidates)
+                tree_refine(index, &TreeQuery { query, active: None }, coherent, &score, candidates)
             }
-            _ => full.nearest_exact(query),
+            _ => scorer.nearest_exact(),
         }
     }
 }
 
-/// The best of `best` and the tree's candidates for `query`. Tree candidates farther than `best`
-/// (in projected distance, a lower bound of the full one) cannot win, so the tree is searched only
-/// within that radius; the margin covers the rounding of the f32 projection.
+/// The best of `best` and the tree's candidates for the scorer's query. Tree candidates farther
+/// than `best` (in projected distance, a lower bound of the full one, which the occurrence factor
+/// only raises) cannot win, so the tree is searched only within that radius; the margin covers
+/// the rounding of the f32 projection. A masked query has its left-out slots set to the
+/// projection's mean and no radius (the projected distance no longer bounds the masked one).
 fn tree_refine(
     index: &ApproximateIndex,
-    query: &[f32],
+    tree_query: &TreeQuery,
     best: (f32, usize),
     score: &dyn Fn(&usize) -> (f32, usize),
     candidates: &mut Vec<usize>,
 ) -> usize {
-    let radius2 = best.0 * (1.0 + 1e-4) + 1e-6;
     let first = candidates.len();
-    index.candidates(query, radius2, candidates);
+    match tree_query.active {
+        None => index.candidates(tree_query.query, best.0 * (1.0 + 1e-4) + 1e-6, candidates),
+        Some(active) => {
+            let mut query = tree_query.query.to_vec();
+            let mean = index.pca().mean();
+            for ((slot, m), &on) in query.chunks_exact_mut(3).zip(mean.chunks_exact(3)).zip(active) {
+                if !on {
+                    slot.copy_from_slice(m);
+                }
+            }
+            index.candidates(&query, f32::INFINITY, candidates);
+        }
+    }
     candidates[first..].iter().map(score).fold(best, better).1
 }
 

