@@ -1,0 +1,271 @@
+//! Mesh loading: OBJ and glTF/GLB, the UV flip, computed normals and the hard cases.
+
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+use skinkit_render::mesh::{Mesh, MeshError};
+
+fn obj(text: &str) -> Result<skinkit_render::mesh::LoadedMesh, MeshError> {
+    Mesh::parse_obj(&mut text.as_bytes(), "test.obj")
+}
+
+const QUAD_OBJ: &str = "\
+v 0 0 0
+v 2 0 0
+v 2 1 0
+v 0 1 0
+vt 0 0
+vt 1 0
+vt 1 0.25
+vt 0 0.25
+vn 0 0 1
+f 1/1/1 2/2/1 3/3/1 4/4/1
+";
+
+#[test]
+fn obj_quad_is_triangulated_and_v_flipped() {
+    let loaded = obj(QUAD_OBJ).unwrap();
+    let m = &loaded.mesh;
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_eq!(m.triangle_count(), 2);
+    assert_eq!(m.positions.len(), 4);
+    for (p, uv) in m.positions.iter().zip(&m.uvs) {
+        // File: vt = (x / 2, y / 4) with v up; skinkit: v = 1 - y / 4 (top origin).
+        assert!((uv.x - p.x / 2.0).abs() < 1e-6 && (uv.y - (1.0 - p.y / 4.0)).abs() < 1e-6, "{p} {uv}");
+    }
+    assert!(m.normals.iter().all(|n| *n == Vec3::Z));
+    assert_eq!(m.bounds(), (Vec3::ZERO, Vec3::new(2.0, 1.0, 0.0)));
+    m.validate().unwrap();
+}
+
+#[test]
+fn obj_without_uvs_is_an_error_naming_the_file() {
+    let err = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+    assert!(matches!(err, MeshError::NoUvs { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(msg.contains("test.obj") && msg.contains("texture coordinates"), "{msg}");
+}
+
+#[test]
+fn obj_without_normals_gets_area_weighted_normals_and_a_warning() {
+    // Two triangles sharing the edge 1-2: one in the z = 0 plane facing +z with area 2, one in
+    // the x = 0 plane facing +x with area 1. Area weighting gives the shared vertices
+    // normalize(2 z + 1 x) (hand computed), the others their face normal.
+    let text = "\
+v 0 0 0
+v 0 2 0
+v -2 0 0
+v 0 0 1
+v 0 1 0
+vt 0 0
+vt 0 1
+vt 1 0
+vt 1 1
+vt 0.5 0.5
+f 1/1 2/2 3/3
+f 1/1 2/2 4/4
+f 2/2 5/5 2/2
+";
+    let loaded = obj(text).unwrap();
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("test.obj") && loaded.warnings[0].contains("normals"));
+    let m = &loaded.mesh;
+    // The third triangle has zero area: kept, but adds nothing.
+    assert_eq!(m.triangle_count(), 3);
+    let expected_shared = Vec3::new(1.0, 0.0, 2.0).normalize();
+    let at = |p: Vec3| m.positions.iter().position(|&q| q == p).unwrap();
+    for p in [Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0)] {
+        let n = m.normals[at(p)];
+        assert!(n.angle_between(expected_shared) < 1e-5, "{p}: {n}");
+    }
+    assert!(m.normals[at(Vec3::new(-2.0, 0.0, 0.0))].angle_between(Vec3::Z) < 1e-6);
+    assert!(m.normals[at(Vec3::new(0.0, 0.0, 1.0))].angle_between(Vec3::X) < 1e-6);
+    // A vertex touched only by the zero-area triangle: finite, unit.
+    let lonely = m.normals[at(Vec3::new(0.0, 1.0, 0.0))];
+    assert!(lonely.is_finite() && (lonely.length() - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn nan_position_is_an_error_naming_the_vertex() {
+    let err = obj("v 0 0 0\nv nan 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, MeshError::NonFinite { index: 1, field: "position", .. }), "{msg}");
+    assert!(msg.contains("test.obj") && msg.contains("vertex 1"), "{msg}");
+}
+
+#[test]
+fn out_of_range_indices_are_errors() {
+    let err = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 9/1\n").unwrap_err();
+    assert!(err.to_string().contains("test.obj"), "{err}");
+    let mesh = Mesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        normals: vec![Vec3::Z; 3],
+        uvs: vec![Vec2::ZERO; 3],
+        indices: vec![0, 1, 3],
+    };
+    let err = mesh.validate().unwrap_err();
+    assert!(matches!(err, MeshError::IndexOutOfRange { triangle: 0, index: 3, count: 3, .. }), "{err}");
+    let short = Mesh { indices: vec![0, 1], ..mesh.clone() };
+    assert!(matches!(short.validate(), Err(MeshError::Layout { field: "indices", .. })));
+    let bad_uv = Mesh { indices: vec![0, 1, 2], uvs: vec![Vec2::ZERO, Vec2::NAN, Vec2::ZERO], ..mesh };
+    assert!(matches!(bad_uv.validate(), Err(MeshError::NonFinite { index: 1, field: "uv", .. })));
+}
+
+#[test]
+fn load_dispatches_on_extension() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("Quad.OBJ");
+    std::fs::write(&path, QUAD_OBJ).unwrap();
+    assert_eq!(Mesh::load(&path).unwrap().mesh, obj(QUAD_OBJ).unwrap().mesh);
+    let ply = dir.path().join("quad.ply");
+    std::fs::write(&ply, "ply").unwrap();
+    assert!(matches!(Mesh::load(&ply), Err(MeshError::UnsupportedFormat { .. })));
+    let missing = Mesh::load(&dir.path().join("missing.obj")).unwrap_err();
+    assert!(missing.to_string().contains("missing.obj"));
+}
+
+/// A little-endian buffer: 3 positions, 3 uvs, 3 u16 indices (+2 bytes padding).
+fn triangle_buffer() -> Vec<u8> {
+    let mut b = Vec::new();
+    for p in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        p.iter().for_each(|x| b.extend(x.to_le_bytes()));
+    }
+    for t in [[0f32, 1.0], [1.0, 1.0], [0.0, 0.0]] {
+        t.iter().for_each(|x| b.extend(x.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2] {
+        b.extend(i.to_le_bytes());
+    }
+    b.extend([0, 0]);
+    b
+}
+
+/// glTF JSON for the triangle, drawn by two nodes: one translated and scaled, one mirrored in x.
+fn triangle_json(buffer_uri: Option<&str>, len: usize) -> String {
+    let uri = buffer_uri.map(|u| format!(r#""uri": "{u}", "#)).unwrap_or_default();
+    format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "scene": 0,
+  "scenes": [{{ "nodes": [0, 1] }}],
+  "nodes": [
+    {{ "mesh": 0, "translation": [10, 0, 0], "scale": [2, 2, 2] }},
+    {{ "children": [2], "scale": [-1, 1, 1] }},
+    {{ "mesh": 0 }}
+  ],
+  "meshes": [{{ "primitives": [{{ "attributes": {{ "POSITION": 0, "TEXCOORD_0": 1 }}, "indices": 2 }}] }}],
+  "buffers": [{{ {uri}"byteLength": {len} }}],
+  "bufferViews": [
+    {{ "buffer": 0, "byteOffset": 0, "byteLength": 36 }},
+    {{ "buffer": 0, "byteOffset": 36, "byteLength": 24 }},
+    {{ "buffer": 0, "byteOffset": 60, "byteLength": 6 }}
+  ],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] }},
+    {{ "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }},
+    {{ "bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR" }}
+  ]
+}}"#
+    )
+}
+
+fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut json = json.as_bytes().to_vec();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(&json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+fn check_transformed_triangles(loaded: &skinkit_render::mesh::LoadedMesh) {
+    let m = &loaded.mesh;
+    assert_eq!(m.triangle_count(), 2);
+    // Node 0: scale 2 then translate by 10 in x.
+    let first: Vec<Vec3> = m.triangle(0).iter().map(|&i| m.positions[i]).collect();
+    assert_eq!(first, vec![Vec3::new(10.0, 0.0, 0.0), Vec3::new(12.0, 0.0, 0.0), Vec3::new(10.0, 2.0, 0.0)]);
+    // Node 2 under the mirroring node 1: x negated, winding restored so the face still looks
+    // along +z (computed normals follow the winding).
+    let second: Vec<Vec3> = m.triangle(1).iter().map(|&i| m.positions[i]).collect();
+    assert!(second.contains(&Vec3::new(-1.0, 0.0, 0.0)) && second.contains(&Vec3::new(0.0, 1.0, 0.0)));
+    let face = (second[1] - second[0]).cross(second[2] - second[0]);
+    assert!(face.z > 0.0, "{face}");
+    assert!(m.normals.iter().all(|n| n.angle_between(Vec3::Z) < 1e-6), "{:?}", m.normals);
+    // glTF UVs are top-origin already: not flipped.
+    assert_eq!(&m.uvs[..3], &[Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 0.0)]);
+    assert_eq!(loaded.warnings.len(), 2, "no normals in either primitive: {:?}", loaded.warnings);
+}
+
+#[test]
+fn glb_applies_node_transforms() {
+    let bin = triangle_buffer();
+    let bytes = glb(&triangle_json(None, bin.len()), &bin);
+    let loaded = Mesh::parse_gltf(&bytes, None, "t.glb").unwrap();
+    check_transformed_triangles(&loaded);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("t.glb");
+    std::fs::write(&path, &bytes).unwrap();
+    assert_eq!(Mesh::load(&path).unwrap().mesh, loaded.mesh);
+}
+
+#[test]
+fn gltf_with_external_buffer_resolves_against_its_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let bin = triangle_buffer();
+    std::fs::write(dir.path().join("tri.bin"), &bin).unwrap();
+    let path = dir.path().join("tri.gltf");
+    std::fs::write(&path, triangle_json(Some("tri.bin"), bin.len())).unwrap();
+    check_transformed_triangles(&Mesh::load(&path).unwrap());
+}
+
+#[test]
+fn gltf_without_uvs_is_an_error() {
+    let bin = triangle_buffer();
+    let json = triangle_json(None, bin.len()).replace(r#", "TEXCOORD_0": 1"#, "");
+    let err = Mesh::parse_gltf(&glb(&json, &bin), None, Path::new("x.glb").to_str().unwrap()).unwrap_err();
+    assert!(matches!(err, MeshError::NoUvs { .. }), "{err}");
+    assert!(err.to_string().contains("x.glb"));
+}
+
+#[test]
+fn zero_normals_are_replaced_with_a_warning_and_objects_merge() {
+    let text = "\
+o first
+v 0 0 0
+v 1 0 0
+v 0 1 0
+vt 0 0
+vt 1 0
+vt 0 1
+vn 0 0 0
+f 1/1/1 2/2/1 3/3/1
+o second
+v 5 0 0
+v 6 0 0
+v 5 0 1
+vt 0 0
+vt 1 0
+vt 0 1
+vn 0 -3 0
+f 4/4/2 5/5/2 6/6/2
+";
+    let loaded = obj(text).unwrap();
+    let m = &loaded.mesh;
+    assert_eq!((m.triangle_count(), m.positions.len()), (2, 6));
+    assert_eq!(m.triangle(1).map(|i| m.positions[i].x), [5.0, 6.0, 5.0]);
+    // The zero normal becomes the face normal (+z); the long one is renormalised.
+    assert!(m.normals[..3].iter().all(|n| n.angle_between(Vec3::Z) < 1e-6), "{:?}", m.normals);
+    assert!(m.normals[3..].iter().all(|&n| n == -Vec3::Y), "{:?}", m.normals);
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("3 zero or non-finite normals"), "{:?}", loaded.warnings);
+}
