@@ -160,3 +160,39 @@ fn an_exemplar_count_that_does_not_match_is_an_error() {
     let e = compose(&layout(THREE), &exemplars()[..2], &options(0.0, true), &|_| {}).unwrap_err();
     assert!(e.to_string().contains("3 regions but 2 exemplars"), "{e}");
 }
+
+#[test]
+fn a_map_smaller_than_the_pyramid_needs_gets_fewer_levels_or_a_clear_error() {
+    let text = r#"
+size = [24, 12]
+mm_per_texel = 0.02
+[[region]]
+name = "a"
+exemplar = "a.png"
+exemplar_mm_per_texel = 0.02
+points = [[0.25, 0.5]]
+[[region]]
+name = "b"
+exemplar = "b.png"
+exemplar_mm_per_texel = 0.02
+points = [[0.75, 0.5]]
+"#;
+    let l = layout(text);
+    let ex = exemplars();
+    let ex = &ex[..2];
+    // Automatic levels follow the narrowest region (12 texels: 2 levels).
+    let auto = compose(&l, ex, &options(0.0, true), &|_| {}).unwrap();
+    assert_eq!(auto.levels, 2);
+    assert!(auto.normals.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-5));
+    // More levels than the map holds: every piece is then the whole map, where the spline's
+    // pyramids clamp at their edges (documented in spline.rs), so the result stays a unit map.
+    let deep = ComposeOptions { levels: Some(9), ..options(0.0, true) };
+    let c = compose(&l, ex, &deep, &|_| {}).map_err(|e| e.to_string()).unwrap();
+    assert_eq!(c.levels, 9);
+    assert!(c.regions.iter().all(|r| r.piece.is_some_and(|p| (p.width, p.height) == (24, 12))));
+    assert!(c.normals.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-5));
+    // A level count outside the spline's range is refused.
+    let absurd = ComposeOptions { levels: Some(64), ..options(0.0, true) };
+    let e = compose(&l, ex, &absurd, &|_| {}).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("levels = 64"), "{e}");
+}
