@@ -42,6 +42,8 @@ enum Command {
     Stitch(cmd::stitch::StitchArgs),
     /// Capture, grow and stitch a face layout in one go into a folder of maps and a report.
     Face(cmd::stitch::FaceArgs),
+    /// Render a scene (mesh, maps, Lafortune skin, lights, cameras) with the bundled wgpu renderer.
+    Render(cmd::render::Args),
 }
 
 fn main() {
@@ -56,6 +58,7 @@ fn main() {
         Command::Synth(args) => cmd::synth::run(args, &out),
         Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
         Command::Face(args) => cmd::stitch::run_face(args, &out),
+        Command::Render(args) => cmd::render::run(args, &out),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -164,6 +164,15 @@ pub struct PreparedScene {
     background: [f32; 4],
 }
 
+impl PreparedScene {
+    /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the
+    /// uniform block, which every draw writes anyway).
+    pub fn set_camera(&mut self, camera: &crate::shading::Camera) {
+        self.globals.view_proj = camera.view_proj.to_cols_array_2d();
+        self.globals.eye = vec4(camera.eye, self.globals.eye[3]);
+    }
+}
+
 /// An offscreen colour target and depth buffer from [`Gpu::create_target`].
 pub struct Target {
     color: wgpu::Texture,
@@ -217,6 +226,9 @@ struct Globals {
     lights: [LightRaw; MAX_LIGHTS],
     lobes: [LobeRaw; MAX_LOBES],
 }
+
+/// Bytes of the base pass's uniform block (camera, lights, lobes, options).
+pub const UNIFORM_BYTES: u64 = std::mem::size_of::<Globals>() as u64;
 
 impl Gpu {
     /// Open the first adapter on the backends named by `WGPU_BACKEND` (or the native ones).

@@ -4,12 +4,14 @@
 //! Geometry side: [`scene`] (TOML scenes), [`mesh`] (OBJ and glTF loading), [`frames`] (the
 //! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
 //! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
-//! (device, offscreen targets, the base pass).
+//! (device, offscreen targets, the base pass); [`load`] turns a scene into what the passes draw
+//! and plans the passes and resources it needs.
 
 pub mod brdf;
 pub mod frames;
 pub mod gpu;
 pub mod head;
+pub mod load;
 pub mod mesh;
 pub mod scene;
 pub mod shading;

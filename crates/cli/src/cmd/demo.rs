@@ -17,6 +17,7 @@ use skinkit_synth::SynthConfig;
 
 use super::batch::session_in;
 use super::capture::SolveArgs;
+use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
 use super::synth::{Map, QualityReport, parse_size, quality, write_coords};
 use crate::output::Output;
@@ -39,6 +40,9 @@ pub struct Args {
     /// Stitch the sample face map at 4096x2048 (default 2048x1024).
     #[arg(long)]
     pub full: bool,
+    /// Skip the renders of the face map (figures 7 and 8).
+    #[arg(long)]
+    pub no_render: bool,
 }
 
 #[derive(Serialize)]
@@ -68,6 +72,7 @@ struct DemoReport {
     molds: Vec<MoldResult>,
     growths: Vec<GrowthResult>,
     face: Option<FaceReport>,
+    renders: Option<FiguresReport>,
 }
 
 /// The repository's sample molds, found from the source tree this binary was built from, or in the
@@ -144,7 +149,25 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         out.note(format!("no face layout at {}: the face map is skipped", layout.display()));
         None
     };
-    let report = DemoReport { molds, growths, face };
+    let renders = match &face {
+        Some(_) if !args.no_render => {
+            out.note("rendering the sample head and a patch of the face map (figures 7 and 8)");
+            match figures(&args.out.join("face").join("normal.png"), &args.out.join("render"), out) {
+                Ok(r) => Some(r),
+                // No adapter: the maps above are still worth having; say how to get the figures.
+                Err(e)
+                    if e.downcast_ref::<skinkit_render::gpu::GpuError>()
+                        .is_some_and(|g| matches!(g, skinkit_render::gpu::GpuError::NoAdapter { .. })) =>
+                {
+                    out.warn(format!("figures skipped: {e}"));
+                    None
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        _ => None,
+    };
+    let report = DemoReport { molds, growths, face, renders };
     pipeline::write_json(&args.out.join("demo-report.json"), &report)?;
     out.result(&report, || {
         let mut s = format!(
@@ -188,6 +211,16 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                 f.seams.summary.mean_gradient_ratio.unwrap_or(f64::NAN),
                 f.seams.summary.mean_jump_degrees,
                 f.seconds.total
+            );
+        }
+        if let Some(r) = &report.renders {
+            let draw: f64 = r.renders.iter().flat_map(|j| &j.images).map(|i| i.render_seconds).sum();
+            s += &format!(
+                "\nrenders on {}: {} (with and without fine-scale structure), {} (four light directions); {:.2} s drawing\n",
+                r.renders.first().map_or("", |j| j.adapter.as_str()),
+                r.figure7,
+                r.figure8,
+                draw
             );
         }
         s + &format!("outputs and demo-report.json in {}", args.out.display())

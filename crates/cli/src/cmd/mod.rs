@@ -3,6 +3,8 @@
 pub mod batch;
 pub mod capture;
 pub mod demo;
+pub mod figures;
+pub mod render;
 pub mod rig;
 pub mod samples;
 pub mod stitch;

@@ -33,13 +33,24 @@ pub struct Args {
     /// Seed of the heightfields and the sensor noise.
     #[arg(long, default_value_t = 2001)]
     pub seed: u64,
+    /// Also write the sample head (OBJ, millimetres, cylindrical UVs laid out like
+    /// samples/face/layout.toml) to this file; `--head-only` skips the molds.
+    #[arg(long, value_name = "FILE")]
+    pub head: Option<PathBuf>,
+    /// Write only the head (needs `--head`).
+    #[arg(long, requires = "head")]
+    pub head_only: bool,
 }
 
 #[derive(Serialize)]
 struct Written {
+    /// A mold region, or "head".
     region: String,
+    /// The region's folder, or the head's OBJ file.
     folder: String,
+    /// Pixels of a mold, vertices of the head.
     width: usize,
+    /// Pixels of a mold, triangles of the head.
     height: usize,
 }
 
@@ -107,9 +118,23 @@ pub fn turntable() -> Rig {
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     let rig = turntable();
-    let bar = out.progress(REGIONS.len() as u64, "samples");
     let mut written = Vec::new();
-    for region in REGIONS {
+    if let Some(path) = &args.head {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        let mesh = skinkit_render::head::sample_head();
+        skinkit_render::head::write_obj(&mesh, path)?;
+        written.push(Written {
+            region: "head".into(),
+            folder: path.display().to_string(),
+            width: mesh.positions.len(),
+            height: mesh.indices.len() / 3,
+        });
+    }
+    let regions = if args.head_only { &[][..] } else { REGIONS };
+    let bar = out.progress(regions.len() as u64, "samples");
+    for region in regions {
         let dir = args.out.join(region);
         write_region(region, &dir, &args, &rig)?;
         bar.inc(1);

@@ -1,0 +1,175 @@
+//! The demo's renders of the sample face map (Haro et al. 2001, section 6):
+//!
+//! - figure 7: the sample head (`skinkit_render::head`) with and without the fine-scale normal
+//!   map, same light and camera, side by side;
+//! - figure 8: one patch of the map on a flat square under four light directions (azimuths 0, 90,
+//!   180 and 270 degrees at 15 degrees elevation, where the fine structure shows), in a 2 x 2 grid.
+//!
+//! Every render goes through scene files written next to the images and the same code as
+//! `skinkit render`, so `skinkit render demo-out/render/head-skin.toml` redraws a figure.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use glam::{Vec2, Vec3};
+use serde::Serialize;
+use skinkit_maps::io::{self, Limits, PngLayout};
+use skinkit_maps::{Channels, Samples};
+use skinkit_render::head;
+use skinkit_render::mesh::Mesh;
+
+use super::render::{Job, RenderReport, render};
+use crate::output::Output;
+
+/// Side of each figure panel, pixels.
+pub const PANEL: usize = 768;
+
+/// Elevation of figure 8's lights above the patch, degrees.
+pub const PATCH_ELEVATION_DEG: f32 = 15.0;
+
+/// What the figures cost and where they are.
+#[derive(Serialize)]
+pub struct FiguresReport {
+    pub figure7: String,
+    pub figure8: String,
+    pub renders: Vec<RenderReport>,
+}
+
+/// Head scene text: the sample head, with `normal_map` (a path relative to the scene) or flat.
+fn head_scene(normal_map: Option<&str>) -> String {
+    let map = normal_map
+        .map_or(String::new(), |p| format!("\n[normal_map]\npath = \"{p}\"\ngreen = \"up\"\nframes = \"paper\"\n"));
+    format!(
+        r#"# Written by `skinkit demo`: the sample head (figure 7 of Haro et al. 2001){}.
+mesh = "head.obj"
+mm_per_unit = 1.0
+specular = "pixel"
+{map}
+[[light]]
+kind = "directional"
+direction = [0.85, 0.45, 0.25]
+intensity = 4.0
+
+[[light]]
+kind = "directional"
+direction = [-0.6, 0.1, 0.8]
+intensity = 0.6
+
+[[camera]]
+position = [150.0, 30.0, 330.0]
+target = [10.0, 5.0, 40.0]
+fov_deg = 30.0
+
+[output]
+size = [{PANEL}, {PANEL}]
+"#,
+        if normal_map.is_some() { ", with the grown face map" } else { ", without fine-scale structure" }
+    )
+}
+
+/// Patch scene text: the map's patch on a flat square lit from `azimuth_deg` at 30 degrees.
+fn patch_scene(normal_map: &str, azimuth_deg: f32) -> String {
+    let (elevation, azimuth) = (PATCH_ELEVATION_DEG.to_radians(), azimuth_deg.to_radians());
+    let d = Vec3::new(elevation.cos() * azimuth.cos(), elevation.cos() * azimuth.sin(), elevation.sin());
+    format!(
+        r#"# Written by `skinkit demo`: one patch of the face map under a light at azimuth {azimuth_deg} deg,
+# elevation {PATCH_ELEVATION_DEG} deg (figure 8 of Haro et al. 2001).
+mesh = "patch.obj"
+mm_per_unit = 1.0
+
+[normal_map]
+path = "{normal_map}"
+
+[[light]]
+kind = "directional"
+direction = [{:.6}, {:.6}, {:.6}]
+intensity = 10.0
+
+[[camera]]
+position = [0.0, 0.0, 60.0]
+target = [0.0, 0.0, 0.0]
+fov_deg = 20.0
+
+[output]
+size = [{PANEL}, {PANEL}]
+"#,
+        d.x, d.y, d.z
+    )
+}
+
+/// A flat square of `side` mm in the z = 0 plane facing +z, whose UVs cover `[u0, u1] x [v0, v1]`
+/// of the map.
+fn patch(side: f32, u: [f32; 2], v: [f32; 2]) -> Mesh {
+    let h = side / 2.0;
+    Mesh {
+        positions: vec![Vec3::new(-h, h, 0.0), Vec3::new(h, h, 0.0), Vec3::new(h, -h, 0.0), Vec3::new(-h, -h, 0.0)],
+        normals: vec![Vec3::Z; 4],
+        // v = 0 at the top of the image: the top edge of the square gets v0.
+        uvs: vec![Vec2::new(u[0], v[0]), Vec2::new(u[1], v[0]), Vec2::new(u[1], v[1]), Vec2::new(u[0], v[1])],
+        indices: vec![0, 3, 2, 0, 2, 1],
+    }
+}
+
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    io::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(|source| skinkit_maps::Error::Io { path: path.to_owned(), source })
+    })
+    .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Renders both figures of `normal_map` (the stitched face) into `dir`.
+pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresReport> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let map = std::path::absolute(normal_map).unwrap_or_else(|_| normal_map.to_owned());
+    let map = map.to_string_lossy().replace('\\', "/");
+    head::write_obj(&head::sample_head(), &dir.join("head.obj"))?;
+    // The middle of the forehead: 0.06 of the map's width and as many texels down (12 mm on the
+    // sample layout's 0.05 mm texels).
+    head::write_obj(&patch(20.0, [0.47, 0.53], [0.12, 0.24]), &dir.join("patch.obj"))?;
+
+    let mut renders = Vec::new();
+    let mut job = |name: &str, text: String| -> Result<PathBuf> {
+        let scene = dir.join(format!("{name}.toml"));
+        write_text(&scene, &text)?;
+        let image = dir.join(format!("{name}.png"));
+        renders.push(render(&Job { scene, out: Some(image.clone()), size: None, frames: None }, out)?);
+        Ok(image)
+    };
+    let smooth = job("head-smooth", head_scene(None))?;
+    let skin = job("head-skin", head_scene(Some(&map)))?;
+    let lit: Vec<PathBuf> = [0.0f32, 90.0, 180.0, 270.0]
+        .iter()
+        .map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a)))
+        .collect::<Result<_>>()?;
+
+    let figure7 = dir.join("figure7.png");
+    grid(&[smooth, skin], 2, &figure7)?;
+    let figure8 = dir.join("figure8.png");
+    grid(&lit, 2, &figure8)?;
+    Ok(FiguresReport { figure7: figure7.display().to_string(), figure8: figure8.display().to_string(), renders })
+}
+
+/// Tiles same-sized 8-bit RGB PNGs into `columns` columns.
+fn grid(images: &[PathBuf], columns: usize, path: &Path) -> Result<()> {
+    let photos = images.iter().map(|p| io::read_photo(p, &Limits::default())).collect::<Result<Vec<_>, _>>()?;
+    let (w, h) = (photos[0].width(), photos[0].height());
+    let rows = images.len().div_ceil(columns);
+    let (gw, gh) = (w * columns, h * rows);
+    let mut samples = vec![0u16; gw * gh * 3];
+    for (i, photo) in photos.iter().enumerate() {
+        let (Samples::U8(s), Channels::Rgb) = (photo.samples(), photo.channels()) else {
+            bail!("{}: expected an 8-bit RGB render", images[i].display())
+        };
+        if (photo.width(), photo.height()) != (w, h) {
+            bail!("{}: renders of one figure must share a size", images[i].display());
+        }
+        let (x0, y0) = ((i % columns) * w, (i / columns) * h);
+        for y in 0..h {
+            for x in 0..w * 3 {
+                samples[((y0 + y) * gw + x0) * 3 + x] = s[y * w * 3 + x] as u16;
+            }
+        }
+    }
+    io::write_png(path, gw, gh, PngLayout::Rgb8, &samples).with_context(|| format!("cannot write {}", path.display()))
+}

@@ -1,0 +1,315 @@
+//! `skinkit render`: a scene (TOML) drawn by the bundled wgpu renderer into PNG (sRGB, tone
+//! mapped) or EXR (linear HDR) images (Haro et al. 2001, section 5; issue 5).
+//!
+//! One image per camera; `--orbit --frames N` turns each camera about its target in N steps (a
+//! turntable). Several images get numbered names beside `--out`: `face-cam1.png`,
+//! `face-0003.png`, `face-cam1-0003.png`. `--explain` prints the passes and GPU resources the
+//! scene needs and renders nothing.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use serde::Serialize;
+use skinkit_maps::io::{self, PngLayout};
+use skinkit_render::gpu::{Gpu, Rendered};
+use skinkit_render::load::{self, Plan};
+use skinkit_render::scene::{self, Scene};
+
+use super::synth::parse_size;
+use crate::output::Output;
+
+/// Largest texture side assumed by `--explain` when no adapter is present (WebGPU's default).
+const EXPLAIN_TEXTURE_SIDE: u32 = 8192;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Output image (.png: sRGB, tone mapped; .exr: linear HDR). Default: the scene's
+    /// `output.path`.
+    #[arg(long, value_name = "IMG")]
+    pub out: Option<PathBuf>,
+    /// Image size (default: the scene's `output.size`).
+    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    pub size: Option<(usize, usize)>,
+    /// Print the passes and GPU resources the scene needs, render nothing.
+    #[arg(long)]
+    pub explain: bool,
+    /// Turn each camera about its target (a turntable sequence of `--frames` images).
+    #[arg(long)]
+    pub orbit: bool,
+    /// Images per camera with `--orbit`.
+    #[arg(long, default_value_t = 1, value_name = "N", requires = "orbit")]
+    pub frames: usize,
+    /// Also write the report (JSON).
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+}
+
+/// One written image.
+#[derive(Clone, Debug, Serialize)]
+pub struct Image {
+    pub path: String,
+    pub camera: usize,
+    pub frame: usize,
+    /// Draw on the GPU and read back, seconds.
+    pub render_seconds: f64,
+    pub write_seconds: f64,
+}
+
+/// What `--json` and `--report` hold.
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderReport {
+    pub scene: String,
+    pub adapter: String,
+    pub width: u32,
+    pub height: u32,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub plan: Plan,
+    pub images: Vec<Image>,
+    pub warnings: Vec<String>,
+    /// Reading the mesh and maps and building frames.
+    pub load_seconds: f64,
+    /// Uploading textures and buffers (mip chains included).
+    pub upload_seconds: f64,
+    pub total_seconds: f64,
+}
+
+/// The explain-only result.
+#[derive(Clone, Debug, Serialize)]
+pub struct Explained {
+    scene: String,
+    adapter: Option<String>,
+    width: u32,
+    height: u32,
+    plan: Plan,
+    warnings: Vec<String>,
+}
+
+pub fn run(args: Args, out: &Output) -> Result<i32> {
+    let job = Job {
+        scene: args.scene,
+        out: args.out,
+        size: args.size,
+        frames: if args.orbit { Some(args.frames.max(1)) } else { None },
+    };
+    if args.explain {
+        let explained = explain(&job)?;
+        out.result(&explained, || explain_text(&explained));
+        return Ok(0);
+    }
+    let report = render(&job, out)?;
+    if let Some(path) = &args.report {
+        crate::pipeline::write_json(path, &report)?;
+    }
+    out.result(&report, || human(&report));
+    Ok(0)
+}
+
+/// One `skinkit render` invocation (also what `skinkit demo` renders its figures with).
+pub struct Job {
+    pub scene: PathBuf,
+    /// Overrides the scene's `output.path`.
+    pub out: Option<PathBuf>,
+    /// Overrides the scene's `output.size`.
+    pub size: Option<(usize, usize)>,
+    /// Turntable frames per camera, if orbiting.
+    pub frames: Option<usize>,
+}
+
+/// A job's scene, size and output path, checked.
+struct Resolved {
+    scene: Scene,
+    width: u32,
+    height: u32,
+    path: PathBuf,
+    format: scene::OutputFormat,
+}
+
+fn resolve(job: &Job) -> Result<Resolved> {
+    let scene = Scene::load(&job.scene)?;
+    let (width, height) = match job.size {
+        Some((w, h)) => (side(w, "--size")?, side(h, "--size")?),
+        None => (scene.output.size[0], scene.output.size[1]),
+    };
+    let path = match (&job.out, &scene.output.path) {
+        (Some(p), _) | (None, Some(p)) => p.clone(),
+        (None, None) => bail!("{}: no output: give --out IMG or `output.path` in the scene", job.scene.display()),
+    };
+    let format = scene::OutputFormat::from_path(&path)
+        .with_context(|| format!("{}: cannot write `{}`: use .png or .exr", job.scene.display(), path.display()))?;
+    Ok(Resolved { scene, width, height, path, format })
+}
+
+fn explain(job: &Job) -> Result<Explained> {
+    let r = resolve(job)?;
+    let (target_format, _) = load::target_for(r.format);
+    let gpu = Gpu::new();
+    let (adapter, limit) = match &gpu {
+        Ok(gpu) => (Some(gpu.adapter_name()), gpu.max_texture_side()),
+        Err(_) => (None, EXPLAIN_TEXTURE_SIDE),
+    };
+    let loaded = load::load(&r.scene, &job.scene, r.width, r.height, limit)?;
+    let plan = load::plan(&r.scene, &job.scene, &loaded, r.width, r.height, target_format)?;
+    Ok(Explained {
+        scene: job.scene.display().to_string(),
+        adapter,
+        width: r.width,
+        height: r.height,
+        plan,
+        warnings: loaded.warnings,
+    })
+}
+
+/// Renders every image of a job and writes them.
+pub fn render(job: &Job, out: &Output) -> Result<RenderReport> {
+    let start = Instant::now();
+    let Resolved { scene, width, height, path, format } = resolve(job)?;
+    let (target_format, tone) = load::target_for(format);
+    let gpu = Gpu::new()?;
+    let t = Instant::now();
+    let mut loaded = load::load(&scene, &job.scene, width, height, gpu.max_texture_side())?;
+    loaded.inputs.tone = tone;
+    let plan = load::plan(&scene, &job.scene, &loaded, width, height, target_format)?;
+    for warning in &loaded.warnings {
+        out.warn(warning);
+    }
+    let load_seconds = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut prepared = gpu.prepare(&loaded.inputs)?;
+    let upload_seconds = t.elapsed().as_secs_f64();
+    let target = gpu.create_target(width, height, target_format)?;
+
+    let frames = job.frames.unwrap_or(1);
+    let jobs: Vec<(usize, usize)> = (0..scene.cameras.len()).flat_map(|c| (0..frames).map(move |f| (c, f))).collect();
+    let bar = out.progress(jobs.len() as u64, "render");
+    let mut images = Vec::with_capacity(jobs.len());
+    for &(c, f) in &jobs {
+        let camera = if job.frames.is_some() { load::orbit(&scene.cameras[c], f, frames) } else { scene.cameras[c] };
+        let t = Instant::now();
+        prepared.set_camera(&load::gpu_camera(&camera, width, height));
+        gpu.draw(&prepared, &target)?;
+        let rendered = gpu.read(&target)?;
+        let render_seconds = t.elapsed().as_secs_f64();
+        let file = numbered(&path, (scene.cameras.len() > 1).then_some(c), job.frames.map(|_| f));
+        let t = Instant::now();
+        write_image(&file, &rendered, format).with_context(|| format!("cannot write {}", file.display()))?;
+        images.push(Image {
+            path: file.display().to_string(),
+            camera: c,
+            frame: f,
+            render_seconds,
+            write_seconds: t.elapsed().as_secs_f64(),
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(RenderReport {
+        scene: job.scene.display().to_string(),
+        adapter: gpu.adapter_name(),
+        width,
+        height,
+        vertices: loaded.vertex_count,
+        triangles: loaded.triangle_count,
+        plan,
+        images,
+        warnings: loaded.warnings,
+        load_seconds,
+        upload_seconds,
+        total_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn side(v: usize, flag: &str) -> Result<u32> {
+    u32::try_from(v)
+        .ok()
+        .filter(|&s| s <= scene::MAX_OUTPUT_SIDE)
+        .with_context(|| format!("{flag}: {v} is above the largest output side, {}", scene::MAX_OUTPUT_SIDE))
+}
+
+/// `path` with `-camC` and `-FFFF` before the extension, for the parts given.
+fn numbered(path: &Path, camera: Option<usize>, frame: Option<usize>) -> PathBuf {
+    if camera.is_none() && frame.is_none() {
+        return path.to_owned();
+    }
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut name = stem;
+    if let Some(c) = camera {
+        name.push_str(&format!("-cam{c}"));
+    }
+    if let Some(f) = frame {
+        name.push_str(&format!("-{f:04}"));
+    }
+    path.with_file_name(format!("{name}.{ext}"))
+}
+
+/// Writes a rendered image atomically: PNG as 8-bit sRGB RGB, EXR as linear float RGB.
+pub fn write_image(path: &Path, image: &Rendered, format: scene::OutputFormat) -> Result<()> {
+    let (w, h) = (image.width as usize, image.height as usize);
+    match format {
+        scene::OutputFormat::Png => {
+            let samples: Vec<u16> =
+                image.srgb_bytes.chunks_exact(4).flat_map(|px| [px[0], px[1], px[2]].map(u16::from)).collect();
+            io::write_png(path, w, h, PngLayout::Rgb8, &samples)?;
+        }
+        scene::OutputFormat::Exr => {
+            io::write_exr_rgb(path, w, h, |x, y| {
+                let p = image.pixels[y * w + x];
+                [p[0], p[1], p[2]]
+            })?;
+        }
+    }
+    Ok(())
+}
+
+fn explain_text(e: &Explained) -> String {
+    let mut s = format!(
+        "{} at {}x{} on {}\n",
+        e.scene,
+        e.width,
+        e.height,
+        e.adapter.as_deref().unwrap_or("no adapter (sizes assume an 8192 texture limit)")
+    );
+    s.push_str("passes:\n");
+    for (i, p) in e.plan.passes.iter().enumerate() {
+        s.push_str(&format!(
+            "  {}. {}: {}\n     reads {}; writes {}\n",
+            i + 1,
+            p.name,
+            p.what,
+            p.reads.join(", "),
+            p.writes.join(", ")
+        ));
+    }
+    s.push_str("resources:\n");
+    for r in &e.plan.resources {
+        s.push_str(&format!("  {:<14} {:>10.2} MiB  {}\n", r.name, r.bytes as f64 / (1 << 20) as f64, r.detail));
+    }
+    s.push_str(&format!("  total          {:>10.2} MiB", e.plan.bytes() as f64 / (1 << 20) as f64));
+    for w in &e.warnings {
+        s.push_str(&format!("\nwarning: {w}"));
+    }
+    s
+}
+
+fn human(r: &RenderReport) -> String {
+    let mut s = format!(
+        "rendered {} image(s) of {}x{} on {} ({} vertices, {} triangles): load {:.2} s, upload {:.2} s",
+        r.images.len(),
+        r.width,
+        r.height,
+        r.adapter,
+        r.vertices,
+        r.triangles,
+        r.load_seconds,
+        r.upload_seconds
+    );
+    for i in &r.images {
+        s.push_str(&format!("\n  {}  render {:.3} s, write {:.3} s", i.path, i.render_seconds, i.write_seconds));
+    }
+    s
+}

@@ -1,0 +1,152 @@
+//! Scenes into render inputs (`load`): maps read with their conventions, oversized maps halved
+//! with a warning, albedo transfer by bit depth, turntable cameras, lights and lobes past the
+//! pass's limits refused, and the plan of passes and resources.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+use skinkit_maps::io::{PngLayout, write_normal_map, write_png};
+use skinkit_maps::{GreenAxis, Grid, NormalEncoding, NormalMap};
+use skinkit_render::gpu::OutputFormat;
+use skinkit_render::head::write_obj;
+use skinkit_render::load::{load, orbit, plan};
+use skinkit_render::mesh::Mesh;
+use skinkit_render::scene::{Camera, Scene};
+
+fn quad(dir: &Path) -> PathBuf {
+    let mesh = Mesh {
+        positions: vec![
+            Vec3::new(-1.0, 1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(-1.0, -1.0, 0.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
+        indices: vec![0, 3, 2, 0, 2, 1],
+    };
+    let path = dir.join("quad.obj");
+    write_obj(&mesh, &path).unwrap();
+    path
+}
+
+fn scene(dir: &Path, body: &str) -> (Scene, PathBuf) {
+    let mesh = quad(dir);
+    let text = format!(
+        "mesh = \"{}\"\nmm_per_unit = 10.0\n{body}\n[[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, 1.0]\n\
+         [[camera]]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\n",
+        mesh.display()
+    );
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, &text).unwrap();
+    (Scene::load(&path).unwrap(), path)
+}
+
+/// A 256x128 map tilted toward +x on the left half and +y on the right half.
+fn tilted(dir: &Path, green: GreenAxis) -> PathBuf {
+    let map = NormalMap::from_grid(Grid::from_fn(256, 128, |x, _| {
+        if x < 128 { Vec3::new(0.5, 0.0, 1.0).normalize() } else { Vec3::new(0.0, 0.5, 1.0).normalize() }
+    }));
+    let path = dir.join(format!("tilted-{green:?}.png"));
+    write_normal_map(&path, &map, NormalEncoding { green }, 16).unwrap();
+    path
+}
+
+#[test]
+fn green_down_maps_are_read_green_up() {
+    let tmp = tempfile::tempdir().unwrap();
+    for green in [GreenAxis::Up, GreenAxis::Down] {
+        let file = tilted(tmp.path(), green);
+        let name = if green == GreenAxis::Up { "up" } else { "down" };
+        let (scene, path) =
+            scene(tmp.path(), &format!("[normal_map]\npath = \"{}\"\ngreen = \"{name}\"", file.display()));
+        let loaded = load(&scene, &path, 64, 64, 8192).unwrap();
+        let t = loaded.inputs.normal_map.texels[200];
+        assert!((t[1] - 0.5 / 1.25f32.sqrt()).abs() < 1e-4, "{green:?}: {t:?}");
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    }
+}
+
+#[test]
+fn maps_above_the_device_limit_are_halved_with_a_warning() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tilted(tmp.path(), GreenAxis::Up);
+    let (scene, path) = scene(tmp.path(), &format!("[normal_map]\npath = \"{}\"", file.display()));
+    let loaded = load(&scene, &path, 64, 64, 100).unwrap();
+    let map = &loaded.inputs.normal_map;
+    assert_eq!((map.width, map.height), (64, 32));
+    assert!(
+        loaded.warnings.iter().any(|w| w.contains("256x128") && w.contains("100") && w.contains("64x32")),
+        "{:?}",
+        loaded.warnings
+    );
+    // Box-filtered halves keep each side's tilt (the halves do not mix except at the middle).
+    assert!((map.texels[0][0] - 0.5 / 1.25f32.sqrt()).abs() < 1e-4);
+}
+
+#[test]
+fn eight_bit_albedo_is_srgb_and_sixteen_bit_is_linear() {
+    let tmp = tempfile::tempdir().unwrap();
+    let a8 = tmp.path().join("a8.png");
+    write_png(&a8, 2, 1, PngLayout::Rgb8, &[128, 128, 128, 255, 0, 0]).unwrap();
+    let a16 = tmp.path().join("a16.png");
+    write_png(&a16, 1, 1, PngLayout::Gray16, &[32768]).unwrap();
+    let (s8, p8) = scene(tmp.path(), &format!("albedo = \"{}\"", a8.display()));
+    let t = load(&s8, &p8, 8, 8, 8192).unwrap().inputs.albedo;
+    // sRGB 128/255 is 0.2158605 linear.
+    assert!((t.texels[0][0] - 0.2158605).abs() < 1e-5, "{:?}", t.texels[0]);
+    assert_eq!(t.texels[1], [1.0, 0.0, 0.0, 1.0]);
+    let (s16, p16) = scene(tmp.path(), &format!("albedo = \"{}\"", a16.display()));
+    let loaded = load(&s16, &p16, 8, 8, 8192).unwrap();
+    assert!((loaded.inputs.albedo.texels[0][2] - 32768.0 / 65535.0).abs() < 1e-6);
+    // A map is the whole rho_d: the BRDF's own diffuse is then 1.
+    assert_eq!(loaded.inputs.brdf.diffuse, Vec3::ONE);
+    // Without an albedo, rho_d is the BRDF's.
+    let (plain, pp) = scene(tmp.path(), "");
+    let loaded = load(&plain, &pp, 8, 8, 8192).unwrap();
+    assert_eq!(loaded.inputs.brdf.diffuse, plain.brdf.diffuse);
+    assert_eq!(loaded.inputs.albedo.texels, vec![[1.0; 4]]);
+}
+
+#[test]
+fn a_turntable_keeps_the_distance_and_starts_at_the_camera() {
+    let camera =
+        Camera { position: Vec3::new(3.0, 1.0, 4.0), target: Vec3::new(0.0, 1.0, 0.0), up: Vec3::Y, fov_deg: 30.0 };
+    assert!((orbit(&camera, 0, 8).position - camera.position).length() < 1e-6);
+    for f in 0..8 {
+        let c = orbit(&camera, f, 8);
+        assert!(((c.position - c.target).length() - 5.0).abs() < 1e-4);
+        assert!((c.position.y - 1.0).abs() < 1e-5, "turns about the up axis");
+    }
+    let half = orbit(&camera, 4, 8);
+    assert!((half.position - Vec3::new(-3.0, 1.0, -4.0)).length() < 1e-4, "{:?}", half.position);
+}
+
+#[test]
+fn more_lights_than_the_pass_shades_are_refused_by_name() {
+    let tmp = tempfile::tempdir().unwrap();
+    let light = "[[light]]\nkind = \"directional\"\ndirection = [0.0, 1.0, 1.0]\n";
+    let (scene, path) = scene(tmp.path(), &light.repeat(4));
+    let e = load(&scene, &path, 8, 8, 8192).unwrap_err().to_string();
+    assert!(
+        e.contains("scene.toml") && e.contains("light") && e.contains("5 lights") && e.contains("at most 4"),
+        "{e}"
+    );
+}
+
+#[test]
+fn shadowed_lights_warn_and_effects_are_refused_until_they_exist() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (shadowed, path) =
+        scene(tmp.path(), "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 3.0]\nshadows = true\n");
+    let loaded = load(&shadowed, &path, 8, 8, 8192).unwrap();
+    assert!(loaded.warnings.iter().any(|w| w.contains("light[0]") && w.contains("shadows")), "{:?}", loaded.warnings);
+    let p = plan(&shadowed, &path, &loaded, 8, 8, OutputFormat::Srgb8).unwrap();
+    assert_eq!(p.passes.len(), 1);
+    assert_eq!(p.resources.iter().find(|r| r.name == "colour target").unwrap().bytes, 8 * 8 * 4);
+
+    let (effects, path) = scene(tmp.path(), "effects = [\"shadows\"]");
+    let loaded = load(&effects, &path, 8, 8, 8192).unwrap();
+    let e = plan(&effects, &path, &loaded, 8, 8, OutputFormat::Hdr32).unwrap_err().to_string();
+    assert!(e.contains("effects") && e.contains("shadows"), "{e}");
+}
