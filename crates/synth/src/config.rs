@@ -62,6 +62,12 @@ pub struct SynthConfig {
     /// loses sparse features such as pores and furrows. Counts grow in scanline order in the causal
     /// pass and are taken from the state at the start of each correction sub-pass.
     pub occurrence_penalty: f32,
+    /// The occurrence penalty at the finest level, if it differs from
+    /// [`SynthConfig::occurrence_penalty`] (coarse levels decide the structure the penalty
+    /// protects; the finest level decides how coherent the copies are).
+    pub finest_penalty: Option<f32>,
+    /// Correction passes at the coarser levels, if they differ from [`SynthConfig::corrections`].
+    pub coarse_corrections: Option<usize>,
     /// Seed of the initial state (random exemplar positions, see [`crate::synthesis::random_copies`]).
     pub seed: u64,
     /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
@@ -81,6 +87,8 @@ impl Default for SynthConfig {
             exemplar_wrap: false,
             corrections: DEFAULT_CORRECTIONS,
             occurrence_penalty: DEFAULT_OCCURRENCE_PENALTY,
+            finest_penalty: None,
+            coarse_corrections: None,
             seed: 0,
             memory_limit: 8 << 30,
         }
@@ -147,6 +155,12 @@ impl SynthConfig {
         }
         if !(self.occurrence_penalty.is_finite() && self.occurrence_penalty >= 0.0) {
             return Err(Error::config("occurrence_penalty", self.occurrence_penalty, "must be finite and >= 0"));
+        }
+        if let Some(p) = self.finest_penalty.filter(|p| !(p.is_finite() && *p >= 0.0)) {
+            return Err(Error::config("finest_penalty", p, "must be finite and >= 0"));
+        }
+        if let Some(c) = self.coarse_corrections.filter(|&c| c > MAX_CORRECTIONS) {
+            return Err(Error::config("coarse_corrections", c, format!("at most {MAX_CORRECTIONS} passes")));
         }
         if let Search::KCoherence { k, fallback, .. } = self.search {
             if !(1..=64).contains(&k) {
@@ -266,5 +280,7 @@ mod tests {
         c.search = kc(4, Some(2.0));
         assert!(c.validate(32, 32).is_ok());
         assert!(bad(|c| c.corrections = 17).contains("corrections = 17"));
+        assert!(bad(|c| c.coarse_corrections = Some(17)).contains("coarse_corrections = 17"));
+        assert!(bad(|c| c.finest_penalty = Some(-1.0)).contains("finest_penalty = -1"));
     }
 }

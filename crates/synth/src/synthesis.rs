@@ -118,7 +118,14 @@ pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn
     let mut result = None;
     for level in (0..config.levels).rev() {
         let start = Instant::now();
-        let (texels, coords) = synthesize_level(&pyramid, level, sizes[level], coarser.as_ref(), &config, progress);
+        let level_config = SynthConfig {
+            occurrence_penalty: if level == 0 { config.finest_penalty } else { None }
+                .unwrap_or(config.occurrence_penalty),
+            corrections: if level > 0 { config.coarse_corrections } else { None }.unwrap_or(config.corrections),
+            ..config.clone()
+        };
+        let (texels, coords) =
+            synthesize_level(&pyramid, level, sizes[level], coarser.as_ref(), &level_config, progress);
         level_seconds[level] = start.elapsed().as_secs_f64();
         if level == 0 {
             result = Some((texels, coords));
