@@ -44,6 +44,10 @@ enum Command {
     Face(cmd::stitch::FaceArgs),
     /// Render a scene (mesh, maps, Lafortune skin, lights, cameras) with the bundled wgpu renderer.
     Render(cmd::render::Args),
+    /// Open a scene in the interactive viewer (orbit, move the light, toggle the normal map and
+    /// specular); built with `--features viewer`.
+    #[cfg(feature = "viewer")]
+    View(cmd::render::ViewArgs),
 }
 
 fn main() {
@@ -59,6 +63,8 @@ fn main() {
         Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
         Command::Face(args) => cmd::stitch::run_face(args, &out),
         Command::Render(args) => cmd::render::run(args, &out),
+        #[cfg(feature = "viewer")]
+        Command::View(args) => cmd::render::view(args, &out),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -171,6 +171,13 @@ impl PreparedScene {
         self.globals.view_proj = camera.view_proj.to_cols_array_2d();
         self.globals.eye = vec4(camera.eye, self.globals.eye[3]);
     }
+
+    /// Replaces light `index` (below the scene's light count) for the next [`Gpu::draw`].
+    pub fn set_light(&mut self, index: usize, light: &crate::shading::Light) {
+        if index < self.globals.counts[0] as usize {
+            self.globals.lights[index] = light_raw(light);
+        }
+    }
 }
 
 /// An offscreen colour target and depth buffer from [`Gpu::create_target`].
@@ -771,15 +778,20 @@ fn vec4(v: glam::Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
 
+/// A light as the shader reads it.
+fn light_raw(light: &crate::shading::Light) -> LightRaw {
+    let vector = match light.kind {
+        LightKind::Directional { toward } => vec4(toward, 0.0),
+        LightKind::Point { position } => vec4(position, 1.0),
+    };
+    LightRaw { vector, radiance: vec4(light.color * light.intensity, 0.0) }
+}
+
 /// The uniform block for `inputs`.
 fn globals(inputs: &RenderInputs) -> Globals {
     let mut lights = [LightRaw { vector: [0.0; 4], radiance: [0.0; 4] }; MAX_LIGHTS];
     for (raw, light) in lights.iter_mut().zip(&inputs.lights) {
-        raw.vector = match light.kind {
-            LightKind::Directional { toward } => vec4(toward, 0.0),
-            LightKind::Point { position } => vec4(position, 1.0),
-        };
-        raw.radiance = vec4(light.color * light.intensity, 0.0);
+        *raw = light_raw(light);
     }
     let mut lobes = [LobeRaw { cx: [0.0; 4], cy: [0.0; 4], cz: [0.0; 4], n: [0.0; 4] }; MAX_LOBES];
     for (raw, lobe) in lobes.iter_mut().zip(&inputs.brdf.lobes) {

@@ -15,3 +15,5 @@ pub mod load;
 pub mod mesh;
 pub mod scene;
 pub mod shading;
+#[cfg(feature = "viewer")]
+pub mod viewer;

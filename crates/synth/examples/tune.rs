@@ -25,6 +25,7 @@ fn main() {
                 "l" => config.occurrence_penalty = f as f32,
                 "L" => config.levels = f as usize,
                 "fl" => config.finest_penalty = Some(f as f32),
+                "cp" => config.correction_penalty = Some(f as f32),
                 "cc" => config.coarse_corrections = Some(f as usize),
                 "s" => side = f as usize,
                 "seed" => config.seed = f as u64,

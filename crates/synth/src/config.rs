@@ -66,6 +66,8 @@ pub struct SynthConfig {
     /// [`SynthConfig::occurrence_penalty`] (coarse levels decide the structure the penalty
     /// protects; the finest level decides how coherent the copies are).
     pub finest_penalty: Option<f32>,
+    /// The occurrence penalty of the correction passes, if it differs from the causal pass's.
+    pub correction_penalty: Option<f32>,
     /// Correction passes at the coarser levels, if they differ from [`SynthConfig::corrections`].
     pub coarse_corrections: Option<usize>,
     /// Seed of the initial state (random exemplar positions, see [`crate::synthesis::random_copies`]).
@@ -88,6 +90,7 @@ impl Default for SynthConfig {
             corrections: DEFAULT_CORRECTIONS,
             occurrence_penalty: DEFAULT_OCCURRENCE_PENALTY,
             finest_penalty: None,
+            correction_penalty: None,
             coarse_corrections: None,
             seed: 0,
             memory_limit: 8 << 30,
@@ -158,6 +161,9 @@ impl SynthConfig {
         }
         if let Some(p) = self.finest_penalty.filter(|p| !(p.is_finite() && *p >= 0.0)) {
             return Err(Error::config("finest_penalty", p, "must be finite and >= 0"));
+        }
+        if let Some(p) = self.correction_penalty.filter(|p| !(p.is_finite() && *p >= 0.0)) {
+            return Err(Error::config("correction_penalty", p, "must be finite and >= 0"));
         }
         if let Some(c) = self.coarse_corrections.filter(|&c| c > MAX_CORRECTIONS) {
             return Err(Error::config("coarse_corrections", c, format!("at most {MAX_CORRECTIONS} passes")));
@@ -282,5 +288,6 @@ mod tests {
         assert!(bad(|c| c.corrections = 17).contains("corrections = 17"));
         assert!(bad(|c| c.coarse_corrections = Some(17)).contains("coarse_corrections = 17"));
         assert!(bad(|c| c.finest_penalty = Some(-1.0)).contains("finest_penalty = -1"));
+        assert!(bad(|c| c.correction_penalty = Some(f32::NAN)).contains("correction_penalty = NaN"));
     }
 }

@@ -118,6 +118,35 @@
 //! 128x128 forehead, release, best of 3, machine load about 3 on 2 cores: lambda 0 1.47 s, lambda
 //! 4 1.55 s (the penalty costs about 5 %; the old code could not be rerun under the same load).
 //!
+//! Against the peer (`benches/peer.rs`, 2026-12-01, machine load about 2 on 2 cores; the peer
+//! took 2.38 s at 256x256 and 11.4 s at 512x512 here, about twice the issue's figures): defaults
+//! 0.62 s / 2.10 s (3.8x / 5.4x faster), energy 0.0758 / 0.0827 against the peer's 0.0284 /
+//! 0.0290, slope distance 0.0144 / 0.0096 against 0.0039 / 0.0044, spectrum distance 0.131 /
+//! 0.093 against 0.055 / 0.046. The issue's "5x faster at equal or lower energy with better
+//! slopes" is NOT met. Per-level knobs measured at 256x256 (`examples/tune.rs`, same scoring):
+//!
+//! | config (k = 4) | s | energy | slope | spectrum | largest block |
+//! | --- | --- | --- | --- | --- | --- |
+//! | defaults (5x5, 1 pass, lambda 4) | 1.34 | 0.0758 | 0.0144 | 0.131 | 187 |
+//! | lambda 0 | 1.40 | 0.0344 | 0.0311 | 0.172 | 688 |
+//! | lambda 0, 2 passes, 7x7 | 2.58 | 0.0272 | 0.0320 | 0.159 | 777 |
+//! | lambda 0 at the finest level only (`finest_penalty`) | 1.03 | 0.0333 | 0.0346 | 0.194 | 179 |
+//! | ... with 2 passes | 1.33 | 0.0298 | 0.0353 | 0.183 | 225 |
+//! | finest lambda 1, 2 passes | 1.93 | 0.0565 | 0.0209 | 0.167 | 253 |
+//! | unpenalised correction passes (`correction_penalty = 0`), 1 pass | 0.97 | 0.0582 | 0.0170 | 0.130 | 419 |
+//! | ... 2 passes | 1.27 | 0.0499 | 0.0190 | 0.137 | 1615 |
+//! | ... 2 passes, correction lambda 1 | 1.43 | 0.0626 | 0.0162 | 0.113 | 389 |
+//! | ... 2 passes, 7x7 | 1.89 | 0.0455 | 0.0154 | 0.101 | 712 |
+//!
+//! (Seconds include a cold start; the peer bench's medians are lower.) The penalty at the finest
+//! level is what keeps the slope histogram; at the coarse levels it does nothing measurable. The
+//! peer reaches both low energy and the exemplar's slopes: it fills texels in random order with
+//! random candidates besides coherent ones and a robust (Cauchy) distance, so pore and furrow
+//! patches are seeded anywhere and then grow coherently, where scanline L2 search only starts a
+//! pore when the coarser level already shows it. Candidates to try next: random candidates in the
+//! correction passes, a robust distance for candidate scoring, a heavier coarser-level window at
+//! the finest level (pores 2-5 texels wide vanish two levels up).
+//!
 //! Next steps:
 //! 0. Quality: the captured forehead and cheek stay at 5.3 and 4.0 times their own variation
 //!    (target 3, `captured_slope_distance_within_three_times_own_variation` is ignored); the rms

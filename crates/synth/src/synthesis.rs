@@ -564,7 +564,8 @@ impl CorrectionLevel<'_> {
                 let (ox, oy) = (sub % s, sub / s);
                 let rows: Vec<usize> = (oy..h).step_by(s).collect();
                 let (read_out, read_coords) = (&*out, &*coords);
-                let occurrence = Occurrence::of(full, read_coords, self.config.occurrence_penalty);
+                let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
+                let occurrence = Occurrence::of(full, read_coords, lambda);
                 let chosen: Vec<Vec<usize>> = rows
                     .par_iter()
                     .map_init(Scratch::default, |scratch, &y| {

@@ -223,6 +223,35 @@ pub fn render(job: &Job, out: &Output) -> Result<RenderReport> {
     })
 }
 
+/// `skinkit view`.
+#[cfg(feature = "viewer")]
+#[derive(clap::Args, Debug)]
+pub struct ViewArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Window size (default: the scene's `output.size`, at most 1280x960).
+    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    pub size: Option<(usize, usize)>,
+}
+
+#[cfg(feature = "viewer")]
+pub fn view(args: ViewArgs, out: &Output) -> Result<i32> {
+    let scene = Scene::load(&args.scene)?;
+    let (width, height) = match args.size {
+        Some((w, h)) => (side(w, "--size")?, side(h, "--size")?),
+        None => (scene.output.size[0].min(1280), scene.output.size[1].min(960)),
+    };
+    let gpu = Gpu::new()?;
+    let loaded = load::load(&scene, &args.scene, width, height, gpu.max_texture_side())?;
+    load::plan(&scene, &args.scene, &loaded, width, height, skinkit_render::gpu::OutputFormat::Srgb8)?;
+    for warning in &loaded.warnings {
+        out.warn(warning);
+    }
+    out.note("left drag: orbit, wheel: zoom, right drag: move the light, N: normal map, S: specular, V: per-vertex specular, R: reset, Esc: quit");
+    skinkit_render::viewer::run(gpu, loaded.inputs, scene.cameras[0], (width, height))?;
+    Ok(0)
+}
+
 fn side(v: usize, flag: &str) -> Result<u32> {
     u32::try_from(v)
         .ok()
