@@ -190,3 +190,30 @@ fn missing_exemplar_and_bad_size_are_refused() {
     }
     assert!(!out.exists());
 }
+
+#[test]
+fn upsampled_selects_the_preset_and_flags_still_override_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "forehead", 64);
+    let out = tmp.path().join("up.png");
+    let o = synth(&exemplar, &out, &["--upsampled", "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let options = &r["options"];
+    assert_eq!(options["start"], "upsampled");
+    assert_eq!(options["levels_requested"], 5);
+    assert_eq!(options["corrections"], 2);
+    assert_eq!(options["occurrence_penalty"], 0.0);
+    let o = synth(
+        &exemplar,
+        &out,
+        &["--upsampled", "--levels", "3", "--corrections", "1", "--occurrence-penalty", "2", "--json"],
+    );
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["options"]["levels"], 3);
+    assert_eq!(r["options"]["corrections"], 1);
+    assert_eq!(r["options"]["occurrence_penalty"], 2.0);
+    // The default stays the Wei-Levoy scanline start.
+    let o = synth(&exemplar, &out, &["--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["options"]["start"], "scanline");
+}

@@ -195,8 +195,63 @@ fn compare(ex: &NormalMap) -> Vec<Row> {
         rows.push(Row { side, method, threads, runs, seconds, quality: score(&ours.normals, ex) });
         let method = "skinkit default, output quantised to 8 bits";
         rows.push(Row { side, method, threads, runs, seconds, quality: score(&quantise(&ours.normals), ex) });
+        let config = SynthConfig { seed: SEED, ..SynthConfig::upsampled(side, side) };
+        let (ours, seconds) = timed(runs, || synthesize_normals(ex, &config, &quiet).expect("valid configuration"));
+        let method = "skinkit upsampled (float)";
+        rows.push(Row { side, method, threads, runs, seconds, quality: score(&ours.normals, ex) });
+        let method = "skinkit upsampled, output quantised to 8 bits";
+        rows.push(Row { side, method, threads, runs, seconds, quality: score(&quantise(&ours.normals), ex) });
     }
     rows
+}
+
+/// Seeds of the spread table: one draw is noisy at the level the methods differ by.
+const SPREAD_SEEDS: [u64; 4] = [1, 2, 3, 4];
+
+/// Mean and spread over [`SPREAD_SEEDS`] at 256x256: the peer (tiling), skinkit's default and the
+/// upsampled preset (float), one run each.
+fn spread(ex: &NormalMap) -> String {
+    let (ew, eh) = ex.size();
+    let example = RgbImage::from_raw(ew as u32, eh as u32, encode_rgb8(ex)).expect("buffer holds the exemplar");
+    let side = 256;
+    let mut s = String::from(
+        "\n| 256x256, seeds 1-4 | energy mean (min-max) | slope distance mean (min-max) | spectrum distance mean (min-max) |\n| --- | --- | --- | --- |\n",
+    );
+    let methods: [(&str, &dyn Fn(u64) -> NormalMap); 3] = [
+        ("texture-synthesis 0.8, tiling", &|seed| {
+            let session = Session::builder()
+                .add_example(Example::new(DynamicImage::ImageRgb8(example.clone())))
+                .output_size(Dims::square(side as u32))
+                .seed(seed)
+                .tiling_mode(true)
+                .max_thread_count(threads())
+                .build()
+                .expect("the peer accepts the exemplar");
+            let generated = session.run(None);
+            let rgba: &texture_synthesis::image::RgbaImage = generated.as_ref();
+            decode_rgb8(side, side, 4, rgba.as_raw())
+        }),
+        ("skinkit default", &|seed| {
+            synthesize_normals(ex, &SynthConfig { seed, ..skinkit_config(side) }, &quiet).expect("valid").normals
+        }),
+        ("skinkit upsampled", &|seed| {
+            synthesize_normals(ex, &SynthConfig { seed, ..SynthConfig::upsampled(side, side) }, &quiet)
+                .expect("valid")
+                .normals
+        }),
+    ];
+    for (name, run) in methods {
+        eprintln!("spread: {name}...");
+        let scores: Vec<Quality> = SPREAD_SEEDS.iter().map(|&seed| score(&run(seed), ex)).collect();
+        let cell = |f: fn(&Quality) -> f64| {
+            let v: Vec<f64> = scores.iter().map(f).collect();
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+            format!("{mean:.4} ({lo:.4}-{hi:.4})")
+        };
+        s += &format!("| {name} | {} | {} | {} |\n", cell(|q| q.energy), cell(|q| q.slope), cell(|q| q.spectrum));
+    }
+    s
 }
 
 /// The 1-minute load average (`/proc/loadavg`), when the system has one: the machine is shared, so
@@ -259,7 +314,8 @@ fn target_dir() -> PathBuf {
 fn report(ex: &NormalMap) {
     let load_start = load_average();
     let rows = compare(ex);
-    let table = markdown(&rows, ex, &format!("{load_start} / {}", load_average()));
+    let mut table = markdown(&rows, ex, &format!("{load_start} / {}", load_average()));
+    table += &spread(ex);
     eprintln!("\n{table}");
     let path = target_dir().join("synth-peer.md");
     match std::fs::create_dir_all(target_dir()).and_then(|()| std::fs::write(&path, &table)) {
@@ -278,6 +334,16 @@ fn bench_peer(c: &mut Criterion) {
     for side in sides() {
         group.throughput(Throughput::Elements((side * side) as u64));
         let config = skinkit_config(side);
+        group.bench_with_input(BenchmarkId::from_parameter(side), &config, |b, config| {
+            b.iter(|| synthesize_normals(&ex, config, &quiet).expect("valid configuration"))
+        });
+    }
+    group.finish();
+    let mut group = c.benchmark_group("skinkit_upsampled");
+    group.sample_size(10).measurement_time(Duration::from_secs(5)).warm_up_time(Duration::from_secs(1));
+    for side in sides() {
+        group.throughput(Throughput::Elements((side * side) as u64));
+        let config = SynthConfig { seed: SEED, ..SynthConfig::upsampled(side, side) };
         group.bench_with_input(BenchmarkId::from_parameter(side), &config, |b, config| {
             b.iter(|| synthesize_normals(&ex, config, &quiet).expect("valid configuration"))
         });

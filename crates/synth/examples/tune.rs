@@ -25,6 +25,12 @@ fn main() {
                 "l" => config.occurrence_penalty = f as f32,
                 "L" => config.levels = f as usize,
                 "fl" => config.finest_penalty = Some(f as f32),
+                "up" => {
+                    config.start =
+                        if f > 0.0 { skinkit_synth::Start::Upsampled } else { skinkit_synth::Start::Scanline }
+                }
+                "j" => config.jitter = f as usize,
+                "w" => config.exemplar_wrap = f > 0.0,
                 "cp" => config.correction_penalty = Some(f as f32),
                 "cc" => config.coarse_corrections = Some(f as usize),
                 "s" => side = f as usize,

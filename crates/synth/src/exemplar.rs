@@ -101,6 +101,13 @@ impl ExemplarLevel {
         *self.texels.get(x as usize, y as usize)
     }
 
+    /// The candidate nearest exemplar position `(x, y)` (clamped into the candidate rectangle).
+    pub fn nearest_candidate(&self, x: isize, y: isize) -> usize {
+        let cx = (x - self.x0 as isize).clamp(0, self.cols as isize - 1) as usize;
+        let cy = (y - self.y0 as isize).clamp(0, self.rows as isize - 1) as usize;
+        cy * self.cols + cx
+    }
+
     /// The candidate at exemplar position `(x, y)`, wrapped when the exemplar wraps; `None` when the
     /// position is not a candidate.
     pub fn index_of(&self, x: isize, y: isize) -> Option<usize> {

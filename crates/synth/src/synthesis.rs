@@ -40,6 +40,14 @@
 //! same on any thread count. With `s` = 3 most texels of a sub-pass see already corrected
 //! neighbours on two sides (a Jacobi update, `s` = 1, and `s` = 2 or 5 measured slightly worse).
 //!
+//! Upsampled start ([`Start::Upsampled`], [`SynthConfig::upsampled`]; Lefebvre and Hoppe 2005):
+//! instead of the causal pass, the coarsest level starts as random exemplar copies and every finer
+//! level as its coarser level's coordinates upsampled (texel `(x, y)` copies `2 p + (x mod 2,
+//! y mod 2)`, clamped into the candidates, optionally jittered at the coarser levels); the
+//! correction passes then do all the matching. Whole exemplar patches are carried down the
+//! pyramid, so the output keeps the exemplar's slope histogram without an occurrence penalty, and
+//! no step is sequential.
+//!
 //! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, the
 //! exhaustive scan over candidates for one texel, and the texels of a correction sub-pass. The
 //! causal texel loop stays sequential: each texel's causal neighbourhood holds the texels
@@ -60,7 +68,7 @@ use skinkit_maps::{Grid, NormalMap};
 
 use rayon::prelude::*;
 
-use crate::config::{CORRECTION_STRIDE, Search, SynthConfig, half};
+use crate::config::{CORRECTION_STRIDE, Search, Start, SynthConfig, half};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::neighbourhood::Neighbourhood;
 use crate::search::{ApproximateIndex, KCoherenceSets};
@@ -115,6 +123,7 @@ pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn
     }
     let mut level_seconds = vec![0.0; config.levels];
     let mut coarser: Option<Grid<Vec3>> = None;
+    let mut coarser_coords: Option<Grid<[u32; 2]>> = None;
     let mut result = None;
     for level in (0..config.levels).rev() {
         let start = Instant::now();
@@ -124,13 +133,14 @@ pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn
             corrections: if level > 0 { config.coarse_corrections } else { None }.unwrap_or(config.corrections),
             ..config.clone()
         };
-        let (texels, coords) =
-            synthesize_level(&pyramid, level, sizes[level], coarser.as_ref(), &level_config, progress);
+        let coarser_level = coarser.as_ref().zip(coarser_coords.as_ref());
+        let (texels, coords) = synthesize_level(&pyramid, level, sizes[level], coarser_level, &level_config, progress);
         level_seconds[level] = start.elapsed().as_secs_f64();
         if level == 0 {
             result = Some((texels, coords));
         } else {
             coarser = Some(texels);
+            coarser_coords = Some(coords);
         }
     }
     let (texels, coords) = result.expect("level 0 is always synthesised");
@@ -205,10 +215,11 @@ fn synthesize_level(
     pyramid: &[Grid<Vec3>],
     level: usize,
     (w, h): (usize, usize),
-    coarser: Option<&Grid<Vec3>>,
+    coarser_level: Option<(&Grid<Vec3>, &Grid<[u32; 2]>)>,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    let coarser = coarser_level.map(|(t, _)| t);
     let nb = shape(config, false, coarser.is_some());
     let ex = ExemplarLevel::new(
         pyramid[level].clone(),
@@ -219,9 +230,15 @@ fn synthesize_level(
     );
     let search = build_search(pyramid, level, coarser.is_some(), &ex, config);
     // Progress counts rows: `h` for the causal pass and `h` for each correction pass.
-    let total = (h * (1 + config.corrections)) as f32;
+    let total = (h * (usize::from(config.start == Start::Scanline) + config.corrections)).max(1) as f32;
     let report = |units: usize| progress(level, units as f32 / total);
-    let (mut out, mut coords) = causal_pass(level, (w, h), coarser, &nb, &ex, &search, config, &report);
+    let (mut out, mut coords) = match (config.start, coarser_level) {
+        (Start::Scanline, _) => causal_pass(level, (w, h), coarser, &nb, &ex, &search, config, &report),
+        (Start::Upsampled, None) => random_copies(ex.texels(), ex.margin(), w, h, config.seed, level),
+        (Start::Upsampled, Some((_, parent))) => {
+            upsampled(search.full.as_ref().expect("always built"), parent, w, h, config.jitter, config.seed, level)
+        }
+    };
     drop(ex);
     if config.corrections > 0 {
         let full_nb = shape(config, true, coarser.is_some());
@@ -229,6 +246,43 @@ fn synthesize_level(
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
+}
+
+const JITTER_MIN_LEVEL: usize = 2;
+
+/// A level's start from its coarser level's coordinates (Lefebvre and Hoppe 2005): texel `(x, y)`
+/// copies exemplar position `2 p + (x mod 2, y mod 2)`, `p` the coarser texel's source, kept
+/// inside the candidates (clamped, or wrapped when the exemplar wraps).
+fn upsampled(
+    full: &ExemplarLevel,
+    parent: &Grid<[u32; 2]>,
+    w: usize,
+    h: usize,
+    jitter: usize,
+    seed: u64,
+    level: usize,
+) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    let (pw, ph) = parent.size();
+    // One ChaCha stream per level, offset from random_copies' streams; drawn in row-major order.
+    let offsets: Vec<[isize; 2]> = if jitter == 0 || level < JITTER_MIN_LEVEL {
+        Vec::new()
+    } else {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(1 << 32 | level as u64);
+        let r = jitter as isize;
+        (0..w * h)
+            .map(|_| [rng.random_range(-r as i64..=r as i64) as isize, rng.random_range(-r as i64..=r as i64) as isize])
+            .collect()
+    };
+    let coords = Grid::from_fn(w, h, |x, y| {
+        let [px, py] = *parent.get((x / 2).min(pw - 1), (y / 2).min(ph - 1));
+        let [jx, jy] = offsets.get(y * w + x).copied().unwrap_or([0, 0]);
+        let (cx, cy) = (2 * px as isize + (x % 2) as isize + jx, 2 * py as isize + (y % 2) as isize + jy);
+        let i = full.index_of(cx, cy).unwrap_or_else(|| full.nearest_candidate(cx, cy));
+        full.position(i)
+    });
+    let texels = coords.map(|&[x, y]| *full.texels().get(x as usize, y as usize));
+    (texels, coords)
 }
 
 /// The causal (or, `full`, the full) neighbourhood shape of a level.
@@ -581,7 +635,8 @@ impl CorrectionLevel<'_> {
                         *coords.get_mut(x, y) = full.position(best);
                     }
                 }
-                report(h * (1 + pass) + (sub + 1) * h / (s * s));
+                let causal = if self.config.start == Start::Scanline { h } else { 0 };
+                report(causal + h * pass + (sub + 1) * h / (s * s));
             }
         }
     }

@@ -517,3 +517,76 @@ fn a_negative_or_non_finite_penalty_is_refused() {
         assert!(err.contains("occurrence_penalty"), "{err}");
     }
 }
+
+fn upsampled(w: usize, h: usize, search: Search) -> SynthConfig {
+    SynthConfig { levels: 3, search, ..SynthConfig::upsampled(w, h) }
+}
+
+#[test]
+fn upsampled_start_gives_the_same_bits_on_one_and_two_threads() {
+    let ex = pattern(24, 24);
+    for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
+        for jitter in [0, 1] {
+            let c = SynthConfig { jitter, ..upsampled(40, 33, search) };
+            let one = on_threads(1, || synthesize(&ex, &c, &quiet).unwrap());
+            let two = on_threads(2, || synthesize(&ex, &c, &quiet).unwrap());
+            assert_eq!(one.coords, two.coords, "{search:?} jitter {jitter}");
+            assert!(one.texels.as_slice().iter().zip(two.texels.as_slice()).all(|(a, b)| a.to_array() == b.to_array()));
+            // Every texel is its coordinate's exemplar texel.
+            let copied = replay(&one.coords, &ex).unwrap();
+            assert_eq!(copied.as_slice(), one.texels.as_slice(), "{search:?}");
+        }
+    }
+}
+
+#[test]
+fn upsampled_coordinates_copy_two_by_two_blocks_before_correction() {
+    let ex = pattern(40, 40);
+    // No correction pass: the finest level is its coarser level's coordinates upsampled, so each
+    // 2x2 output block copies a 2x2 exemplar block (clamped into the candidates at the border).
+    let c = SynthConfig { corrections: 0, levels: 2, ..SynthConfig::upsampled(30, 22) };
+    let s = synthesize(&ex, &c, &quiet).unwrap();
+    let (mut aligned, mut blocks) = (0, 0);
+    for by in 0..11 {
+        for bx in 0..15 {
+            let [x0, y0] = *s.coords.get(2 * bx, 2 * by);
+            blocks += 1;
+            let ok = (0..2)
+                .all(|dy| (0..2).all(|dx| *s.coords.get(2 * bx + dx, 2 * by + dy) == [x0 + dx as u32, y0 + dy as u32]));
+            aligned += usize::from(ok);
+        }
+    }
+    // Only blocks whose source was clamped at the candidates' right or bottom edge differ.
+    assert!(aligned * 10 >= blocks * 9, "{aligned} of {blocks} blocks are whole 2x2 copies");
+    assert!(s.coords.as_slice().iter().all(|&[x, y]| (2..38).contains(&x) && (2..38).contains(&y)));
+}
+
+#[test]
+fn upsampled_start_hard_cases() {
+    let v = Vec3::new(0.2, -0.4, 0.9);
+    let s = synthesize(&Grid::filled(12, 12, v), &upsampled(10, 7, KCOH), &quiet).unwrap();
+    assert!(s.texels.as_slice().iter().all(|t| *t == v));
+    let ex = pattern(21, 9);
+    let s = synthesize(&ex, &upsampled(1, 1, KCOH), &quiet).unwrap();
+    assert!(s.texels.get(0, 0).is_finite());
+    // Five levels asked of a 21x9 exemplar: clamped, with a warning.
+    let s = synthesize(&ex, &SynthConfig::upsampled(17, 6), &quiet).unwrap();
+    assert!(!s.warnings.is_empty());
+    assert!(s.coords.as_slice().iter().all(|&[x, y]| (2..19).contains(&x) && (2..7).contains(&y)));
+}
+
+#[test]
+fn upsampled_preset_beats_the_scanline_default_on_a_skin_exemplar() {
+    // 128x128 grown from a 64x64 forehead heightfield (the peer benchmark at a quarter of the
+    // size): the upsampled preset's energy and slope distance are both lower than the scanline
+    // default's (benchmark ratios at 256x256 from 128x128: energy 0.28, slope distance 0.34).
+    let ex = skinkit_heightfield::SkinParams::forehead(64, 64, 1).generate().unwrap().normals;
+    let score = |c: SynthConfig| {
+        let out = synthesize_normals(&ex, &SynthConfig { seed: 1, ..c }, &quiet).unwrap().normals;
+        (window_energy(out.grid(), ex.grid(), 5, 1), skinkit_synth::metrics::slope_distance(&out, &ex))
+    };
+    let (e_scan, s_scan) = score(SynthConfig::new(128, 128));
+    let (e_up, s_up) = score(SynthConfig::upsampled(128, 128));
+    assert!(e_up < 0.6 * e_scan, "energy: upsampled {e_up:.5} vs scanline {e_scan:.5}");
+    assert!(s_up < s_scan, "slope distance: upsampled {s_up:.5} vs scanline {s_scan:.5}");
+}

@@ -17,6 +17,7 @@ use indicatif::ProgressBar;
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
+use skinkit_synth::config::UPSAMPLED_LEVELS;
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Search, SynthConfig};
 
@@ -42,18 +43,28 @@ pub struct Args {
     /// Output size in texels, `WIDTHxHEIGHT` (e.g. 512x512).
     #[arg(long, value_name = "WxH", value_parser = parse_size, required = true)]
     pub size: Option<(usize, usize)>,
-    /// Pyramid levels (1 = single resolution); clamped, with a warning, to what the exemplar allows.
-    #[arg(long, default_value_t = 3, value_name = "L")]
-    pub levels: usize,
+    /// Pyramid levels (1 = single resolution; default 3, 5 with `--upsampled`); clamped, with a
+    /// warning, to what the exemplar allows.
+    #[arg(long, value_name = "L")]
+    pub levels: Option<usize>,
     /// Side of the causal neighbourhood at each level (odd, at least 3).
     #[arg(long, default_value_t = 5, value_name = "N", alias = "neighbourhood")]
     pub neighborhood: usize,
     /// Side of the full neighbourhood taken from the coarser level (odd).
     #[arg(long, default_value_t = 3, value_name = "M")]
     pub parent: usize,
-    /// Correction passes per level: every texel chosen again by its full (non-causal) window.
-    #[arg(long, default_value_t = skinkit_synth::config::DEFAULT_CORRECTIONS, value_name = "P")]
-    pub corrections: usize,
+    /// Correction passes per level: every texel chosen again by its full (non-causal) window
+    /// (default 1, 2 with `--upsampled`).
+    #[arg(long, value_name = "P")]
+    pub corrections: Option<usize>,
+    /// Start every level from its coarser level's coordinates upsampled (Lefebvre and Hoppe 2005)
+    /// instead of the causal scanline pass: whole exemplar patches are copied and the correction
+    /// passes do the matching (lower energy, parallel; see the README's comparison).
+    #[arg(long)]
+    pub upsampled: bool,
+    /// Occurrence penalty lambda (0 = off; default 4, 0 with `--upsampled`).
+    #[arg(long, value_name = "LAMBDA")]
+    pub occurrence_penalty: Option<f32>,
     /// k-coherence search (the default): candidates per source texel (Tong et al. 2002).
     #[arg(long = "k", default_value_t = 4, value_name = "K", conflicts_with_all = ["exact", "pca"])]
     pub k: usize,
@@ -206,6 +217,9 @@ fn check_map_extension(path: &Path) -> Result<()> {
 pub struct OptionsReport {
     pub kind: String,
     pub levels_requested: usize,
+    /// `scanline` (Wei-Levoy causal pass) or `upsampled` (Lefebvre-Hoppe coordinates).
+    pub start: String,
+    pub occurrence_penalty: f32,
     pub levels: usize,
     pub neighborhood: usize,
     pub parent: usize,
@@ -273,13 +287,13 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
 
 /// The library options the flags ask for.
 fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
+    let base = if args.upsampled { SynthConfig::upsampled(width, height) } else { SynthConfig::new(width, height) };
     SynthConfig {
-        width,
-        height,
-        levels: args.levels,
+        levels: args.levels.unwrap_or(base.levels),
         neighbourhood: args.neighborhood,
         parent: args.parent,
-        corrections: args.corrections,
+        corrections: args.corrections.unwrap_or(base.corrections),
+        occurrence_penalty: args.occurrence_penalty.unwrap_or(base.occurrence_penalty),
         search: if args.exact {
             Search::Exact
         } else if args.pca {
@@ -290,7 +304,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         coherence: !args.no_coherence,
         exemplar_wrap: args.exemplar_wrap,
         seed: args.seed,
-        ..SynthConfig::default()
+        ..base
     }
 }
 
@@ -395,7 +409,13 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
     };
     OptionsReport {
         kind: args.map.kind.clone(),
-        levels_requested: args.levels,
+        levels_requested: args.levels.unwrap_or(if args.upsampled {
+            UPSAMPLED_LEVELS
+        } else {
+            SynthConfig::default().levels
+        }),
+        start: format!("{:?}", run.start).to_lowercase(),
+        occurrence_penalty: run.occurrence_penalty,
         levels: run.levels,
         neighborhood: run.neighbourhood,
         parent: run.parent,
