@@ -253,6 +253,26 @@ fn demo_reports_every_mold_with_both_solvers() {
     for name in ["normal.png", "normal.exr", "labels.png", "report.json"] {
         assert!(tmp.path().join("face").join(name).is_file(), "face/{name} missing");
     }
+    // Figures 7 (the head without and with the face map) and 8 (a patch under four lights),
+    // rendered on the test machine's adapter (lavapipe in CI: scripts/test installs it).
+    let renders = &report["renders"];
+    assert_eq!(renders["renders"].as_array().unwrap().len(), 6, "{renders}");
+    let read = |name: &str| {
+        let p = skinkit_maps::io::read_photo(&tmp.path().join("render").join(name), &Default::default()).unwrap();
+        let skinkit_maps::Samples::U8(v) = p.samples() else { panic!("{name} is not 8-bit") };
+        (p.width(), p.height(), v.clone())
+    };
+    let (w7, h7, fig7) = read("figure7.png");
+    assert_eq!((w7, h7), (2 * 768, 768));
+    let (w8, h8, _) = read("figure8.png");
+    assert_eq!((w8, h8), (2 * 768, 2 * 768));
+    // The right panel (with fine-scale structure) is not the left one.
+    let differ = (0..h7)
+        .flat_map(|y| (0..768).map(move |x| (x, y)))
+        .filter(|&(x, y)| fig7[3 * (y * w7 + x)] != fig7[3 * (y * w7 + x + 768)])
+        .count();
+    assert!(differ > 768 * 768 / 20, "figure 7's panels differ in only {differ} pixels");
+    assert!(tmp.path().join("render").join("head-skin.toml").is_file());
 }
 
 /// Writes `count` 16-bit photos of a flat RGB patch lit by the rig's lights, plus its rig.
