@@ -15,38 +15,18 @@
 //! `pow`, frames built per pixel) running on the CPU.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use skinkit_render::brdf::Lafortune;
 use skinkit_render::gpu::{Gpu, OutputFormat};
 use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
 };
-use std::f32::consts::PI;
 
 const WIDTH: u32 = 1920;
 const HEIGHT: u32 = 1080;
 
 fn sphere(segments: u32, rings: u32) -> (Vec<Vertex>, Vec<u32>) {
-    let mut vertices = Vec::new();
-    for r in 0..=rings {
-        let theta = PI * r as f32 / rings as f32;
-        for s in 0..=segments {
-            let phi = 2.0 * PI * s as f32 / segments as f32;
-            let n = Vec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos());
-            vertices.push(Vertex {
-                position: n.into(),
-                normal: n.into(),
-                tangent: Vec4::new(phi.cos(), 0.0, -phi.sin(), 1.0).into(),
-                uv: [s as f32 / segments as f32, r as f32 / rings as f32],
-            });
-        }
-    }
-    let row = segments + 1;
-    let indices = (0..rings)
-        .flat_map(|r| (0..segments).map(move |s| r * row + s))
-        .flat_map(|a| [a, a + row, a + 1, a + 1, a + row, a + row + 1])
-        .collect();
-    (vertices, indices)
+    skinkit_render::shading::uv_sphere(segments, rings)
 }
 
 /// A 4096x2048 field of small bumps (not skin, but the same texture traffic).

@@ -535,6 +535,33 @@ fn rasterize_triangle(corners: &[Corner; 3], width: u32, height: u32, target: &m
     }
 }
 
+/// A unit UV sphere centred on the origin, `segments` around (u from +z toward +x) and `rings`
+/// from the north pole (v = 0) to the south pole, with analytic normals and tangents along +u:
+/// the test and benchmark scene whose shading has a closed form per pixel.
+pub fn uv_sphere(segments: u32, rings: u32) -> (Vec<Vertex>, Vec<u32>) {
+    use std::f32::consts::PI;
+    let mut vertices = Vec::with_capacity(((segments + 1) * (rings + 1)) as usize);
+    for r in 0..=rings {
+        let theta = PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = 2.0 * PI * s as f32 / segments as f32;
+            let n = Vec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos());
+            vertices.push(Vertex {
+                position: n.into(),
+                normal: n.into(),
+                tangent: Vec4::new(phi.cos(), 0.0, -phi.sin(), 1.0).into(),
+                uv: [s as f32 / segments as f32, r as f32 / rings as f32],
+            });
+        }
+    }
+    let row = segments + 1;
+    let indices = (0..rings)
+        .flat_map(|r| (0..segments).map(move |s| r * row + s))
+        .flat_map(|a| [a, a + row, a + 1, a + 1, a + row, a + row + 1])
+        .collect();
+    (vertices, indices)
+}
+
 impl Camera {
     /// A perspective camera looking from `eye` at `target` (right-handed, y up, wgpu depth range).
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, fov_y_degrees: f32, aspect: f32) -> Self {

@@ -39,26 +39,7 @@ fn plane() -> (Vec<Vertex>, Vec<u32>) {
 /// A latitude-longitude unit sphere; the tangent follows increasing longitude (u), which is
 /// defined at the poles too.
 fn sphere(segments: u32, rings: u32) -> (Vec<Vertex>, Vec<u32>) {
-    let mut vertices = Vec::new();
-    for r in 0..=rings {
-        let theta = PI * r as f32 / rings as f32;
-        for s in 0..=segments {
-            let phi = 2.0 * PI * s as f32 / segments as f32;
-            let n = Vec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos());
-            let t = Vec4::new(phi.cos(), 0.0, -phi.sin(), 1.0);
-            let uv = [s as f32 / segments as f32, r as f32 / rings as f32];
-            vertices.push(vertex(n, n, t, uv));
-        }
-    }
-    let mut indices = Vec::new();
-    let row = segments + 1;
-    for r in 0..rings {
-        for s in 0..segments {
-            let a = r * row + s;
-            indices.extend([a, a + row, a + 1, a + 1, a + row, a + row + 1]);
-        }
-    }
-    (vertices, indices)
+    skinkit_render::shading::uv_sphere(segments, rings)
 }
 
 /// Normals of the height field `h = A sin(2 pi k u) sin(2 pi k v)` over the unit texture square
