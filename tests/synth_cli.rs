@@ -201,8 +201,9 @@ fn upsampled_selects_the_preset_and_flags_still_override_it() {
     let options = &r["options"];
     assert_eq!(options["start"], "upsampled");
     assert_eq!(options["levels_requested"], 5);
-    assert_eq!(options["corrections"], 2);
+    assert_eq!(options["corrections"], 1);
     assert_eq!(options["occurrence_penalty"], 0.0);
+    assert_eq!(options["search"], "k-coherence (k = 2)");
     let o = synth(
         &exemplar,
         &out,
@@ -210,7 +211,7 @@ fn upsampled_selects_the_preset_and_flags_still_override_it() {
     );
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["options"]["levels"], 3);
-    assert_eq!(r["options"]["corrections"], 1);
+    assert_eq!(r["options"]["corrections"], 3);
     assert_eq!(r["options"]["occurrence_penalty"], 2.0);
     // The default stays the Wei-Levoy scanline start.
     let o = synth(&exemplar, &out, &["--json"]);

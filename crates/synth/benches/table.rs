@@ -6,8 +6,10 @@
 //! Modes: exact (exhaustive, the reference); PCA to D in {4, 8, 16, 32} dimensions + kd-tree,
 //! re-ranking the best 8 in full space (with Ashikhmin coherence candidates, the config's default);
 //! k-coherence k = 4 (the default search); and, to show what the correction pass adds, k-coherence
-//! and PCA-8 with one correction pass. Every other option is [`SynthConfig`]'s default (3x3
-//! parent window, seed 1).
+//! and PCA-8 with one correction pass; last, the upsampled preset ([`SynthConfig::upsampled`]:
+//! coordinate upsampling, k = 2, two passes at the coarser levels and one at the finest, no
+//! occurrence penalty). Every other option is [`SynthConfig`]'s default (3x3 parent window, the
+//! occurrence penalty, seed 1).
 //!
 //! * Energy: [`window_energy`] with 5x5 windows for every N (so cells compare), finest level, every
 //!   other texel per axis; lower is better. Slope distance: [`metrics::slope_distance`] against the
@@ -16,8 +18,9 @@
 //!   10-60 s a run, PCA-32 up to exact's time, since a kd-tree in 32 dimensions scans nearly all).
 //! * A configuration that panics is reported as such in its cell, and the other cells still run.
 //!
-//! By default only N = 5 with 3 levels runs (about a minute); `SYNTH_TABLE_FULL=1` runs N in
-//! {3, 5, 7} x levels in {1, 2, 3} (15-25 minutes on 2 shared cores, mostly exact and PCA-32). The
+//! By default only N = 5 with 3 and 5 levels runs (a few minutes); `SYNTH_TABLE_FULL=1` runs N in
+//! {3, 5, 7} x levels in {1, 2, 3}, plus N = 5 with 5 levels (20-30 minutes on 2 shared cores,
+//! mostly exact and PCA-32). The
 //! table goes to stderr and, as markdown, to `target/synth-table.md`. A report generator with a
 //! plain `main` (`harness = false`): `cargo bench -p skinkit-synth --bench table`.
 
@@ -49,10 +52,12 @@ struct Mode {
     name: &'static str,
     search: Search,
     corrections: usize,
+    /// [`SynthConfig::upsampled`] (its start, passes and penalty) instead of the scanline default.
+    upsampled: bool,
 }
 
 const fn mode(name: &'static str, search: Search, corrections: usize) -> Mode {
-    Mode { name, search, corrections }
+    Mode { name, search, corrections, upsampled: false }
 }
 
 const fn pca(dims: usize) -> Search {
@@ -60,7 +65,7 @@ const fn pca(dims: usize) -> Search {
 }
 
 /// Every mode, exact first (the others' energies are divided by its energy).
-const MODES: [Mode; 8] = [
+const MODES: [Mode; 9] = [
     mode("exact", Search::Exact, 0),
     mode("PCA-4, rerank 8", pca(4), 0),
     mode("PCA-8, rerank 8", pca(8), 0),
@@ -69,6 +74,12 @@ const MODES: [Mode; 8] = [
     mode("k-coherence k=4", Search::K_COHERENCE, 0),
     mode("PCA-8, rerank 8", pca(8), 1),
     mode("k-coherence k=4", Search::K_COHERENCE, 1),
+    Mode {
+        name: "upsampled preset (k-coherence k=2)",
+        search: Search::KCoherence { k: 2, fallback: None, dims: 8, rerank: 8 },
+        corrections: 1,
+        upsampled: true,
+    },
 ];
 
 /// What one cell measured.
@@ -105,14 +116,13 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// Runs one cell: up to [`RUNS`] timed syntheses (all give the same bits: the synthesis is
 /// deterministic), then the scores of the last output. A panic is caught and reported in the cell.
 fn measure(ex: &Grid<Vec3>, ex_normals: &NormalMap, n: usize, levels: usize, mode: Mode) -> Cell {
-    let config = SynthConfig {
-        levels,
-        search: mode.search,
-        neighbourhood: n,
-        corrections: mode.corrections,
-        seed: SEED,
-        ..SynthConfig::new(OUTPUT_SIDE, OUTPUT_SIDE)
+    let base = if mode.upsampled {
+        SynthConfig::upsampled(OUTPUT_SIDE, OUTPUT_SIDE)
+    } else {
+        SynthConfig::new(OUTPUT_SIDE, OUTPUT_SIDE)
     };
+    let config =
+        SynthConfig { levels, search: mode.search, neighbourhood: n, corrections: mode.corrections, seed: SEED, ..base };
     let run = || {
         let mut seconds = Vec::with_capacity(RUNS);
         let mut last = None;
@@ -144,9 +154,11 @@ fn panic_message(payload: Box<dyn Any + Send>) -> String {
 /// The (N, levels) pairs to run.
 fn grid() -> Vec<(usize, usize)> {
     if std::env::var("SYNTH_TABLE_FULL").is_ok_and(|v| v == "1") {
-        [3, 5, 7].into_iter().flat_map(|n| [1, 2, 3].map(|l| (n, l))).collect()
+        let mut cells: Vec<_> = [3, 5, 7].into_iter().flat_map(|n| [1, 2, 3].map(|l| (n, l))).collect();
+        cells.push((5, 5));
+        cells
     } else {
-        vec![(5, 3)]
+        vec![(5, 3), (5, 5)]
     }
 }
 

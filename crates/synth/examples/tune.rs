@@ -1,7 +1,8 @@
 //! Scores synthesis configurations the way the peer benchmark does (256x256 from the 128x128
 //! forehead heightfield, seed 1): `cargo run --release -p skinkit-synth --example tune -- k=4,n=5,c=1,l=4 ...`.
 //! Keys: k (k-coherence k), n (causal side), c (correction passes), l (occurrence penalty),
-//! L (levels), s (output side), seed.
+//! L (levels), s (output side), h (output height, default s), up (upsampled start), j (jitter),
+//! w (exemplar wrap), fl / cp (finest-level and correction penalties), cc (coarse corrections), seed.
 
 use std::time::Instant;
 
@@ -14,6 +15,7 @@ fn main() {
     let ex = SkinParams::forehead(128, 128, 1).generate().expect("preset").normals;
     for spec in std::env::args().skip(1) {
         let mut side = 256;
+        let mut height = None;
         let mut config = SynthConfig { seed: 1, ..SynthConfig::new(side, side) };
         for kv in spec.split(',') {
             let (k, v) = kv.split_once('=').expect("key=value");
@@ -34,12 +36,13 @@ fn main() {
                 "cp" => config.correction_penalty = Some(f as f32),
                 "cc" => config.coarse_corrections = Some(f as usize),
                 "s" => side = f as usize,
+                "h" => height = Some(f as usize),
                 "seed" => config.seed = f as u64,
                 other => panic!("unknown key {other}"),
             }
         }
         config.width = side;
-        config.height = side;
+        config.height = height.unwrap_or(side);
         let t = Instant::now();
         let out = synthesize_normals(&ex, &config, &|_, _| {}).expect("synthesis");
         let secs = t.elapsed().as_secs_f64();

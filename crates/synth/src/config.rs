@@ -25,8 +25,11 @@ pub enum Search {
 }
 
 impl Search {
-    /// k-coherence with `k` = 4 and no tree fallback (the fastest mode).
-    pub const K_COHERENCE: Search = Search::KCoherence { k: 4, fallback: None, dims: 8, rerank: 8 };
+    /// `k` of [`Search::K_COHERENCE`].
+    pub const K_COHERENCE_K: usize = 4;
+    /// k-coherence with `k` = 4 and no tree fallback (the default search of the scanline start).
+    pub const K_COHERENCE: Search =
+        Search::KCoherence { k: Self::K_COHERENCE_K, fallback: None, dims: 8, rerank: 8 };
 }
 
 /// How each output level gets its first state, before its correction passes.
@@ -149,18 +152,21 @@ impl SynthConfig {
     }
 
     /// The upsampled-coordinates preset (Lefebvre and Hoppe 2005 on Wei-Levoy's neighbourhoods):
-    /// [`Start::Upsampled`], 5 pyramid levels (clamped to the exemplar), two k-coherence
-    /// correction passes per level and no occurrence penalty. Whole exemplar patches are copied
-    /// down the pyramid, which keeps the exemplar's slope histogram without the penalty that the
-    /// scanline start needs; measured against the scanline default and the `texture-synthesis`
-    /// peer in `benches/peer.rs`.
+    /// [`Start::Upsampled`], 5 pyramid levels (clamped to the exemplar), k-coherence with k = 2,
+    /// two correction passes at the coarser levels and one at the finest, no occurrence penalty.
+    /// Whole exemplar patches are carried down the pyramid, which keeps the exemplar's slope
+    /// histogram without the penalty the scanline start needs; few candidates per texel keep the
+    /// patches whole. Measured against the scanline default and the `texture-synthesis` peer in
+    /// `benches/peer.rs` (see the crate's status notes).
     pub fn upsampled(width: usize, height: usize) -> Self {
         SynthConfig {
             width,
             height,
             start: Start::Upsampled,
             levels: UPSAMPLED_LEVELS,
-            corrections: 2,
+            search: Search::KCoherence { k: 2, fallback: None, dims: 8, rerank: 8 },
+            corrections: 1,
+            coarse_corrections: Some(2),
             occurrence_penalty: 0.0,
             ..Default::default()
         }

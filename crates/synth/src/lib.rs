@@ -123,7 +123,8 @@
 //! 0.62 s / 2.10 s (3.8x / 5.4x faster), energy 0.0758 / 0.0827 against the peer's 0.0284 /
 //! 0.0290, slope distance 0.0144 / 0.0096 against 0.0039 / 0.0044, spectrum distance 0.131 /
 //! 0.093 against 0.055 / 0.046. The issue's "5x faster at equal or lower energy with better
-//! slopes" is NOT met. Per-level knobs measured at 256x256 (`examples/tune.rs`, same scoring):
+//! slopes" is not met by the scanline start (it is by the upsampled preset, below). Per-level knobs
+//! measured at 256x256 (`examples/tune.rs`, same scoring):
 //!
 //! | config (k = 4) | s | energy | slope | spectrum | largest block |
 //! | --- | --- | --- | --- | --- | --- |
@@ -147,19 +148,21 @@
 //! correction passes, a robust distance for candidate scoring, a heavier coarser-level window at
 //! the finest level (pores 2-5 texels wide vanish two levels up).
 //!
-//! Upsampled start ([`Start::Upsampled`], `SynthConfig::upsampled`: 5 levels, 2 passes, no
-//! penalty; same scoring, one cold run each): 256x256 energy 0.0209, slope 0.0055, spectrum
-//! 0.063, largest block 2853; L = 3: 0.0242 / 0.0273 / 0.130; L = 4: 0.0256 / 0.0159 / 0.079;
-//! L = 5 with 7x7: 0.0190 / 0.0056 / 0.086; L = 5 with k = 2: 0.0192 / 0.0049 / 0.062; any
-//! penalty raised energy and slope (lambda 0.25: 0.037 / 0.016); jitter (1-2 texels) at every
-//! level: slope 0.044-0.051, at levels >= 2 only: 0.024-0.028; exemplar wrap: 0.0268 / 0.0053.
-//! Peer bench, seeds 1-4 at 256x256: peer 0.0277 / 0.0041 / 0.048, upsampled 0.0208 / 0.0049 /
-//! 0.052; time 0.69 s (4.3x faster than the peer) and at 512x512 1.50 s (9.4x). More levels carry
-//! larger exemplar patches down the pyramid, which is what keeps the slope histogram. Still to
-//! do: the peer's slope statistics (the candidates' rectangle loses a margin of `N / 2` texels at
-//! every level, so the exemplar's borders are copied less often than its middle), and the copy
-//! bounds of `tests/quality.rs` (mean copied block <= 8, largest <= area / 8) before it can become
-//! the default.
+//! Upsampled start ([`Start::Upsampled`]; same scoring, one cold run each, 256x256, 5 levels, no
+//! penalty unless said): k = 4 with 2 passes everywhere: energy 0.0209, slope 0.0055, spectrum
+//! 0.063, largest block 2853; with 3 levels 0.0242 / 0.0273 / 0.130; 4 levels 0.0256 / 0.0159 /
+//! 0.079; 7x7 0.0190 / 0.0056 / 0.086; any penalty raised energy and slope (lambda 0.25: 0.037 /
+//! 0.016); jitter of 1-2 texels at every level: slope 0.044-0.051, at levels >= 2 only:
+//! 0.024-0.028; exemplar wrap 0.0268 / 0.0053, wrap at the coarse levels only 0.020-0.023 /
+//! 0.0077-0.0086. Fewer candidates keep patches whole and the histogram with them: k = 2 with one
+//! pass at the finest level and two above (the preset, `SynthConfig::upsampled`): seeds 1-4 slope
+//! 0.0047 / 0.0035 / 0.0038 / 0.0032, energy 0.021-0.023, 0.42-0.62 s; k = 1: slope 0.0027-0.0038,
+//! energy 0.019-0.022, spectrum 0.037-0.066, largest block up to 4850; no pass at the finest level:
+//! 0.0249 / 0.0042. Peer bench (2026-12-01, load 1.7-1.9), seeds 1-4 at 256x256: peer energy
+//! 0.0274, slope 0.0041, spectrum 0.048; the preset 0.0216 / 0.0038 / 0.049, 6.0x faster at
+//! 256x256 and 22x at 512x512 (0.71 s). It is not the default because its copied blocks are large
+//! (largest 3000-5000 texels, over the `tests/quality.rs` bound of area / 8 = 2048; mean block
+//! well over 8); the scanline start keeps those bounds.
 //!
 //! Next steps:
 //! 0. Quality: the captured forehead and cheek stay at 5.3 and 4.0 times their own variation

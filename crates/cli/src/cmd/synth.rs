@@ -65,9 +65,10 @@ pub struct Args {
     /// Occurrence penalty lambda (0 = off; default 4, 0 with `--upsampled`).
     #[arg(long, value_name = "LAMBDA")]
     pub occurrence_penalty: Option<f32>,
-    /// k-coherence search (the default): candidates per source texel (Tong et al. 2002).
-    #[arg(long = "k", default_value_t = 4, value_name = "K", conflicts_with_all = ["exact", "pca"])]
-    pub k: usize,
+    /// k-coherence search (the default): candidates per source texel (Tong et al. 2002; default
+    /// 4, 2 with `--upsampled`).
+    #[arg(long = "k", value_name = "K", conflicts_with_all = ["exact", "pca"])]
+    pub k: Option<usize>,
     /// Search a PCA-projected kd-tree (plus Ashikhmin coherence) instead of k-coherence sets.
     #[arg(long, conflicts_with = "exact")]
     pub pca: bool,
@@ -299,7 +300,11 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         } else if args.pca {
             Search::Approximate { dims: args.dims, rerank: args.rerank }
         } else {
-            Search::KCoherence { k: args.k, fallback: None, dims: args.dims, rerank: args.rerank }
+            let k = match base.search {
+                Search::KCoherence { k, .. } => args.k.unwrap_or(k),
+                _ => args.k.unwrap_or(Search::K_COHERENCE_K),
+            };
+            Search::KCoherence { k, fallback: None, dims: args.dims, rerank: args.rerank }
         },
         coherence: !args.no_coherence,
         exemplar_wrap: args.exemplar_wrap,
