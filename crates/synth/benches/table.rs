@@ -121,8 +121,14 @@ fn measure(ex: &Grid<Vec3>, ex_normals: &NormalMap, n: usize, levels: usize, mod
     } else {
         SynthConfig::new(OUTPUT_SIDE, OUTPUT_SIDE)
     };
-    let config =
-        SynthConfig { levels, search: mode.search, neighbourhood: n, corrections: mode.corrections, seed: SEED, ..base };
+    let config = SynthConfig {
+        levels,
+        search: mode.search,
+        neighbourhood: n,
+        corrections: mode.corrections,
+        seed: SEED,
+        ..base
+    };
     let run = || {
         let mut seconds = Vec::with_capacity(RUNS);
         let mut last = None;

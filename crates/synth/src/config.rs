@@ -28,8 +28,7 @@ impl Search {
     /// `k` of [`Search::K_COHERENCE`].
     pub const K_COHERENCE_K: usize = 4;
     /// k-coherence with `k` = 4 and no tree fallback (the default search of the scanline start).
-    pub const K_COHERENCE: Search =
-        Search::KCoherence { k: Self::K_COHERENCE_K, fallback: None, dims: 8, rerank: 8 };
+    pub const K_COHERENCE: Search = Search::KCoherence { k: Self::K_COHERENCE_K, fallback: None, dims: 8, rerank: 8 };
 }
 
 /// How each output level gets its first state, before its correction passes.
