@@ -207,7 +207,7 @@ fn upsampled_selects_the_preset_and_flags_still_override_it() {
     let o = synth(
         &exemplar,
         &out,
-        &["--upsampled", "--levels", "3", "--corrections", "1", "--occurrence-penalty", "2", "--json"],
+        &["--upsampled", "--levels", "3", "--corrections", "3", "--occurrence-penalty", "2", "--json"],
     );
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["options"]["levels"], 3);
