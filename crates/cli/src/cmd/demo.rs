@@ -143,6 +143,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             straight: false,
             no_blend: false,
             seam_band: 4,
+            upsampled: false,
         };
         Some(face_to_dir(&options, &args.out.join("face"), &mut cache, out, Instant::now())?)
     } else {

@@ -55,6 +55,10 @@ pub struct StitchOptions {
     /// Band width of the seam metric, texels.
     #[arg(long, default_value_t = 4, value_name = "W")]
     pub seam_band: usize,
+    /// Grow every region with the upsampled-coordinates preset (`skinkit synth --upsampled`:
+    /// lower energy, faster, larger copied blocks) instead of the scanline default.
+    #[arg(long)]
+    pub upsampled: bool,
 }
 
 #[derive(clap::Args, Debug)]
@@ -103,6 +107,8 @@ pub struct FaceReport {
     pub levels: usize,
     pub curve_amplitude: f64,
     pub blend: bool,
+    /// Regions grown with the upsampled preset rather than the scanline default.
+    pub upsampled: bool,
     pub seed: u64,
     pub regions: Vec<RegionReport>,
     pub seams: SeamReport,
@@ -195,7 +201,7 @@ pub fn build(options: &StitchOptions, cache: &mut CaptureCache, out: &Output) ->
         curve: CurveParams::new(amplitude, options.seed),
         levels: options.levels,
         blend: !options.no_blend,
-        synth: SynthConfig::default(),
+        synth: if options.upsampled { SynthConfig::upsampled(0, 0) } else { SynthConfig::default() },
         seed: options.seed,
         seam_band: options.seam_band,
     };
@@ -259,6 +265,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
         levels: c.levels,
         curve_amplitude: face.amplitude,
         blend: !options.no_blend,
+        upsampled: options.upsampled,
         seed: options.seed,
         regions: c.regions.clone(),
         seams: c.seams.clone(),
