@@ -186,7 +186,6 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
             }
         })
         .collect();
-    let (_, tone) = target_for(scene::OutputFormat::Png);
     let inputs = RenderInputs {
         vertices,
         indices: mesh.indices.clone(),
@@ -201,7 +200,8 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
             scene::Specular::Vertex => SpecularMode::Vertex,
         },
         exposure: 1.0,
-        tone,
+        // The output decides the curve (`target_for`); callers set it.
+        tone: ToneCurve::None,
         background: [0.0, 0.0, 0.0, 1.0],
     };
     Ok(Loaded { inputs, vertex_count: mesh.positions.len(), triangle_count: mesh.triangle_count(), warnings })

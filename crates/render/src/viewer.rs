@@ -143,7 +143,8 @@ impl App {
 
     fn draw(&mut self) -> Result<(), ViewerError> {
         let (w, h) = self.size;
-        if self.target.is_none() {
+        let fresh = self.target.is_none();
+        if fresh {
             self.target = Some(self.gpu.create_target(w, h, OutputFormat::Srgb8)?);
         }
         let toggles = self.toggles;
@@ -165,7 +166,10 @@ impl App {
         self.last_frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let (Some(surface), Some(window)) = (self.surface.as_mut(), self.window.as_ref()) else { return Ok(()) };
         let (Some(nw), Some(nh)) = (NonZeroU32::new(w), NonZeroU32::new(h)) else { return Ok(()) };
-        surface.resize(nw, nh).map_err(|e| ViewerError::Window(e.to_string()))?;
+        // The surface follows the target: both change only when the window is resized.
+        if fresh {
+            surface.resize(nw, nh).map_err(|e| ViewerError::Window(e.to_string()))?;
+        }
         let mut buffer = surface.buffer_mut().map_err(|e| ViewerError::Window(e.to_string()))?;
         for (dst, px) in buffer.iter_mut().zip(frame.srgb_bytes.chunks_exact(4)) {
             *dst = (u32::from(px[0]) << 16) | (u32::from(px[1]) << 8) | u32::from(px[2]);
