@@ -15,5 +15,6 @@ pub mod load;
 pub mod mesh;
 pub mod scene;
 pub mod shading;
+pub mod skin;
 #[cfg(feature = "viewer")]
 pub mod viewer;
