@@ -13,10 +13,12 @@
 //! larger than the device's `max_texture_dimension_2d` is an error naming the limit
 //! ([`GpuError::TextureTooLarge`]): the caller decides whether to downscale.
 
+use crate::passes::{self, Features, SkinSetup, Table};
 use crate::shading::{
     GreenAxis, LightKind, MAX_LIGHTS, MAX_LOBES, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
 };
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use wgpu::util::DeviceExt;
 
 /// What can go wrong on the GPU side.
@@ -159,9 +161,58 @@ pub struct PreparedScene {
     uniforms: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     vertices: wgpu::Buffer,
+    vertex_skin: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
     background: [f32; 4],
+    features: Features,
+    bounds: (glam::Vec3, f32),
+    shadow: Option<ShadowResources>,
+    tsd: Option<TsdResources>,
+}
+
+/// The key light's shadow map and the bind group its pass draws with (one that does not sample
+/// the map being written).
+struct ShadowResources {
+    depth: wgpu::Texture,
+    bind_group: wgpu::BindGroup,
+}
+
+/// Texture-space diffusion: the UV-space depth of the culling pre-pass, two light maps for the
+/// ping-pong blur, and the bind groups of each pass.
+struct TsdResources {
+    passes: u32,
+    reuse_below_px: f32,
+    depth: wgpu::Texture,
+    maps: [wgpu::Texture; 2],
+    /// The base bind group's layout, for the texture-space passes (no light map bound).
+    bind_group: wgpu::BindGroup,
+    /// Blur pass i reads `maps[i % 2]` and writes `maps[(i + 1) % 2]`.
+    blur_groups: Vec<wgpu::BindGroup>,
+    /// Whether a light map from an earlier frame exists (distance culling reuses it).
+    ready: AtomicBool,
+}
+
+impl PreparedScene {
+    /// The shader features this scene's base pass was compiled with.
+    pub fn features(&self) -> Features {
+        self.features
+    }
+
+    /// The passes [`Gpu::draw`] runs for this scene, in order.
+    pub fn pass_names(&self) -> Vec<String> {
+        let mut names = Vec::new();
+        if self.shadow.is_some() {
+            names.push("shadow map".to_string());
+        }
+        if let Some(tsd) = &self.tsd {
+            names.push("tsd back-face pre-pass".to_string());
+            names.push("tsd light map".to_string());
+            names.extend((0..tsd.passes).map(|i| format!("tsd blur {}", i + 1)));
+        }
+        names.push("base".to_string());
+        names
+    }
 }
 
 impl PreparedScene {
@@ -197,11 +248,31 @@ pub struct Gpu {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     shader: wgpu::ShaderModule,
-    pipelines: Mutex<Vec<(OutputFormat, wgpu::RenderPipeline)>>,
+    blur_layout: wgpu::BindGroupLayout,
+    blur_pipeline_layout: wgpu::PipelineLayout,
+    blur_shader: wgpu::ShaderModule,
+    pipelines: Mutex<Vec<(PipelineKey, wgpu::RenderPipeline)>>,
 }
 
-/// The WGSL source of the base pass.
-pub const BASE_WGSL: &str = include_str!("../shaders/base.wgsl");
+/// Which pipeline: the base pass for an output format and features, or one of the skin passes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PipelineKey {
+    Base(OutputFormat, Features),
+    Shadow,
+    TsdPrepass(Features),
+    LightMap(Features),
+    Blur,
+}
+
+/// Light maps are Rgba16Float: filterable everywhere, HDR irradiance, kernel size in alpha.
+const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The WGSL source of the base pass: the closed-form LUT fits, then base.wgsl.
+pub const BASE_WGSL: &str =
+    concat!(include_str!("../shaders/skin_fit.wgsl"), "\n", include_str!("../shaders/base.wgsl"));
+
+/// The WGSL source of texture-space diffusion's Poisson blur.
+pub const BLUR_WGSL: &str = include_str!("../shaders/tsd_blur.wgsl");
 
 /// One light as the shader reads it.
 #[repr(C)]
@@ -232,6 +303,23 @@ struct Globals {
     options: [u32; 4],
     lights: [LightRaw; MAX_LIGHTS],
     lobes: [LobeRaw; MAX_LOBES],
+    skin: [f32; 4],
+    blur: [f32; 4],
+    shadow_view_proj: [[f32; 4]; 4],
+    shadow: [f32; 4],
+    shadow_lut: [f32; 4],
+    sh: [[f32; 4]; 9],
+    zonal: [f32; 4],
+    tsd: [f32; 4],
+    tsd_kernel: [f32; 4],
+}
+
+/// The `Blur` uniform of tsd_blur.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BlurRaw {
+    params: [f32; 4],
+    flags: [u32; 4],
 }
 
 /// Bytes of the base pass's uniform block (camera, lights, lobes, options).
@@ -255,7 +343,9 @@ impl Gpu {
         let device_desc = wgpu::DeviceDescriptor {
             label: Some("skinkit device"),
             // Timestamps where the adapter has them (lavapipe does): per-pass GPU times.
-            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            // Float32 filtering where the adapter has it (lavapipe does): exact LUTs.
+            required_features: adapter.features()
+                & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::FLOAT32_FILTERABLE),
             required_limits: adapter.limits(),
             ..Default::default()
         };
@@ -271,7 +361,28 @@ impl Gpu {
             label: Some("base.wgsl"),
             source: wgpu::ShaderSource::Wgsl(BASE_WGSL.into()),
         });
-        Ok(Self { adapter, device, queue, layout, pipeline_layout, shader, pipelines: Mutex::new(Vec::new()) })
+        let blur_layout = blur_bind_group_layout(&device);
+        let blur_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tsd blur layout"),
+            bind_group_layouts: &[Some(&blur_layout)],
+            immediate_size: 0,
+        });
+        let blur_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("tsd_blur.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(BLUR_WGSL.into()),
+        });
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            layout,
+            pipeline_layout,
+            shader,
+            blur_layout,
+            blur_pipeline_layout,
+            blur_shader,
+            pipelines: Mutex::new(Vec::new()),
+        })
     }
 
     /// The adapter's name and backend, e.g. "llvmpipe (LLVM 19.1.7, 256 bits) (Vulkan)".
@@ -304,16 +415,49 @@ impl Gpu {
     /// Too many lights or lobes, textures above the device limit, an invalid mesh, or a wgpu
     /// validation error.
     pub fn prepare(&self, inputs: &RenderInputs) -> Result<PreparedScene> {
+        self.prepare_with(inputs, &SkinSetup::default())
+    }
+
+    /// [`Gpu::prepare`] with the skin effects of `skin`: its tables uploaded, its shadow map and
+    /// texture-space light maps allocated, its pipelines chosen.
+    ///
+    /// # Errors
+    /// As [`Gpu::prepare`], and a per-vertex skin array of the wrong length.
+    pub fn prepare_with(&self, inputs: &RenderInputs, skin: &SkinSetup) -> Result<PreparedScene> {
         self.check(inputs)?;
+        if !skin.vertex_skin.is_empty() && skin.vertex_skin.len() != inputs.vertices.len() {
+            return Err(GpuError::BadMesh {
+                vertices: inputs.vertices.len(),
+                indices: skin.vertex_skin.len(),
+                problem: "the per-vertex skin attributes do not match the vertex count",
+            });
+        }
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let globals = globals(inputs);
+        let bounds = passes::bounding_sphere(&inputs.vertices);
+        let globals = globals(inputs, skin);
         let uniforms = self.buffer(
             "base pass globals",
             bytemuck::bytes_of(&globals),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let bind_group = self.create_bind_group(inputs, &uniforms);
+        let textures = self.skin_textures(inputs, skin);
+        let shadow = skin.shadow.as_ref().map(|s| {
+            let depth = self.depth_texture("shadow map", s.map_size, s.map_size, true);
+            let bind_group = self.create_bind_group(&textures, &uniforms, None, None);
+            (depth, bind_group)
+        });
+        let tsd = skin.tsd.as_ref().map(|t| self.tsd_resources(t, &textures, &uniforms, shadow.as_ref().map(|s| &s.0)));
+        let light_map = match (&tsd, &textures.light_map) {
+            (Some(tsd), _) => Some(tsd.maps[(tsd.passes % 2) as usize].create_view(&Default::default())),
+            (None, Some(map)) => Some(map.create_view(&Default::default())),
+            (None, None) => None,
+        };
+        let shadow_view = shadow.as_ref().map(|s| s.0.create_view(&Default::default()));
+        let bind_group = self.create_bind_group(&textures, &uniforms, shadow_view.as_ref(), light_map.as_ref());
         let vertices = self.buffer("vertices", bytemuck::cast_slice(&inputs.vertices), wgpu::BufferUsages::VERTEX);
+        let skin_data: Vec<[f32; 2]> =
+            if skin.vertex_skin.is_empty() { vec![[0.0; 2]; inputs.vertices.len()] } else { skin.vertex_skin.clone() };
+        let vertex_skin = self.buffer("per-vertex skin", bytemuck::cast_slice(&skin_data), wgpu::BufferUsages::VERTEX);
         let indices = self.buffer("indices", bytemuck::cast_slice(&inputs.indices), wgpu::BufferUsages::INDEX);
         self.pop_scope(scope, "scene upload")?;
         Ok(PreparedScene {
@@ -321,10 +465,85 @@ impl Gpu {
             uniforms,
             bind_group,
             vertices,
+            vertex_skin,
             indices,
             index_count: inputs.indices.len() as u32,
             background: inputs.background,
+            features: skin.features,
+            bounds,
+            shadow: shadow.map(|(depth, bind_group)| ShadowResources { depth, bind_group }),
+            tsd,
         })
+    }
+
+    fn tsd_resources(
+        &self,
+        tsd: &passes::TsdSetup,
+        textures: &SceneTextures,
+        uniforms: &wgpu::Buffer,
+        shadow: Option<&wgpu::Texture>,
+    ) -> TsdResources {
+        let size = tsd.size;
+        let depth = self.depth_texture("tsd texture-space depth", size, size, false);
+        let map = |label| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent(size, size),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: LIGHT_MAP_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let maps = [map("tsd light map A"), map("tsd light map B")];
+        let shadow_view = shadow.map(|t| t.create_view(&Default::default()));
+        let bind_group = self.create_bind_group(textures, uniforms, shadow_view.as_ref(), None);
+        let sampler = |label, filter| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: filter,
+                min_filter: filter,
+                ..Default::default()
+            })
+        };
+        let nearest = sampler("tsd dilation sampler", wgpu::FilterMode::Nearest);
+        let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
+        let (a, b) = (tsd.kernel_scale[0], tsd.kernel_scale[1]);
+        let blur_groups = (0..tsd.passes)
+            .map(|i| {
+                let raw =
+                    BlurRaw { params: [1.0 / size as f32, 1.0 / size as f32, a, b], flags: [(i == 0) as u32, 0, 0, 0] };
+                let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
+                let view = maps[(i % 2) as usize].create_view(&Default::default());
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("tsd blur bind group"),
+                    layout: &self.blur_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::Sampler(if i == 0 { &nearest } else { &linear }),
+                        },
+                    ],
+                })
+            })
+            .collect();
+        TsdResources {
+            passes: tsd.passes,
+            reuse_below_px: tsd.reuse_below_px,
+            depth,
+            maps,
+            bind_group,
+            blur_groups,
+            ready: AtomicBool::new(false),
+        }
     }
 
     /// An offscreen colour target with its depth buffer.
@@ -350,55 +569,201 @@ impl Gpu {
     /// # Errors
     /// A wgpu validation error or a failed wait.
     pub fn draw(&self, scene: &PreparedScene, target: &Target) -> Result<()> {
-        self.encode_and_submit(scene, target, None)
+        self.encode_and_submit(scene, target, None).map(|_| ())
     }
 
-    /// [`Gpu::draw`] with GPU timestamps around the pass: the pass's GPU time, or `None` when the
-    /// adapter has no `TIMESTAMP_QUERY` feature.
+    /// [`Gpu::draw`] with GPU timestamps around every pass: the frame's GPU time (first pass's
+    /// start to the last one's end), or `None` when the adapter has no `TIMESTAMP_QUERY` feature.
     ///
     /// # Errors
     /// A wgpu validation error, a failed wait or a failed readback of the timestamps.
     pub fn draw_timed(&self, scene: &PreparedScene, target: &Target) -> Result<Option<std::time::Duration>> {
+        Ok(self.draw_timed_passes(scene, target)?.map(|passes| passes.iter().map(|(_, d)| *d).sum()))
+    }
+
+    /// [`Gpu::draw`] with each pass's GPU time, named as [`PreparedScene::pass_names`] names them;
+    /// `None` without `TIMESTAMP_QUERY`.
+    ///
+    /// # Errors
+    /// As [`Gpu::draw_timed`].
+    pub fn draw_timed_passes(
+        &self,
+        scene: &PreparedScene,
+        target: &Target,
+    ) -> Result<Option<Vec<(String, std::time::Duration)>>> {
         if !self.has_timestamps() {
             self.draw(scene, target)?;
             return Ok(None);
         }
-        let timer = PassTimer::new(&self.device);
-        self.encode_and_submit(scene, target, Some(&timer))?;
+        let names = scene.pass_names();
+        let timer = PassTimer::new(&self.device, names.len() as u32);
+        let ran = self.encode_and_submit(scene, target, Some(&timer))?;
         let bytes = self.read_buffer(&timer.readback)?;
-        let ticks: [u64; 2] = std::array::from_fn(|i| u64::from_le_bytes(bytes[8 * i..8 * i + 8].try_into().unwrap()));
-        let nanos = ticks[1].saturating_sub(ticks[0]) as f64 * self.queue.get_timestamp_period() as f64;
-        Ok(Some(std::time::Duration::from_nanos(nanos as u64)))
+        let tick = |i: usize| u64::from_le_bytes(bytes[8 * i..8 * i + 8].try_into().unwrap());
+        let period = self.queue.get_timestamp_period() as f64;
+        let passes = names
+            .into_iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let nanos = if ran[i] { tick(2 * i + 1).saturating_sub(tick(2 * i)) as f64 * period } else { 0.0 };
+                (name, std::time::Duration::from_nanos(nanos as u64))
+            })
+            .collect();
+        Ok(Some(passes))
     }
 
-    fn encode_and_submit(&self, scene: &PreparedScene, target: &Target, timer: Option<&PassTimer>) -> Result<()> {
+    /// Encodes every pass of `scene` (shadow map, TSD pre-pass, light map, blurs, base) and waits;
+    /// returns which of [`PreparedScene::pass_names`] ran (TSD culling may skip its passes).
+    fn encode_and_submit(
+        &self,
+        scene: &PreparedScene,
+        target: &Target,
+        timer: Option<&PassTimer>,
+    ) -> Result<Vec<bool>> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut globals = scene.globals;
         globals.options[0] = tone_code(target_curve(target.format, globals.options[0]));
         self.queue.write_buffer(&scene.uniforms, 0, bytemuck::bytes_of(&globals));
-        let pipeline = self.pipeline(target.format);
         let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("base pass encoder") });
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame encoder") });
+        let mut ran = Vec::new();
+        if let Some(shadow) = &scene.shadow {
+            let writes = timestamp_writes(timer, ran.len() as u32);
+            ran.push(true);
+            self.encode_shadow(&mut encoder, scene, shadow, writes);
+        }
+        if let Some(tsd) = &scene.tsd {
+            let camera = glam::Mat4::from_cols_array_2d(&scene.globals.view_proj);
+            let eye = glam::Vec3::from_slice(&scene.globals.eye[..3]);
+            let (centre, radius) = scene.bounds;
+            let visible = passes::sphere_in_frustum(camera, centre, radius);
+            let small = passes::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;
+            let reuse = small && tsd.ready.load(Ordering::Relaxed);
+            let run = visible && !reuse;
+            if run {
+                self.encode_tsd(&mut encoder, scene, tsd, timer, ran.len() as u32);
+                tsd.ready.store(true, Ordering::Relaxed);
+            }
+            ran.extend(std::iter::repeat_n(run, 2 + tsd.passes as usize));
+        }
         {
-            let timestamps = timer.map(|t| wgpu::RenderPassTimestampWrites {
-                query_set: &t.queries,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: Some(1),
-            });
-            let mut pass = begin_pass(&mut encoder, &target.color, &target.depth, scene.background, timestamps);
+            let writes = timestamp_writes(timer, ran.len() as u32);
+            ran.push(true);
+            let pipeline = self.pipeline(PipelineKey::Base(target.format, scene.features));
+            let mut pass = begin_pass(&mut encoder, &target.color, &target.depth, scene.background, writes);
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &scene.bind_group, &[]);
             pass.set_vertex_buffer(0, scene.vertices.slice(..));
+            pass.set_vertex_buffer(1, scene.vertex_skin.slice(..));
             pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..scene.index_count, 0, 0..1);
         }
         if let Some(t) = timer {
-            encoder.resolve_query_set(&t.queries, 0..2, &t.resolve, 0);
-            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.readback, 0, 16);
+            // Passes that were culled wrote no timestamps; resolving unwritten queries is
+            // allowed and gives zeros, which `ran` masks.
+            let count = 2 * ran.len() as u32;
+            encoder.resolve_query_set(&t.queries, 0..count, &t.resolve, 0);
+            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.readback, 0, 8 * count as u64);
         }
         self.queue.submit([encoder.finish()]);
-        self.pop_scope(scope, "the base pass")?;
-        self.wait()
+        self.pop_scope(scope, "the frame's passes")?;
+        self.wait()?;
+        Ok(ran)
+    }
+
+    fn encode_shadow(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        shadow: &ShadowResources,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let view = shadow.depth.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow map pass"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::Shadow));
+        pass.set_bind_group(0, &shadow.bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..scene.index_count, 0, 0..1);
+    }
+
+    /// The TSD passes: back-face pre-pass into the UV-space depth, the light map (depth "equal":
+    /// only texels the pre-pass kept), then the ping-pong blurs (the first dilates and covers
+    /// every texel; the later ones only the kept texels).
+    fn encode_tsd(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        tsd: &TsdResources,
+        timer: Option<&PassTimer>,
+        first_slot: u32,
+    ) {
+        let writes = |slot: u32| timestamp_writes(timer, slot);
+        let depth_view = tsd.depth.create_view(&Default::default());
+        let depth_attachment = |load| wgpu::RenderPassDepthStencilAttachment {
+            view: &depth_view,
+            depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        };
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("tsd back-face pre-pass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(depth_attachment(wgpu::LoadOp::Clear(1.0))),
+                timestamp_writes: writes(first_slot),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline(PipelineKey::TsdPrepass(scene.features)));
+            self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+        }
+        let clear_unwritten = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+        {
+            let view = tsd.maps[0].create_view(&Default::default());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("tsd light map"),
+                color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(clear_unwritten)))],
+                depth_stencil_attachment: Some(depth_attachment(wgpu::LoadOp::Load)),
+                timestamp_writes: writes(first_slot + 1),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline(PipelineKey::LightMap(scene.features)));
+            self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+        }
+        for (i, group) in tsd.blur_groups.iter().enumerate() {
+            let view = tsd.maps[(i + 1) % 2].create_view(&Default::default());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("tsd blur"),
+                color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(clear_unwritten)))],
+                depth_stencil_attachment: None,
+                timestamp_writes: writes(first_slot + 2 + i as u32),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline(PipelineKey::Blur));
+            pass.set_bind_group(0, group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+
+    fn draw_mesh(&self, pass: &mut wgpu::RenderPass<'_>, scene: &PreparedScene, group: &wgpu::BindGroup) {
+        pass.set_bind_group(0, group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_vertex_buffer(1, scene.vertex_skin.slice(..));
+        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..scene.index_count, 0, 0..1);
     }
 
     /// Read `target` back as linear f32 RGBA (and sRGB bytes for [`OutputFormat::Srgb8`]).
@@ -500,75 +865,293 @@ impl Gpu {
         )
     }
 
-    fn create_bind_group(&self, inputs: &RenderInputs, uniforms: &wgpu::Buffer) -> wgpu::BindGroup {
+    fn depth_texture(&self, label: &str, width: u32, height: u32, sampled: bool) -> wgpu::Texture {
+        let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        if sampled {
+            usage |= wgpu::TextureUsages::TEXTURE_BINDING;
+        }
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: extent(width, height),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage,
+            view_formats: &[],
+        })
+    }
+
+    /// An RGB table as an Rgba32Float texture without mips (sampled with `textureSampleLevel`).
+    fn upload_table(&self, label: &str, table: &Table) -> wgpu::Texture {
+        let data: Vec<f32> = table.texels.iter().flat_map(|t| [t[0], t[1], t[2], 1.0]).collect();
+        self.upload_rgba32(label, table.width, table.height, &data)
+    }
+
+    fn upload_rgba32(&self, label: &str, width: u32, height: u32, data: &[f32]) -> wgpu::Texture {
+        let format = self.table_format();
+        let halves: Vec<u16>;
+        let bytes: &[u8] = if format == TABLE_FORMAT {
+            bytemuck::cast_slice(data)
+        } else {
+            halves = data.iter().map(|&v| half::f16::from_f32(v).to_bits()).collect();
+            bytemuck::cast_slice(&halves)
+        };
+        self.device.create_texture_with_data(
+            &self.queue,
+            &wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent(width, height),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytes,
+        )
+    }
+
+    /// Rgba32Float for tables where the device filters it, else Rgba16Float.
+    pub fn table_format(&self) -> wgpu::TextureFormat {
+        if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
+            TABLE_FORMAT
+        } else {
+            wgpu::TextureFormat::Rgba16Float
+        }
+    }
+
+    /// Every texture and sampler the base bind group holds; tables a scene does not read are
+    /// 1x1 placeholders (never sampled: their shader branches are compiled out).
+    fn skin_textures(&self, inputs: &RenderInputs, skin: &SkinSetup) -> SceneTextures {
+        let placeholder = || self.upload_rgba32("unused table", 1, 1, &[0.0, 0.0, 0.0, 1.0]);
+        let table = |label, t: &Option<Table>| t.as_ref().map_or_else(placeholder, |t| self.upload_table(label, t));
+        let clamp_sampler = |label, filter, lod_min_clamp| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: filter,
+                min_filter: filter,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                lod_min_clamp,
+                ..Default::default()
+            })
+        };
+        let repeat_sampler = |label, lod_min_clamp: f32| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: wgpu::AddressMode::Repeat,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                lod_min_clamp,
+                ..Default::default()
+            })
+        };
         let normal = self.upload_texture("normal map", &inputs.normal_map);
-        let albedo = self.upload_texture("albedo", &inputs.albedo);
-        let sampler = self.device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("map sampler"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
-        let normal_view = normal.create_view(&Default::default());
-        let albedo_view = albedo.create_view(&Default::default());
+        let blur_mip = skin.blur_mip.clamp(0.0, (normal.mip_level_count() - 1) as f32);
+        SceneTextures {
+            normal,
+            albedo: self.upload_texture("albedo", &inputs.albedo),
+            diffuse_lut: table("diffuse LUT", &skin.diffuse_lut),
+            shadow_lut: table("shadow LUT", &skin.shadow_lut),
+            zonal: table("zonal table", &skin.zonal),
+            kernel: match skin.tsd.as_ref().and_then(|t| t.kernel_map.as_ref()) {
+                Some(map) => self.upload_texture("tsd kernel map", map),
+                None => placeholder(),
+            },
+            light_map: skin
+                .light_map
+                .as_ref()
+                .filter(|_| skin.tsd.is_none())
+                .map(|m| self.upload_texture("light map", m)),
+            shadow_placeholder: self.depth_texture("unused shadow map", 1, 1, true),
+            map_sampler: repeat_sampler("map sampler", 0.0),
+            blurred_sampler: repeat_sampler("blurred normal sampler", blur_mip),
+            lut_sampler: clamp_sampler("table sampler", wgpu::FilterMode::Linear, 0.0),
+            shadow_sampler: self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow compare sampler"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Nearest,
+                min_filter: wgpu::FilterMode::Nearest,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+            light_map_placeholder: placeholder(),
+        }
+    }
+
+    /// The base bind group; `shadow` and `light_map` are left as placeholders when `None` (the
+    /// shadow pass must not sample the map it writes, nor the TSD passes the map they write).
+    fn create_bind_group(
+        &self,
+        textures: &SceneTextures,
+        uniforms: &wgpu::Buffer,
+        shadow: Option<&wgpu::TextureView>,
+        light_map: Option<&wgpu::TextureView>,
+    ) -> wgpu::BindGroup {
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let (normal, albedo) = (view(&textures.normal), view(&textures.albedo));
+        let (diffuse_lut, shadow_lut, zonal, kernel) =
+            (view(&textures.diffuse_lut), view(&textures.shadow_lut), view(&textures.zonal), view(&textures.kernel));
+        let shadow_placeholder = view(&textures.shadow_placeholder);
+        let light_map_placeholder = view(&textures.light_map_placeholder);
+        let given_light_map = textures.light_map.as_ref().map(view);
+        let light_map = light_map.or(given_light_map.as_ref()).unwrap_or(&light_map_placeholder);
+        let shadow = shadow.unwrap_or(&shadow_placeholder);
+        let tex = |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
+        let smp =
+            |binding, sampler| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::Sampler(sampler) };
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("base pass bind group"),
             layout: &self.layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&normal_view) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&albedo_view) },
-                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::Sampler(&sampler) },
+                tex(1, &normal),
+                tex(2, &albedo),
+                smp(3, &textures.map_sampler),
+                tex(4, &diffuse_lut),
+                tex(5, &shadow_lut),
+                tex(6, &zonal),
+                tex(7, shadow),
+                smp(8, &textures.shadow_sampler),
+                tex(9, light_map),
+                smp(10, &textures.lut_sampler),
+                smp(11, &textures.blurred_sampler),
+                tex(12, &kernel),
             ],
         })
     }
 
-    /// The base pipeline for `format`, built once.
-    fn pipeline(&self, format: OutputFormat) -> wgpu::RenderPipeline {
+    /// The pipeline for `key`, built once.
+    fn pipeline(&self, key: PipelineKey) -> wgpu::RenderPipeline {
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, p)) = cache.iter().find(|(f, _)| *f == format) {
+        if let Some((_, p)) = cache.iter().find(|(k, _)| *k == key) {
             return p.clone();
         }
-        let pipeline = self.build_pipeline(format);
-        cache.push((format, pipeline.clone()));
+        let pipeline = self.build_pipeline(key);
+        cache.push((key, pipeline.clone()));
         pipeline
     }
 
-    fn build_pipeline(&self, format: OutputFormat) -> wgpu::RenderPipeline {
+    fn build_pipeline(&self, key: PipelineKey) -> wgpu::RenderPipeline {
+        if key == PipelineKey::Blur {
+            return self.build_blur_pipeline();
+        }
         let attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2
         ];
+        let skin_attributes = wgpu::vertex_attr_array![4 => Float32x2];
+        let position_only =
+            [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
+        let stride = std::mem::size_of::<Vertex>() as u64;
+        let step_mode = wgpu::VertexStepMode::Vertex;
+        let full_buffers = [
+            Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode, attributes: &attributes }),
+            Some(wgpu::VertexBufferLayout { array_stride: 8, step_mode, attributes: &skin_attributes }),
+        ];
+        let shadow_buffers =
+            [Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode, attributes: &position_only })];
+        let features = match key {
+            PipelineKey::Base(_, f) | PipelineKey::TsdPrepass(f) | PipelineKey::LightMap(f) => f,
+            PipelineKey::Shadow | PipelineKey::Blur => Features::default(),
+        };
+        let constants = features.constants();
+        let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+        let depth = |write: bool, compare| {
+            Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(write),
+                depth_compare: Some(compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            })
+        };
+        let (label, vertex_entry, buffers, fragment, target, depth_stencil): (_, _, &[_], _, _, _) = match key {
+            PipelineKey::Base(format, _) => (
+                "base pass pipeline",
+                "vs_main",
+                &full_buffers,
+                Some("fs_main"),
+                Some(format.texture_format()),
+                depth(true, wgpu::CompareFunction::Less),
+            ),
+            PipelineKey::Shadow => (
+                "shadow map pipeline",
+                "vs_shadow",
+                &shadow_buffers,
+                None,
+                None,
+                depth(true, wgpu::CompareFunction::Less),
+            ),
+            PipelineKey::TsdPrepass(_) => (
+                "tsd back-face pre-pass pipeline",
+                "vs_texture_space",
+                &full_buffers,
+                Some("fs_tsd_prepass"),
+                None,
+                depth(true, wgpu::CompareFunction::Always),
+            ),
+            PipelineKey::LightMap(_) => (
+                "tsd light map pipeline",
+                "vs_texture_space",
+                &full_buffers,
+                Some("fs_light_map"),
+                Some(LIGHT_MAP_FORMAT),
+                depth(false, wgpu::CompareFunction::Equal),
+            ),
+            PipelineKey::Blur => unreachable!("built above"),
+        };
+        let targets =
+            [target.map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let targets: &[Option<wgpu::ColorTargetState>] = if target.is_some() { &targets } else { &[] };
         self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("base pass pipeline"),
+            label: Some(label),
             layout: Some(&self.pipeline_layout),
             vertex: wgpu::VertexState {
                 module: &self.shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<Vertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                })],
+                entry_point: Some(vertex_entry),
+                compilation_options: options.clone(),
+                buffers,
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
+            depth_stencil,
+            multisample: Default::default(),
+            fragment: fragment.map(|entry| wgpu::FragmentState {
+                module: &self.shader,
+                entry_point: Some(entry),
+                compilation_options: options.clone(),
+                targets,
             }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+
+    fn build_blur_pipeline(&self) -> wgpu::RenderPipeline {
+        self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tsd blur pipeline"),
+            layout: Some(&self.blur_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &self.blur_shader,
+                entry_point: Some("vs_full_screen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
-                module: &self.shader,
-                entry_point: Some("fs_main"),
+                module: &self.blur_shader,
+                entry_point: Some("fs_blur"),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
-                    format: format.texture_format(),
+                    format: LIGHT_MAP_FORMAT,
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
                 })],
@@ -625,7 +1208,7 @@ impl Gpu {
     }
 }
 
-/// Two timestamps around one pass, resolved and copied to a mappable buffer.
+/// Two timestamps around each pass, resolved and copied to a mappable buffer.
 struct PassTimer {
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,
@@ -633,24 +1216,64 @@ struct PassTimer {
 }
 
 impl PassTimer {
-    fn new(device: &wgpu::Device) -> Self {
+    fn new(device: &wgpu::Device, passes: u32) -> Self {
+        let count = 2 * passes.max(1);
         let buffer = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: 16,
+                size: 8 * count as u64,
                 usage,
                 mapped_at_creation: false,
             })
         };
         Self {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("base pass timestamps"),
+                label: Some("pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count,
             }),
             resolve: buffer("timestamp resolve", wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC),
             readback: buffer("timestamp readback", wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
         }
+    }
+}
+
+/// The timestamp writes of pass `slot` (queries 2 slot and 2 slot + 1).
+fn timestamp_writes(timer: Option<&PassTimer>, slot: u32) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    timer.map(|t| wgpu::RenderPassTimestampWrites {
+        query_set: &t.queries,
+        beginning_of_pass_write_index: Some(2 * slot),
+        end_of_pass_write_index: Some(2 * slot + 1),
+    })
+}
+
+/// The textures and samplers of a scene's bind groups.
+struct SceneTextures {
+    normal: wgpu::Texture,
+    albedo: wgpu::Texture,
+    diffuse_lut: wgpu::Texture,
+    shadow_lut: wgpu::Texture,
+    zonal: wgpu::Texture,
+    kernel: wgpu::Texture,
+    light_map: Option<wgpu::Texture>,
+    shadow_placeholder: wgpu::Texture,
+    light_map_placeholder: wgpu::Texture,
+    map_sampler: wgpu::Sampler,
+    blurred_sampler: wgpu::Sampler,
+    lut_sampler: wgpu::Sampler,
+    shadow_sampler: wgpu::Sampler,
+}
+
+/// Tables (LUTs, zonal factors) are Rgba32Float where the device filters it (lavapipe and desktop
+/// adapters, with `FLOAT32_FILTERABLE`), Rgba16Float elsewhere ([`Gpu::table_format`]).
+const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+fn colour_attachment(view: &wgpu::TextureView, load: wgpu::LoadOp<wgpu::Color>) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
     }
 }
 
@@ -707,14 +1330,21 @@ fn check_mesh(vertices: &[Vertex], indices: &[u32]) -> Result<()> {
 
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let both = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
-    let texture = |binding| wgpu::BindGroupLayoutEntry {
+    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
         ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            sample_type,
             view_dimension: wgpu::TextureViewDimension::D2,
             multisampled: false,
         },
+        count: None,
+    };
+    let float = wgpu::TextureSampleType::Float { filterable: true };
+    let sampler = |binding, kind| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(kind),
         count: None,
     };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -730,10 +1360,48 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 },
                 count: None,
             },
-            texture(1),
-            texture(2),
+            texture(1, float),
+            texture(2, float),
+            sampler(3, wgpu::SamplerBindingType::Filtering),
+            texture(4, float),
+            texture(5, float),
+            texture(6, float),
+            texture(7, wgpu::TextureSampleType::Depth),
+            sampler(8, wgpu::SamplerBindingType::Comparison),
+            texture(9, float),
+            sampler(10, wgpu::SamplerBindingType::Filtering),
+            sampler(11, wgpu::SamplerBindingType::Filtering),
+            texture(12, float),
+        ],
+    })
+}
+
+fn blur_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("tsd blur bind group layout"),
+        entries: &[
             wgpu::BindGroupLayoutEntry {
-                binding: 3,
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
                 visibility: wgpu::ShaderStages::FRAGMENT,
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 count: None,
@@ -787,8 +1455,8 @@ fn light_raw(light: &crate::shading::Light) -> LightRaw {
     LightRaw { vector, radiance: vec4(light.color * light.intensity, 0.0) }
 }
 
-/// The uniform block for `inputs`.
-fn globals(inputs: &RenderInputs) -> Globals {
+/// The uniform block for `inputs` with the skin settings of `skin`.
+fn globals(inputs: &RenderInputs, skin: &SkinSetup) -> Globals {
     let mut lights = [LightRaw { vector: [0.0; 4], radiance: [0.0; 4] }; MAX_LIGHTS];
     for (raw, light) in lights.iter_mut().zip(&inputs.lights) {
         *raw = light_raw(light);
@@ -796,6 +1464,31 @@ fn globals(inputs: &RenderInputs) -> Globals {
     let mut lobes = [LobeRaw { cx: [0.0; 4], cy: [0.0; 4], cz: [0.0; 4], n: [0.0; 4] }; MAX_LOBES];
     for (raw, lobe) in lobes.iter_mut().zip(&inputs.brdf.lobes) {
         *raw = LobeRaw { cx: vec4(lobe.cx, 0.0), cy: vec4(lobe.cy, 0.0), cz: vec4(lobe.cz, 0.0), n: vec4(lobe.n, 0.0) };
+    }
+    let map = |t: &Option<Table>| t.as_ref().map_or((0.0, 0.5), |t| (t.scale, t.offset));
+    let (lut_scale, lut_offset) = map(&skin.diffuse_lut);
+    let (shadow_scale, shadow_offset) = map(&skin.shadow_lut);
+    let (zonal_scale, zonal_offset) = map(&skin.zonal);
+    let key = skin.shadow.as_ref().map_or(MAX_LIGHTS as f32, |s| s.light as f32);
+    let (shadow_view_proj, shadow, new_penumbra) = match &skin.shadow {
+        Some(s) => (s.view_proj, [1.0 / s.map_size.max(1) as f32, s.filter as f32, s.texel, s.bias], s.new_penumbra),
+        None => (glam::Mat4::IDENTITY, [1.0, 1.0, 0.0, 0.0], 1.0),
+    };
+    let (tsd, tsd_kernel) = match &skin.tsd {
+        Some(t) => {
+            let from_map = t.kernel_map.is_some();
+            let kernel = if from_map {
+                [t.kernel_scale[0], t.kernel_scale[1], 1.0, passes::MAX_KERNEL_TEXELS]
+            } else {
+                [passes::MAX_KERNEL_TEXELS, 0.0, 0.0, passes::MAX_KERNEL_TEXELS]
+            };
+            ([t.backface_bias, t.size as f32, t.kernel_mm, t.curvature_gain], kernel)
+        }
+        None => ([0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
+    };
+    let mut sh = [[0.0f32; 4]; 9];
+    for (raw, c) in sh.iter_mut().zip(&skin.sh) {
+        *raw = [c[0], c[1], c[2], 0.0];
     }
     Globals {
         view_proj: inputs.camera.view_proj.to_cols_array_2d(),
@@ -810,6 +1503,15 @@ fn globals(inputs: &RenderInputs) -> Globals {
         options: [tone_code(inputs.tone), 0, 0, 0],
         lights,
         lobes,
+        skin: [skin.curvature_scale, skin.mm_per_unit, lut_scale, lut_offset],
+        blur: vec4(skin.normal_blur, key),
+        shadow_view_proj: shadow_view_proj.to_cols_array_2d(),
+        shadow,
+        shadow_lut: [shadow_scale, shadow_offset, new_penumbra, 0.0],
+        sh,
+        zonal: [zonal_scale, zonal_offset, 0.0, 0.0],
+        tsd,
+        tsd_kernel,
     }
 }
 

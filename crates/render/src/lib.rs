@@ -13,6 +13,7 @@ pub mod gpu;
 pub mod head;
 pub mod load;
 pub mod mesh;
+pub mod passes;
 pub mod scene;
 pub mod shading;
 pub mod skin;

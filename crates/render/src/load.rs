@@ -28,8 +28,10 @@ use crate::brdf::{self, Lafortune};
 use crate::frames::{self, FrameMethod};
 use crate::gpu::OutputFormat as TargetFormat;
 use crate::mesh::{Mesh, MeshError};
+use crate::passes::{DiffuseMode, Features};
 use crate::scene::{self, Albedo, Scene};
 use crate::shading::{self, GreenAxis, MAX_LIGHTS, MAX_LOBES, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex};
+use crate::skin::options::{Analytic, CurvatureSource};
 
 /// Errors from turning a scene into render inputs.
 #[derive(Debug, thiserror::Error)]
@@ -169,21 +171,13 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
     let lights = scene
         .lights
         .iter()
-        .enumerate()
-        .map(|(i, light)| {
-            if light.shadows {
-                warnings.push(format!(
-                    "light[{i}] asks for shadows: the base pass draws it unshadowed (shadow maps come with the scattering effects)"
-                ));
-            }
-            shading::Light {
-                kind: match light.kind {
-                    scene::LightKind::Directional { direction } => shading::LightKind::Directional { toward: direction },
-                    scene::LightKind::Point { position } => shading::LightKind::Point { position },
-                },
-                color: light.colour,
-                intensity: light.intensity,
-            }
+        .map(|light| shading::Light {
+            kind: match light.kind {
+                scene::LightKind::Directional { direction } => shading::LightKind::Directional { toward: direction },
+                scene::LightKind::Point { position } => shading::LightKind::Point { position },
+            },
+            color: light.colour,
+            intensity: light.intensity,
         })
         .collect();
     let inputs = RenderInputs {
@@ -270,6 +264,8 @@ pub struct Plan {
     pub passes: Vec<Pass>,
     /// Every resource, once.
     pub resources: Vec<Resource>,
+    /// What was asked for and not built, and why.
+    pub notes: Vec<String>,
 }
 
 impl Plan {
@@ -293,25 +289,99 @@ fn mipped_bytes(width: u32, height: u32) -> (u64, u32) {
     }
 }
 
+/// What a scene's effects and lights decide: the base pass's features, which light casts the
+/// shadow map, which tables are built and which per-vertex data is computed. [`plan`] lists it
+/// for people; [`crate::skin::setup`] builds it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Graph {
+    /// The base pass's shader features.
+    pub features: Features,
+    /// The light whose shadow map is drawn, if any.
+    pub key_light: Option<usize>,
+    /// Whether the diffuse LUT is built (read by the base pass).
+    pub diffuse_lut: bool,
+    /// Whether the shadow-scattering LUT is built.
+    pub shadow_lut: bool,
+    /// Whether the skin's zonal table is built (SH ambient with a pre-integrated diffuse).
+    pub zonal_table: bool,
+    /// Whether per-vertex curvature is computed from the mesh.
+    pub vertex_curvature: bool,
+    /// Whether texture-space diffusion runs.
+    pub tsd: bool,
+    /// Why something asked for is not built (no shadow-casting light, extra shadow lights).
+    pub notes: Vec<String>,
+}
+
+/// The pass graph of `scene`: only what its effects and lights ask for.
+pub fn graph(scene: &Scene) -> Graph {
+    let mut notes = Vec::new();
+    let pre = &scene.skin.preintegrated;
+    let diffuse = if scene.has_effect("preintegrated") {
+        DiffuseMode::Lut
+    } else if scene.has_effect("preintegrated-analytic") {
+        match pre.analytic {
+            Analytic::Own => DiffuseMode::OwnFit,
+            Analytic::Blog => DiffuseMode::Blog,
+        }
+    } else if scene.has_effect("tsd") {
+        DiffuseMode::LightMap
+    } else {
+        DiffuseMode::Lambert
+    };
+    let casters: Vec<usize> = scene.lights.iter().enumerate().filter(|(_, l)| l.shadows).map(|(i, _)| i).collect();
+    let key_light = match (scene.has_effect("shadows"), casters.first()) {
+        (true, Some(&key)) => {
+            for &other in &casters[1..] {
+                notes.push(format!("light[{other}] asks for shadows: one shadow map is drawn, for light[{key}]"));
+            }
+            Some(key)
+        }
+        (true, None) => {
+            notes.push("effect `shadows`: no light has `shadows = true`, so no shadow map is drawn".into());
+            None
+        }
+        (false, Some(_)) => {
+            for &i in &casters {
+                notes.push(format!(
+                    "light[{i}] asks for shadows but `effects` does not list `shadows`: drawn unshadowed"
+                ));
+            }
+            None
+        }
+        (false, None) => None,
+    };
+    let shadows = key_light.is_some();
+    let shadow_scattering = shadows && scene.has_effect("shadow-scattering");
+    let sh_ambient = scene.has_effect("sh-ambient");
+    let derivative = diffuse.reads_curvature() && pre.curvature == CurvatureSource::Derivative;
+    let zonal_table = sh_ambient && diffuse.reads_curvature();
+    let tsd = diffuse == DiffuseMode::LightMap;
+    let vertex_curvature = (diffuse.reads_curvature() && !derivative) || zonal_table || tsd;
+    Graph {
+        features: Features { diffuse, derivative_curvature: derivative, sh_ambient, shadows, shadow_scattering },
+        key_light,
+        diffuse_lut: diffuse == DiffuseMode::Lut,
+        shadow_lut: shadow_scattering,
+        zonal_table,
+        vertex_curvature,
+        tsd,
+        notes,
+    }
+}
+
 /// The plan for `scene` drawn at `width x height` into `format`, from the loaded inputs.
 ///
 /// # Errors
-/// An effect the renderer cannot build yet (named).
+/// None today; kept fallible for effects a device cannot build.
 pub fn plan(
     scene: &Scene,
-    scene_file: &Path,
+    _scene_file: &Path,
     loaded: &Loaded,
     width: u32,
     height: u32,
     format: TargetFormat,
 ) -> Result<Plan> {
-    if let Some(effect) = scene.effects.first() {
-        return Err(LoadError::Unsupported {
-            file: scene_file.display().to_string(),
-            field: "effects".into(),
-            reason: format!("`{effect}` is not built by this renderer yet: the base pass has no scattering effects"),
-        });
-    }
+    let graph = graph(scene);
     let inputs = &loaded.inputs;
     let texture = |name: &str, t: &Texture| {
         let (bytes, levels) = mipped_bytes(t.width, t.height);
@@ -321,13 +391,18 @@ pub fn plan(
             bytes,
         }
     };
+    let table = |name: &str, w: u32, h: u32, what: &str| Resource {
+        name: name.into(),
+        detail: format!("{w}x{h} Rgba32Float, {what}; built on the CPU, cached by its parameters"),
+        bytes: 16 * w as u64 * h as u64,
+    };
     let (target_name, bytes_per_pixel) = match format {
         TargetFormat::Hdr16 => ("Rgba16Float", 8),
         TargetFormat::Hdr32 => ("Rgba32Float", 16),
         TargetFormat::Srgb8 => ("Rgba8UnormSrgb", 4),
     };
     let pixels = width as u64 * height as u64;
-    let resources = vec![
+    let mut resources = vec![
         Resource {
             name: "vertices".into(),
             detail: format!("{} vertices x 48 B (position, normal, tangent, uv)", inputs.vertices.len()),
@@ -345,25 +420,152 @@ pub fn plan(
         },
         texture("normal map", &inputs.normal_map),
         texture("albedo", &inputs.albedo),
-        Resource {
-            name: "colour target".into(),
-            detail: format!("{width}x{height} {target_name}"),
-            bytes: bytes_per_pixel * pixels,
-        },
-        Resource { name: "depth".into(), detail: format!("{width}x{height} Depth32Float"), bytes: 4 * pixels },
     ];
+    let mut base_reads: Vec<String> =
+        ["vertices", "indices", "uniforms", "normal map", "albedo"].map(String::from).to_vec();
+    let mut passes = Vec::new();
+    let skin = &scene.skin;
+    if graph.vertex_curvature {
+        resources.push(Resource {
+            name: "per-vertex curvature".into(),
+            detail: format!(
+                "{} vertices x 8 B (1/r in 1/mm from the mesh's mean curvature, mm per UV unit); computed on the CPU",
+                inputs.vertices.len()
+            ),
+            bytes: 8 * inputs.vertices.len() as u64,
+        });
+        base_reads.push("per-vertex curvature".into());
+    }
+    if graph.diffuse_lut {
+        let [w, h] = skin.preintegrated.lut_size;
+        let what = format!(
+            "pre-integrated diffuse D(N.L, 1/r), {} normalisation, {} ring",
+            skin.preintegrated.normalisation.name(),
+            skin.preintegrated.domain.name()
+        );
+        resources.push(table("diffuse LUT", w, h, &what));
+        base_reads.push("diffuse LUT".into());
+    }
+    if graph.zonal_table {
+        resources.push(table("zonal table", 64, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
+        base_reads.push("zonal table".into());
+    }
+    if let Some(key) = graph.key_light {
+        let n = skin.shadow.map_size;
+        resources.push(Resource {
+            name: "shadow map".into(),
+            detail: format!("{n}x{n} Depth32Float, light[{key}], {0}x{0} box filter", skin.shadow.filter),
+            bytes: 4 * n as u64 * n as u64,
+        });
+        passes.push(Pass {
+            name: "shadow map".into(),
+            what: format!("depth of the mesh seen from light[{key}], bounding its sphere tightly"),
+            reads: ["vertices", "indices", "uniforms"].map(String::from).to_vec(),
+            writes: vec!["shadow map".into()],
+        });
+        base_reads.push("shadow map".into());
+    }
+    if graph.shadow_lut {
+        resources.push(table("shadow LUT", 64, 64, "shadow scattering P_S(s, w), box-filter penumbra"));
+        base_reads.push("shadow LUT".into());
+    }
+    if graph.tsd {
+        let n = skin.tsd.size;
+        let map_bytes = 8 * n as u64 * n as u64;
+        resources.push(Resource {
+            name: "tsd depth".into(),
+            detail: format!("{n}x{n} Depth32Float in texture space (culling pre-pass)"),
+            bytes: 4 * n as u64 * n as u64,
+        });
+        for name in ["light map A", "light map B"] {
+            resources.push(Resource {
+                name: name.into(),
+                detail: format!("{n}x{n} Rgba16Float: diffuse irradiance, kernel size in alpha"),
+                bytes: map_bytes,
+            });
+        }
+        let mut light_reads: Vec<String> =
+            ["vertices", "indices", "uniforms", "normal map", "per-vertex curvature", "tsd depth"]
+                .map(String::from)
+                .to_vec();
+        if graph.key_light.is_some() {
+            light_reads.push("shadow map".into());
+        }
+        if let Some(path) = &skin.tsd.kernel_map {
+            resources.push(Resource {
+                name: "kernel map".into(),
+                detail: format!("{} (per-texel blur kernel size)", path.display()),
+                bytes: 0,
+            });
+            light_reads.push("kernel map".into());
+        }
+        passes.push(Pass {
+            name: "tsd back-face pre-pass".into(),
+            what: format!(
+                "mesh at its UVs; keeps texels with N.V > -{} (frustum culling skips every TSD pass when the head is \
+                 off screen)",
+                skin.tsd.backface_bias
+            ),
+            reads: ["vertices", "indices", "uniforms"].map(String::from).to_vec(),
+            writes: vec!["tsd depth".into()],
+        });
+        passes.push(Pass {
+            name: "tsd light map".into(),
+            what: "diffuse irradiance of every light into texture space (key light through the shadow map), \
+                   kernel size in alpha"
+                .into(),
+            reads: light_reads,
+            writes: vec!["light map A".into()],
+        });
+        for i in 0..skin.tsd.passes {
+            let (from, to) = if i % 2 == 0 { ("light map A", "light map B") } else { ("light map B", "light map A") };
+            let what = if i == 0 { "12-tap Poisson blur, dilating the UV borders" } else { "12-tap Poisson blur" };
+            passes.push(Pass {
+                name: format!("tsd blur {}", i + 1),
+                what: what.into(),
+                reads: vec![from.into()],
+                writes: vec![to.into()],
+            });
+        }
+        let last = if skin.tsd.passes % 2 == 0 { "light map A" } else { "light map B" };
+        base_reads.push(last.into());
+    }
+    resources.push(Resource {
+        name: "colour target".into(),
+        detail: format!("{width}x{height} {target_name}"),
+        bytes: bytes_per_pixel * pixels,
+    });
+    resources.push(Resource {
+        name: "depth".into(),
+        detail: format!("{width}x{height} Depth32Float"),
+        bytes: 4 * pixels,
+    });
     let specular = match inputs.specular {
         SpecularMode::Pixel => "per pixel",
         SpecularMode::Vertex => "per vertex (the paper's look)",
     };
-    let passes = vec![Pass {
+    passes.push(Pass {
         name: "base".into(),
         what: format!(
-            "texture-space bump mapping (light and view vectors into each vertex's frame, renormalised per pixel) \
-             and the Lafortune BRDF, lobes {specular}"
+            "texture-space bump mapping and the Lafortune BRDF, lobes {specular}; diffuse: {}{}{}{}",
+            describe_diffuse(&graph.features),
+            if graph.features.shadows { "; key light shadowed" } else { "" },
+            if graph.features.shadow_scattering { " with shadow scattering" } else { "" },
+            if graph.features.sh_ambient { "; order-2 SH ambient" } else { "" },
         ),
-        reads: ["vertices", "indices", "uniforms", "normal map", "albedo"].map(String::from).to_vec(),
+        reads: base_reads,
         writes: ["colour target", "depth"].map(String::from).to_vec(),
-    }];
-    Ok(Plan { passes, resources })
+    });
+    Ok(Plan { passes, resources, notes: graph.notes })
+}
+
+fn describe_diffuse(features: &Features) -> &'static str {
+    match (features.diffuse, features.derivative_curvature) {
+        (DiffuseMode::Lambert, _) => "Lambert",
+        (DiffuseMode::Lut, false) => "pre-integrated LUT, per-vertex curvature, per-channel normals",
+        (DiffuseMode::Lut, true) => "pre-integrated LUT, derivative curvature, per-channel normals",
+        (DiffuseMode::Blog, _) => "the blog's closed-form pre-integrated curves",
+        (DiffuseMode::OwnFit, _) => "our closed-form fit of the pre-integrated LUT",
+        (DiffuseMode::LightMap, _) => "the blurred texture-space light map x albedo",
+    }
 }

@@ -47,6 +47,7 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use crate::frames::FrameMethod;
+use crate::skin::options::{RawEnvironment, RawPreintegrated, RawShadow, RawSkin, RawTsd, SkinOptions};
 
 /// Effect names a scene may list. The renderer decides what each one builds; the scattering
 /// issue owns their meaning.
@@ -102,6 +103,15 @@ pub struct Scene {
     pub output: Output,
     /// Effect names, each from [`KNOWN_EFFECTS`], in file order, without repeats.
     pub effects: Vec<String>,
+    /// The scattering tables (`[preintegrated]`, `[environment]`, `[shadow]`, `[tsd]`).
+    pub skin: SkinOptions,
+}
+
+impl Scene {
+    /// Whether the scene lists `effect`.
+    pub fn has_effect(&self, effect: &str) -> bool {
+        self.effects.iter().any(|e| e == effect)
+    }
 }
 
 /// Albedo: a map (linear after decoding) or a constant linear RGB.
@@ -312,6 +322,10 @@ struct RawScene {
     output: Option<RawOutput>,
     #[serde(default)]
     effects: Vec<String>,
+    preintegrated: Option<RawPreintegrated>,
+    environment: Option<RawEnvironment>,
+    shadow: Option<RawShadow>,
+    tsd: Option<RawTsd>,
 }
 
 #[derive(Deserialize)]
@@ -392,6 +406,16 @@ struct Checker<'a> {
 impl Checker<'_> {
     fn scene(&self, raw: RawScene) -> Result<Scene> {
         let mm_per_unit = self.positive("mm_per_unit", raw.mm_per_unit)?;
+        let effects = self.effects(&raw.effects)?;
+        let skin = RawSkin {
+            preintegrated: raw.preintegrated,
+            environment: raw.environment,
+            shadow: raw.shadow,
+            tsd: raw.tsd,
+        }
+        .check(self.base)
+        .map_err(|(field, reason)| self.invalid(field, reason))?;
+        self.effect_rules(&effects, &skin)?;
         Ok(Scene {
             mesh: self.base.join(&raw.mesh),
             mm_per_unit,
@@ -406,8 +430,27 @@ impl Checker<'_> {
             lights: self.lights(&raw.light)?,
             cameras: self.cameras(&raw.camera)?,
             output: self.output(raw.output)?,
-            effects: self.effects(&raw.effects)?,
+            effects,
+            skin,
         })
+    }
+
+    /// Effects that contradict each other or lack what they read.
+    fn effect_rules(&self, effects: &[String], skin: &SkinOptions) -> Result<()> {
+        let has = |e: &str| effects.iter().any(|x| x == e);
+        let diffuse: Vec<&str> =
+            ["preintegrated", "preintegrated-analytic", "tsd"].into_iter().filter(|e| has(e)).collect();
+        if diffuse.len() > 1 {
+            let reason = format!("`{}` each decide the diffuse term: list one", diffuse.join("` and `"));
+            return Err(self.invalid("effects", reason));
+        }
+        if has("shadow-scattering") && !has("shadows") {
+            return Err(self.invalid("effects", "`shadow-scattering` filters the shadow map: list `shadows` too"));
+        }
+        if has("sh-ambient") && skin.environment.is_none() {
+            return Err(self.invalid("environment", "`sh-ambient` needs an [environment] table"));
+        }
+        Ok(())
     }
 
     fn invalid(&self, field: impl Into<String>, reason: impl Into<String>) -> SceneError {

@@ -1,0 +1,78 @@
+// Texture-space diffusion's blur (Gosselin et al. 2004): a 12-tap Poisson disc plus the centre,
+// the disc scaled per texel by the kernel size stored in the light map's alpha
+// (radius = a * k + b texels), ping-ponged between two light maps. The first pass also dilates:
+// a texel with an unwritten tap (alpha 1, the clear value) takes the tap of smallest kernel size
+// instead, so bilinear fetches across UV seams read lit texels, not black.
+
+struct Blur {
+    // xy: 1 / light-map size; z: a; w: b.
+    params: vec4<f32>,
+    // x: 1 = this pass dilates.
+    flags: vec4<u32>,
+}
+
+@group(0) @binding(0) var<uniform> blur: Blur;
+@group(0) @binding(1) var source: texture_2d<f32>;
+@group(0) @binding(2) var source_sampler: sampler;
+
+const POISSON: array<vec2<f32>, 12> = array<vec2<f32>, 12>(
+    vec2<f32>(-0.326212, -0.40581),
+    vec2<f32>(-0.840144, -0.07358),
+    vec2<f32>(-0.695914, 0.457137),
+    vec2<f32>(-0.203345, 0.620716),
+    vec2<f32>(0.96234, -0.194983),
+    vec2<f32>(0.473434, -0.480026),
+    vec2<f32>(0.519456, 0.767022),
+    vec2<f32>(0.185461, -0.893124),
+    vec2<f32>(0.507431, 0.064425),
+    vec2<f32>(0.89642, 0.412458),
+    vec2<f32>(-0.32194, -0.932615),
+    vec2<f32>(-0.791559, -0.59771),
+);
+
+struct FullScreen {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+// One triangle covering the target; uv (0, 0) at the top-left.
+@vertex
+fn vs_full_screen(@builtin(vertex_index) index: u32) -> FullScreen {
+    let x = f32((index << 1u) & 2u);
+    let y = f32(index & 2u);
+    var out: FullScreen;
+    out.clip = vec4<f32>(x * 2.0 - 1.0, 1.0 - y * 2.0, 0.0, 1.0);
+    out.uv = vec2<f32>(x, y);
+    return out;
+}
+
+@fragment
+fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
+    let centre = textureSampleLevel(source, source_sampler, input.uv, 0.0);
+    let radius = blur.params.xy * (min(centre.a, 0.999) * blur.params.z + blur.params.w);
+    var sum = centre.rgb;
+    var written_sum = centre.rgb;
+    var written = 1.0;
+    var smallest = centre;
+    for (var tap = 0u; tap < 12u; tap++) {
+        let s = textureSampleLevel(source, source_sampler, input.uv + POISSON[tap] * radius, 0.0);
+        sum += s.rgb;
+        if s.a < 1.0 {
+            written_sum += s.rgb;
+            written += 1.0;
+        }
+        if s.a < smallest.a {
+            smallest = s;
+        }
+    }
+    if blur.flags.x == 1u {
+        if centre.a >= 1.0 {
+            // Unwritten texel: copy the nearest-in-kernel written tap (dilation), or stay unwritten.
+            return smallest;
+        }
+        // A written texel next to unwritten ones averages only what was written (the chapter's
+        // "more complicated scheme"; its own code copies one tap instead).
+        return vec4<f32>(written_sum / written, centre.a);
+    }
+    return vec4<f32>(sum / 13.0, centre.a);
+}
