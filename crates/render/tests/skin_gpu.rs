@@ -1,0 +1,256 @@
+//! GPU tests of the skin passes driven through `passes::SkinSetup` directly: the key light's
+//! shadow map (occluded texels dark, its box filter a linear ramp), texture-space diffusion (a
+//! constant light map survives the blur, a shadow edge is softened, UV borders are dilated),
+//! the LUT path reading the table it is given, and every feature combination compiling.
+//! Needs an adapter (lavapipe in CI); never skips.
+
+use glam::{Vec3, Vec4};
+use skinkit_render::brdf::Lafortune;
+use skinkit_render::gpu::{Gpu, OutputFormat};
+use skinkit_render::passes::{self, DiffuseMode, Features, ShadowSetup, SkinSetup, Table, TsdSetup};
+use skinkit_render::shading::{
+    Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
+};
+
+const SIZE: u32 = 96;
+
+fn gpu() -> Gpu {
+    Gpu::new().unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn vertex(p: Vec3, uv: [f32; 2]) -> Vertex {
+    Vertex { position: p.into(), normal: Vec3::Z.into(), tangent: Vec4::new(1.0, 0.0, 0.0, 1.0).into(), uv }
+}
+
+/// A quad in z = `z` over [x0, x1] x [y0, y1], facing +z, with UVs covering `uv` (u0, v0, u1, v1).
+fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, uv: [f32; 4], base: u32) -> (Vec<Vertex>, Vec<u32>) {
+    let [u0, v0, u1, v1] = uv;
+    let vertices = vec![
+        vertex(Vec3::new(x0, y0, z), [u0, v1]),
+        vertex(Vec3::new(x1, y0, z), [u1, v1]),
+        vertex(Vec3::new(x1, y1, z), [u1, v0]),
+        vertex(Vec3::new(x0, y1, z), [u0, v0]),
+    ];
+    (vertices, vec![base, base + 1, base + 2, base, base + 2, base + 3])
+}
+
+/// The floor [-1, 1]^2 at z = 0 (UVs [0, 1]^2) and, optionally, a blocker over x < 0 at z = 0.5
+/// (UVs squeezed into a corner strip nobody looks at).
+fn floor_and_blocker(blocker: bool) -> (Vec<Vertex>, Vec<u32>) {
+    let (mut v, mut i) = quad(-1.0, 1.0, -1.0, 1.0, 0.0, [0.0, 0.0, 1.0, 1.0], 0);
+    if blocker {
+        let (bv, bi) = quad(-3.0, 0.0, -3.0, 3.0, 0.5, [0.0, 0.0, 0.01, 0.01], 4);
+        v.extend(bv);
+        i.extend(bi);
+    }
+    (v, i)
+}
+
+fn inputs(mesh: (Vec<Vertex>, Vec<u32>)) -> RenderInputs {
+    RenderInputs {
+        vertices: mesh.0,
+        indices: mesh.1,
+        // Looking down at the floor from below the blocker's height is impossible; look from
+        // straight above through it would hide the floor, so the camera sits under z = 0.5.
+        camera: Camera::look_at(Vec3::new(0.0, 0.0, 0.45), Vec3::ZERO, Vec3::Y, 130.0, 1.0),
+        lights: vec![Light { kind: LightKind::Directional { toward: Vec3::Z }, color: Vec3::ONE, intensity: 2.0 }],
+        brdf: Lafortune { diffuse: Vec3::splat(0.5), lobes: Vec::new() },
+        normal_map: Texture::flat_normals(),
+        green: GreenAxis::Up,
+        albedo: Texture::solid([1.0; 4]),
+        specular: SpecularMode::Pixel,
+        exposure: 1.0,
+        tone: ToneCurve::None,
+        background: [0.0; 4],
+    }
+}
+
+fn shadow_setup(inputs: &RenderInputs, filter: u32) -> ShadowSetup {
+    let (centre, radius) = passes::bounding_sphere(&inputs.vertices);
+    let map_size = 256;
+    let (view_proj, texel) = passes::light_view_proj(&inputs.lights[0], centre, radius, map_size);
+    ShadowSetup { light: 0, map_size, filter, bias: 1.0, view_proj, texel, new_penumbra: 0.25 }
+}
+
+fn render(gpu: &Gpu, inputs: &RenderInputs, skin: &SkinSetup) -> Vec<[f32; 4]> {
+    let target = gpu.create_target(SIZE, SIZE, OutputFormat::Hdr32).unwrap();
+    let scene = gpu.prepare_with(inputs, skin).unwrap();
+    gpu.draw(&scene, &target).unwrap();
+    gpu.read(&target).unwrap().pixels
+}
+
+/// Red channel along the image's middle row.
+fn middle_row(pixels: &[[f32; 4]]) -> Vec<f32> {
+    let y = SIZE as usize / 2;
+    (0..SIZE as usize).map(|x| pixels[y * SIZE as usize + x][0]).collect()
+}
+
+/// rho_d / pi * E for the floor lit head-on.
+fn lit_value() -> f32 {
+    0.5 / std::f32::consts::PI * 2.0
+}
+
+#[test]
+fn shadow_map_darkens_what_the_blocker_hides_and_nothing_else() {
+    let gpu = gpu();
+    let scene = inputs(floor_and_blocker(true));
+    let lit = render(&gpu, &scene, &SkinSetup::default());
+    let skin = SkinSetup {
+        features: Features { shadows: true, ..Default::default() },
+        shadow: Some(shadow_setup(&scene, 3)),
+        ..Default::default()
+    };
+    let shadowed = render(&gpu, &scene, &skin);
+    let (row_lit, row_shadowed) = (middle_row(&lit), middle_row(&shadowed));
+    let expected = lit_value();
+    // Without shadows the whole visible floor is lit.
+    for (x, v) in row_lit.iter().enumerate().skip(8).take(80) {
+        assert!((v - expected).abs() < 1e-3 * expected, "x {x}: unshadowed {v} vs {expected}");
+    }
+    // With them, left of the blocker's edge (x = 0 is the image centre) is dark, right is lit,
+    // away from the edge's penumbra.
+    let half = SIZE as usize / 2;
+    for x in 8..half - 8 {
+        assert!(row_shadowed[x] < 1e-4, "x {x} should be in shadow: {}", row_shadowed[x]);
+    }
+    for x in half + 8..SIZE as usize - 8 {
+        assert!((row_shadowed[x] - expected).abs() < 1e-3 * expected, "x {x} should be lit: {}", row_shadowed[x]);
+    }
+}
+
+#[test]
+fn box_filtered_shadow_edge_is_a_monotone_ramp_as_wide_as_the_filter() {
+    let gpu = gpu();
+    let scene = inputs(floor_and_blocker(true));
+    let ramp = |filter: u32| {
+        let skin = SkinSetup {
+            features: Features { shadows: true, ..Default::default() },
+            shadow: Some(shadow_setup(&scene, filter)),
+            ..Default::default()
+        };
+        let row = middle_row(&render(&gpu, &scene, &skin));
+        let expected = lit_value();
+        let inside = row.iter().filter(|&&v| v > 0.02 * expected && v < 0.98 * expected).count();
+        for w in row.windows(2).skip(4).take(SIZE as usize - 10) {
+            assert!(w[1] >= w[0] - 1e-5, "the penumbra must rise monotonically toward the light: {row:?}");
+        }
+        inside
+    };
+    let (narrow, wide) = (ramp(1), ramp(9));
+    assert!(wide > narrow + 2, "a 9-tap filter must widen the penumbra: {narrow} vs {wide} pixels");
+}
+
+fn tsd_setup(passes: u32) -> TsdSetup {
+    TsdSetup {
+        size: 128,
+        passes,
+        kernel_map: None,
+        kernel_scale: [3.0, 2.0],
+        kernel_mm: 0.05,
+        curvature_gain: 0.0,
+        backface_bias: 0.3,
+        reuse_below_px: 0.0,
+    }
+}
+
+fn tsd_skin(scene: &RenderInputs, passes: u32, shadows: bool) -> SkinSetup {
+    let stretch = passes::uv_stretch(&scene.vertices, &scene.indices, 1.0);
+    SkinSetup {
+        features: Features { diffuse: DiffuseMode::LightMap, shadows, ..Default::default() },
+        vertex_skin: stretch.iter().map(|&s| [0.0, s]).collect(),
+        shadow: shadows.then(|| shadow_setup(scene, 1)),
+        tsd: Some(tsd_setup(passes)),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn texture_space_diffusion_keeps_uniform_light_and_softens_a_shadow_edge() {
+    let gpu = gpu();
+    // Uniform light: the blurred, dilated light map equals Lambert everywhere on the floor.
+    let open = inputs(floor_and_blocker(false));
+    let lambert = middle_row(&render(&gpu, &open, &SkinSetup::default()));
+    let tsd = middle_row(&render(&gpu, &open, &tsd_skin(&open, 3, false)));
+    for x in 4..SIZE as usize - 4 {
+        // Rgba16Float light map: half-float rounding of the irradiance.
+        assert!((tsd[x] - lambert[x]).abs() < 2e-3 * lambert[x], "x {x}: tsd {} vs lambert {}", tsd[x], lambert[x]);
+    }
+    // A hard shadow edge (1-tap filter) is spread over more pixels by the blur passes.
+    let blocked = inputs(floor_and_blocker(true));
+    let width = |row: &[f32]| {
+        let e = lit_value();
+        row.iter().filter(|&&v| v > 0.05 * e && v < 0.95 * e).count()
+    };
+    let hard = width(&middle_row(&render(&gpu, &blocked, &tsd_skin(&blocked, 0, true))));
+    let soft = width(&middle_row(&render(&gpu, &blocked, &tsd_skin(&blocked, 4, true))));
+    assert!(soft > hard, "four blur passes must widen the edge: {hard} vs {soft} pixels");
+}
+
+#[test]
+fn tsd_pass_list_follows_the_setup() {
+    let gpu = gpu();
+    let scene = inputs(floor_and_blocker(true));
+    let prepared = gpu.prepare_with(&scene, &tsd_skin(&scene, 2, true)).unwrap();
+    assert_eq!(
+        prepared.pass_names(),
+        ["shadow map", "tsd back-face pre-pass", "tsd light map", "tsd blur 1", "tsd blur 2", "base"]
+    );
+    let plain = gpu.prepare(&scene).unwrap();
+    assert_eq!(plain.pass_names(), ["base"]);
+    if gpu.has_timestamps() {
+        let target = gpu.create_target(SIZE, SIZE, OutputFormat::Hdr32).unwrap();
+        let timed = gpu.draw_timed_passes(&prepared, &target).unwrap().unwrap();
+        assert_eq!(timed.len(), 6);
+        assert!(timed.iter().all(|(_, d)| *d > std::time::Duration::ZERO), "{timed:?}");
+    }
+}
+
+#[test]
+fn lut_path_reads_the_table_it_is_given() {
+    let gpu = gpu();
+    let scene = inputs(floor_and_blocker(false));
+    // A LUT that is 0.25 everywhere in red, 0.5 in green, 1 in blue: the floor's diffuse becomes
+    // rho / pi * E * (0.25, 0.5, 1) whatever N.L and 1/r are.
+    let table = Table { width: 8, height: 4, texels: vec![[0.25, 0.5, 1.0]; 32], scale: 1.0, offset: 0.0 };
+    let skin = SkinSetup {
+        features: Features { diffuse: DiffuseMode::Lut, ..Default::default() },
+        diffuse_lut: Some(table),
+        ..Default::default()
+    };
+    let pixels = render(&gpu, &scene, &skin);
+    let centre = pixels[(SIZE / 2 * SIZE + SIZE / 2) as usize];
+    let e = lit_value();
+    for (c, k) in [0.25f32, 0.5, 1.0].iter().enumerate() {
+        assert!((centre[c] - e * k).abs() < 1e-4, "channel {c}: {} vs {}", centre[c], e * k);
+    }
+}
+
+#[test]
+fn every_feature_combination_compiles_and_draws_finite_pixels() {
+    let gpu = gpu();
+    let scene = inputs(floor_and_blocker(true));
+    let table = || Some(Table { width: 4, height: 4, texels: vec![[0.5; 3]; 16], scale: 1.0, offset: 0.0 });
+    let zonal = Some(Table { width: 4, height: 3, texels: vec![[1.0; 3]; 12], scale: 1.0, offset: 0.0 });
+    let modes = [DiffuseMode::Lambert, DiffuseMode::Lut, DiffuseMode::Blog, DiffuseMode::OwnFit, DiffuseMode::LightMap];
+    for diffuse in modes {
+        for bits in 0..8u32 {
+            let (shadows, sh_ambient, derivative_curvature) = (bits & 1 != 0, bits & 2 != 0, bits & 4 != 0);
+            let features = Features {
+                diffuse,
+                derivative_curvature,
+                sh_ambient,
+                shadows,
+                shadow_scattering: shadows && derivative_curvature,
+            };
+            let mut skin = tsd_skin(&scene, 1, shadows);
+            skin.features = features;
+            skin.tsd = (diffuse == DiffuseMode::LightMap).then(|| tsd_setup(1));
+            skin.diffuse_lut = table();
+            skin.shadow_lut = table();
+            skin.zonal = zonal.clone();
+            skin.sh[0] = [0.3, 0.3, 0.3];
+            let pixels = render(&gpu, &scene, &skin);
+            assert!(pixels.iter().flatten().all(|v| v.is_finite()), "{features:?}: non-finite pixels");
+        }
+    }
+}
