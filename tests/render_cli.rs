@@ -175,7 +175,9 @@ fn bad_scenes_name_the_file_and_the_field() {
     };
     let e = run("intesity = 3.0");
     assert!(e.contains("scene.toml") && e.contains("intesity"), "{e}");
-    let e = run("effects = [\"tsd\"]");
+    let e = run("effects = [\"sh-ambient\"]");
+    assert!(e.contains("scene.toml") && e.contains("environment"), "{e}");
+    let e = run("effects = [\"preintegrated\", \"tsd\"]");
     assert!(e.contains("effects") && e.contains("tsd"), "{e}");
     let e = run("[normal_map]\npath = \"missing.png\"");
     assert!(e.contains("normal_map") && e.contains("missing.png"), "{e}");

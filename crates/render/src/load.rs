@@ -12,11 +12,15 @@
 //! - A map larger than the device's `max_texture_dimension_2d` is halved (2x2 box, the mip
 //!   filter) until it fits, with a warning naming the limit.
 //!
-//! # What the base pass does not do yet
-//! Effects (`effects = [...]`) belong to the scattering stage; a scene that asks for one the
-//! renderer cannot build yet is refused by [`plan`] with the effect named, never silently drawn
-//! without it. A light with `shadows = true` is drawn unshadowed with a warning until the shadow
-//! pass exists.
+//! # Effects
+//! [`graph`] turns the scene's `effects` and lights into the pass graph: the base pass's shader
+//! features (each effect a WGSL override, compiled out when absent), which light draws the one
+//! shadow map (the first with `shadows = true`, and only when `shadows` is listed), which tables
+//! are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
+//! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse) and
+//! whether texture-space diffusion runs. [`plan`] lists it for people (`skinkit render
+//! --explain`); [`crate::skin::setup::build`] computes it. What was asked and cannot be built (a
+//! `shadows` effect with no shadow-casting light) is a note, never a silent omission.
 
 use std::path::Path;
 
@@ -202,7 +206,7 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
 }
 
 /// Reads an albedo image as linear RGBA (8-bit as sRGB, 16-bit and float as linear).
-fn read_albedo(path: &Path, limits: &Limits) -> skinkit_maps::Result<Texture> {
+pub(crate) fn read_albedo(path: &Path, limits: &Limits) -> skinkit_maps::Result<Texture> {
     let photo = io::read_photo(path, limits)?;
     let photo = if photo.bit_depth() == 8 { photo.with_transfer(skinkit_maps::Transfer::Srgb) } else { photo };
     let width = photo.width();

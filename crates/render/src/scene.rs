@@ -12,7 +12,7 @@
 //! mm_per_unit = 1.0             # how long one mesh unit is, in millimetres (curvature needs it)
 //! albedo = "albedo.png"         # or a constant linear RGB: [0.6, 0.45, 0.4]; absent: brdf.diffuse
 //! specular = "pixel"            # or "vertex" (the paper's per-vertex specular look)
-//! effects = ["shadows"]         # names from KNOWN_EFFECTS
+//! effects = ["shadows"]         # names from KNOWN_EFFECTS; their settings: skin::options
 //!
 //! [normal_map]
 //! path = "face-normals.png"
@@ -49,8 +49,11 @@ use serde::Deserialize;
 use crate::frames::FrameMethod;
 use crate::skin::options::{RawEnvironment, RawPreintegrated, RawShadow, RawSkin, RawTsd, SkinOptions};
 
-/// Effect names a scene may list. The renderer decides what each one builds; the scattering
-/// issue owns their meaning.
+/// Effect names a scene may list (see [`crate::load::graph`] for what each builds and
+/// [`crate::skin::options`] for their settings): `preintegrated` (the LUT), `preintegrated-analytic`
+/// (a closed form), `sh-ambient` (order-2 SH environment light), `shadows` (the key light's shadow
+/// map), `shadow-scattering` (the penumbra LUT), `tsd` (texture-space diffusion). One of
+/// `preintegrated`, `preintegrated-analytic` and `tsd` at most.
 pub const KNOWN_EFFECTS: &[&str] =
     &["preintegrated", "preintegrated-analytic", "sh-ambient", "shadows", "shadow-scattering", "tsd"];
 

@@ -134,19 +134,117 @@ fn more_lights_than_the_pass_shades_are_refused_by_name() {
     );
 }
 
-#[test]
-fn shadowed_lights_warn_and_effects_are_refused_until_they_exist() {
+/// The pass names and resource names of a scene's plan.
+fn graph_of(body: &str) -> (Vec<String>, Vec<String>, Vec<String>) {
     let tmp = tempfile::tempdir().unwrap();
-    let (shadowed, path) =
-        scene(tmp.path(), "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 3.0]\nshadows = true\n");
-    let loaded = load(&shadowed, &path, 8, 8, 8192).unwrap();
-    assert!(loaded.warnings.iter().any(|w| w.contains("light[0]") && w.contains("shadows")), "{:?}", loaded.warnings);
-    let p = plan(&shadowed, &path, &loaded, 8, 8, OutputFormat::Srgb8).unwrap();
-    assert_eq!(p.passes.len(), 1);
-    assert_eq!(p.resources.iter().find(|r| r.name == "colour target").unwrap().bytes, 8 * 8 * 4);
+    let (scene, path) = scene(tmp.path(), body);
+    let loaded = load(&scene, &path, 8, 8, 8192).unwrap();
+    let p = plan(&scene, &path, &loaded, 8, 8, OutputFormat::Srgb8).unwrap();
+    let passes = p.passes.iter().map(|p| p.name.clone()).collect();
+    let resources = p.resources.iter().map(|r| r.name.clone()).collect();
+    (passes, resources, p.notes)
+}
 
-    let (effects, path) = scene(tmp.path(), "effects = [\"shadows\"]");
-    let loaded = load(&effects, &path, 8, 8, 8192).unwrap();
-    let e = plan(&effects, &path, &loaded, 8, 8, OutputFormat::Hdr32).unwrap_err().to_string();
-    assert!(e.contains("effects") && e.contains("shadows"), "{e}");
+const SHADOW_LIGHT: &str = "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 3.0]\nshadows = true\n";
+
+#[test]
+fn a_scene_without_effects_is_the_base_pass_alone() {
+    let (passes, resources, notes) = graph_of("");
+    assert_eq!(passes, ["base"]);
+    for absent in ["shadow map", "diffuse LUT", "shadow LUT", "zonal table", "per-vertex curvature", "light map A"] {
+        assert!(!resources.iter().any(|r| r == absent), "{absent} in {resources:?}");
+    }
+    assert!(notes.is_empty(), "{notes:?}");
+}
+
+#[test]
+fn shadows_need_a_shadow_casting_light_and_the_effect() {
+    // The effect without a caster: no shadow map, and a note saying why.
+    let (passes, resources, notes) = graph_of("effects = [\"shadows\"]");
+    assert_eq!(passes, ["base"]);
+    assert!(!resources.iter().any(|r| r == "shadow map"));
+    assert!(notes.iter().any(|n| n.contains("shadows") && n.contains("no light")), "{notes:?}");
+    // A caster without the effect: drawn unshadowed, with a note naming the light.
+    let (passes, _, notes) = graph_of(SHADOW_LIGHT);
+    assert_eq!(passes, ["base"]);
+    assert!(notes.iter().any(|n| n.contains("light[0]") && n.contains("unshadowed")), "{notes:?}");
+    // Both: one shadow map before the base pass, no LUT.
+    let (passes, resources, _) = graph_of(&format!("effects = [\"shadows\"]\n{SHADOW_LIGHT}"));
+    assert_eq!(passes, ["shadow map", "base"]);
+    assert!(resources.iter().any(|r| r == "shadow map") && !resources.iter().any(|r| r.contains("LUT")), "{resources:?}");
+}
+
+#[test]
+fn the_lut_is_built_only_when_a_pass_reads_it() {
+    let (passes, resources, _) = graph_of("effects = [\"preintegrated\"]");
+    assert_eq!(passes, ["base"]);
+    assert!(resources.iter().any(|r| r == "diffuse LUT") && resources.iter().any(|r| r == "per-vertex curvature"));
+    assert!(!resources.iter().any(|r| r == "shadow map" || r == "shadow LUT"), "{resources:?}");
+    // The derivative form reads no per-vertex curvature.
+    let (_, resources, _) = graph_of("effects = [\"preintegrated\"]\n[preintegrated]\ncurvature = \"derivative\"");
+    assert!(!resources.iter().any(|r| r == "per-vertex curvature"), "{resources:?}");
+    // The closed forms need no table at all.
+    let (_, resources, _) = graph_of("effects = [\"preintegrated-analytic\"]");
+    assert!(!resources.iter().any(|r| r.contains("LUT")), "{resources:?}");
+    // Shadow scattering adds its LUT to the shadow map.
+    let body = format!("effects = [\"preintegrated\", \"shadows\", \"shadow-scattering\"]\n{SHADOW_LIGHT}");
+    let (passes, resources, _) = graph_of(&body);
+    assert_eq!(passes, ["shadow map", "base"]);
+    for name in ["diffuse LUT", "shadow LUT", "shadow map"] {
+        assert!(resources.iter().any(|r| r == name), "{name} missing: {resources:?}");
+    }
+}
+
+#[test]
+fn ambient_reads_the_zonal_table_only_over_a_preintegrated_diffuse() {
+    let env = "\n[environment]\nsky = [0.3, 0.3, 0.4]\nground = [0.1, 0.1, 0.1]";
+    let (passes, resources, _) = graph_of(&format!("effects = [\"sh-ambient\"]{env}"));
+    assert_eq!(passes, ["base"]);
+    assert!(!resources.iter().any(|r| r == "zonal table"), "{resources:?}");
+    let (_, resources, _) = graph_of(&format!("effects = [\"sh-ambient\", \"preintegrated\"]{env}"));
+    assert!(resources.iter().any(|r| r == "zonal table"), "{resources:?}");
+}
+
+#[test]
+fn texture_space_diffusion_runs_its_pre_pass_light_map_and_blurs() {
+    let (passes, resources, _) = graph_of("effects = [\"tsd\"]\n[tsd]\npasses = 3\nsize = 256");
+    assert_eq!(passes, ["tsd back-face pre-pass", "tsd light map", "tsd blur 1", "tsd blur 2", "tsd blur 3", "base"]);
+    for name in ["tsd depth", "light map A", "light map B", "per-vertex curvature"] {
+        assert!(resources.iter().any(|r| r == name), "{name} missing: {resources:?}");
+    }
+    assert!(!resources.iter().any(|r| r == "shadow map" || r.contains("LUT")), "{resources:?}");
+    let (passes, _, _) = graph_of(&format!("effects = [\"tsd\", \"shadows\"]\n[tsd]\npasses = 0\n{SHADOW_LIGHT}"));
+    assert_eq!(passes, ["shadow map", "tsd back-face pre-pass", "tsd light map", "base"]);
+}
+
+#[test]
+fn contradicting_or_incomplete_effects_are_refused_by_name() {
+    let tmp = tempfile::tempdir().unwrap();
+    let refused = |body: &str| {
+        let mesh = quad(tmp.path());
+        let text = format!(
+            "mesh = \"{}\"\nmm_per_unit = 1.0\n{body}\n[[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, 1.0]\n\
+             [[camera]]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\n",
+            mesh.display()
+        );
+        let path = tmp.path().join("bad.toml");
+        std::fs::write(&path, &text).unwrap();
+        Scene::load(&path).unwrap_err().to_string()
+    };
+    let e = refused("effects = [\"preintegrated\", \"tsd\"]");
+    assert!(e.contains("bad.toml") && e.contains("preintegrated") && e.contains("tsd"), "{e}");
+    let e = refused("effects = [\"shadow-scattering\"]");
+    assert!(e.contains("shadow-scattering") && e.contains("shadows"), "{e}");
+    let e = refused("effects = [\"sh-ambient\"]");
+    assert!(e.contains("environment"), "{e}");
+    let e = refused("[shadow]\nfilter = 4");
+    assert!(e.contains("shadow.filter") && e.contains("odd"), "{e}");
+    let e = refused("[preintegrated]\nnormal_blur = [0.5, 2.0, 0.0]");
+    assert!(e.contains("preintegrated.normal_blur[1]"), "{e}");
+    let e = refused("[environment]\nconstant = [0.1, 0.1, 0.1]\nsky = [0.2, 0.2, 0.2]");
+    assert!(e.contains("environment") && e.contains("exactly one"), "{e}");
+    let e = refused("[tsd]\nsize = 8");
+    assert!(e.contains("tsd.size"), "{e}");
+    let e = refused("[tsd]\nblur = 3");
+    assert!(e.contains("blur"), "{e}");
 }

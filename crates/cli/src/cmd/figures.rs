@@ -4,6 +4,10 @@
 //!   map, same light and camera, side by side;
 //! - figure 8: one patch of the map on a flat square under four light directions (azimuths 0, 90,
 //!   180 and 270 degrees at 15 degrees elevation, where the fine structure shows), in a 2 x 2 grid.
+//! - the skin figure (issue 6): the head wearing the map under a shadow-casting key light, drawn
+//!   with every diffuse method in a 3 x 2 grid: Lambert, the blog's closed form, our fit (top
+//!   row); the pre-integrated LUT, texture-space diffusion, the exact texture-space reference
+//!   (bottom row). Each method's FLIP mean against the reference is in the report.
 //!
 //! Every render goes through scene files written next to the images and the same code as
 //! `skinkit render`, so `skinkit render demo-out/render/head-skin.toml` redraws a figure.
@@ -32,7 +36,78 @@ pub const PATCH_ELEVATION_DEG: f32 = 15.0;
 pub struct FiguresReport {
     pub figure7: String,
     pub figure8: String,
+    pub skin: SkinFigure,
     pub renders: Vec<RenderReport>,
+}
+
+/// The skin figure and each method's error against the reference.
+#[derive(Serialize)]
+pub struct SkinFigure {
+    pub image: String,
+    pub methods: Vec<SkinPanel>,
+}
+
+/// One method of the skin figure.
+#[derive(Serialize)]
+pub struct SkinPanel {
+    pub method: String,
+    pub image: String,
+    /// FLIP mean against the reference panel (0 for the reference itself).
+    pub flip_mean: f32,
+    pub render_seconds: f64,
+}
+
+/// The methods of the skin figure: name, effects, extra tables, whether it is the reference.
+const SKIN_METHODS: [(&str, &str, &str, bool); 6] = [
+    ("lambert", r#"["shadows"]"#, "", false),
+    ("blog-fit", r#"["preintegrated-analytic", "shadows", "shadow-scattering"]"#, "[preintegrated]\nanalytic = \"blog\"\n", false),
+    ("own-fit", r#"["preintegrated-analytic", "shadows", "shadow-scattering"]"#, "[preintegrated]\nanalytic = \"own\"\n", false),
+    ("lut-256", r#"["preintegrated", "shadows", "shadow-scattering"]"#, "", false),
+    ("tsd-3x1024", r#"["tsd", "shadows"]"#, "[tsd]\npasses = 3\nsize = 1024\n", false),
+    ("reference-1024", r#"["shadows"]"#, "", true),
+];
+
+/// Side of the reference's light map in the skin figure.
+pub const REFERENCE_TEXELS: u32 = 1024;
+
+/// The skin figure's scene: the head wearing `normal_map`, a warm key light from the side
+/// casting the nose's shadow, a dim fill, `effects` and `tables`.
+fn skin_scene(normal_map: &str, effects: &str, tables: &str) -> String {
+    format!(
+        r#"# Written by `skinkit demo`: the sample head for the skin scattering figure (issue 6).
+mesh = "head.obj"
+mm_per_unit = 1.0
+albedo = [0.80, 0.56, 0.46]
+effects = {effects}
+
+[brdf]
+diffuse = [1.0, 1.0, 1.0]
+
+[normal_map]
+path = "{normal_map}"
+
+[[light]]
+kind = "directional"
+direction = [0.95, 0.25, 0.2]
+colour = [1.0, 0.95, 0.9]
+intensity = 5.0
+shadows = true
+
+[[light]]
+kind = "directional"
+direction = [-0.5, 0.2, 0.85]
+intensity = 0.4
+
+[[camera]]
+position = [150.0, 30.0, 330.0]
+target = [10.0, 5.0, 40.0]
+fov_deg = 30.0
+
+{tables}
+[output]
+size = [{PANEL}, {PANEL}]
+"#
+    )
 }
 
 /// Head scene text: the sample head, with `normal_map` (a path relative to the scene) or flat.
@@ -133,7 +208,7 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
         let scene = dir.join(format!("{name}.toml"));
         write_text(&scene, &text)?;
         let image = dir.join(format!("{name}.png"));
-        renders.push(render(&Job { scene, out: Some(image.clone()), size: None, frames: None }, out)?);
+        renders.push(render(&Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None }, out)?);
         Ok(image)
     };
     let smooth = job("head-smooth", head_scene(None))?;
@@ -147,7 +222,58 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
     grid(&[smooth, skin], 2, &figure7)?;
     let figure8 = dir.join("figure8.png");
     grid(&lit, 2, &figure8)?;
-    Ok(FiguresReport { figure7: figure7.display().to_string(), figure8: figure8.display().to_string(), renders })
+
+    let mut panels = Vec::new();
+    for (name, effects, tables, reference) in SKIN_METHODS {
+        let scene = dir.join(format!("skin-{name}.toml"));
+        write_text(&scene, &skin_scene(&map, effects, tables))?;
+        let image = dir.join(format!("skin-{name}.png"));
+        let job = Job {
+            scene,
+            out: Some(image.clone()),
+            size: None,
+            frames: None,
+            reference: reference.then_some(REFERENCE_TEXELS),
+        };
+        let report = render(&job, out)?;
+        let seconds = report.skin_seconds + report.images.iter().map(|i| i.render_seconds).sum::<f64>();
+        renders.push(report);
+        panels.push((name, image, seconds));
+    }
+    let skin = skin_figure(&panels, &dir.join("figure-skin.png"))?;
+    Ok(FiguresReport {
+        figure7: figure7.display().to_string(),
+        figure8: figure8.display().to_string(),
+        skin,
+        renders,
+    })
+}
+
+/// The skin figure: the six panels in a 3 x 2 grid, each method's FLIP mean against the last.
+fn skin_figure(panels: &[(&str, PathBuf, f64)], path: &Path) -> Result<SkinFigure> {
+    let rgba = |p: &Path| -> Result<(u32, u32, Vec<u8>)> {
+        let photo = io::read_photo(p, &Limits::default())?;
+        let Samples::U8(s) = photo.samples() else { bail!("{}: expected an 8-bit render", p.display()) };
+        let bytes = s.chunks_exact(3).flat_map(|px| [px[0], px[1], px[2], 255]).collect();
+        Ok((photo.width() as u32, photo.height() as u32, bytes))
+    };
+    let (_, reference, _) = panels.last().expect("the reference is the last panel");
+    let (w, h, reference) = rgba(reference)?;
+    let methods = panels
+        .iter()
+        .map(|(name, image, seconds)| {
+            let (_, _, test) = rgba(image)?;
+            Ok(SkinPanel {
+                method: name.to_string(),
+                image: image.display().to_string(),
+                flip_mean: skinkit_render::skin::compare::flip_mean(&reference, &test, w, h),
+                render_seconds: *seconds,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let images: Vec<PathBuf> = panels.iter().map(|(_, p, _)| p.clone()).collect();
+    grid(&images, 3, path)?;
+    Ok(SkinFigure { image: path.display().to_string(), methods })
 }
 
 /// Tiles same-sized 8-bit RGB PNGs into `columns` columns.

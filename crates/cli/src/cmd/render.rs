@@ -15,6 +15,7 @@ use skinkit_maps::io::{self, PngLayout};
 use skinkit_render::gpu::{Gpu, Rendered};
 use skinkit_render::load::{self, Plan};
 use skinkit_render::scene::{self, Scene};
+use skinkit_render::skin;
 
 use super::synth::parse_size;
 use crate::output::Output;
@@ -45,6 +46,10 @@ pub struct Args {
     /// Also write the report (JSON).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Draw the diffuse light with the exact texture-space reference (CPU, slow) instead of the
+    /// scene's effects, its light map N texels wide.
+    #[arg(long, value_name = "N")]
+    pub reference: Option<u32>,
 }
 
 /// One written image.
@@ -72,6 +77,8 @@ pub struct RenderReport {
     pub warnings: Vec<String>,
     /// Reading the mesh and maps and building frames.
     pub load_seconds: f64,
+    /// Curvature, LUTs, SH and (with `--reference`) the reference light map, on the CPU.
+    pub skin_seconds: f64,
     /// Uploading textures and buffers (mip chains included).
     pub upload_seconds: f64,
     pub total_seconds: f64,
@@ -94,6 +101,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         out: args.out,
         size: args.size,
         frames: if args.orbit { Some(args.frames.max(1)) } else { None },
+        reference: args.reference,
     };
     if args.explain {
         let explained = explain(&job)?;
@@ -117,6 +125,8 @@ pub struct Job {
     pub size: Option<(usize, usize)>,
     /// Turntable frames per camera, if orbiting.
     pub frames: Option<usize>,
+    /// Draw the exact texture-space reference with a light map this wide.
+    pub reference: Option<u32>,
 }
 
 /// A job's scene, size and output path, checked.
@@ -153,13 +163,15 @@ fn explain(job: &Job) -> Result<Explained> {
     };
     let loaded = load::load(&r.scene, &job.scene, r.width, r.height, limit)?;
     let plan = load::plan(&r.scene, &job.scene, &loaded, r.width, r.height, target_format)?;
+    let mut warnings = loaded.warnings;
+    warnings.extend(plan.notes.iter().cloned());
     Ok(Explained {
         scene: job.scene.display().to_string(),
         adapter,
         width: r.width,
         height: r.height,
         plan,
-        warnings: loaded.warnings,
+        warnings,
     })
 }
 
@@ -173,13 +185,26 @@ pub fn render(job: &Job, out: &Output) -> Result<RenderReport> {
     let mut loaded = load::load(&scene, &job.scene, width, height, gpu.max_texture_side())?;
     loaded.inputs.tone = tone;
     let plan = load::plan(&scene, &job.scene, &loaded, width, height, target_format)?;
+    loaded.warnings.extend(plan.notes.iter().cloned());
     for warning in &loaded.warnings {
         out.warn(warning);
     }
     let load_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let mut prepared = gpu.prepare(&loaded.inputs)?;
+    let skin = match job.reference {
+        None => skin::setup::build(&scene, &job.scene, &loaded, &load::graph(&scene))?,
+        Some(size) => {
+            if !(16..=8192).contains(&size) {
+                bail!("--reference: {size} is outside 16..=8192 texels");
+            }
+            out.note(&format!("baking and scattering the {size}x{size} reference light map on the CPU"));
+            skin::compare::Method::Reference { size }.setup(&scene, &job.scene, &loaded)?
+        }
+    };
+    let skin_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let mut prepared = gpu.prepare_with(&loaded.inputs, &skin)?;
     let upload_seconds = t.elapsed().as_secs_f64();
     let target = gpu.create_target(width, height, target_format)?;
 
@@ -218,6 +243,7 @@ pub fn render(job: &Job, out: &Output) -> Result<RenderReport> {
         images,
         warnings: loaded.warnings,
         load_seconds,
+        skin_seconds,
         upload_seconds,
         total_seconds: start.elapsed().as_secs_f64(),
     })

@@ -1,0 +1,225 @@
+//! Accuracy against time of every skin diffuse method (issue 6): the sample head of
+//! `samples/scenes/skin-compare.toml` drawn by each [`Method`] of the table, each render's error
+//! against the exact texture-space reference (FLIP mean on the tone-mapped sRGB images, relative
+//! RMSE on linear radiance) and its frame time on this adapter relative to the base pass (the
+//! same scene, Lambert, no shadows).
+//!
+//! Frame times are GPU timestamps summed over a frame's passes (median of `FRAMES` frames after
+//! one warm-up), so CPU-side table builds are not in them; the reference's CPU bake and scatter
+//! are reported in their own column. On machines without a GPU the adapter is lavapipe (software
+//! Vulkan on the CPU): the ratios say what each effect costs relative to the base pass there, not
+//! real-time rates on hardware.
+//!
+//! Writes `target/skin-methods.md` (the README's table), `target/skin-methods.svg` (error against
+//! time, a log-time scatter plot) and `target/skin-methods.json`; `SKIN_METHODS_SIZE=WxH` changes
+//! the image size (default 768x768), `SKIN_METHODS_REFERENCE=N` the reference light map (1024).
+//!
+//! Run: `WGPU_BACKEND=vulkan cargo bench -p skinkit-render --bench skin_methods`.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use skinkit_render::gpu::{Gpu, OutputFormat, Rendered};
+use skinkit_render::load;
+use skinkit_render::passes::SkinSetup;
+use skinkit_render::scene::Scene;
+use skinkit_render::shading::ToneCurve;
+use skinkit_render::skin::compare::{self, Method};
+
+const FRAMES: usize = 7;
+
+#[derive(serde::Serialize)]
+struct Row {
+    method: String,
+    flip_mean: f32,
+    rmse: f32,
+    frame_ms: f64,
+    relative_time: f64,
+    cpu_setup_s: f64,
+    passes: Vec<(String, f64)>,
+}
+
+fn main() {
+    if std::env::args().any(|a| a == "--list") {
+        println!("skin_methods: bench");
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let scene_file = root.join("samples/scenes/skin-compare.toml");
+    let scene = Scene::load(&scene_file).unwrap_or_else(|e| panic!("{e}"));
+    let (width, height) = size();
+    let reference_size = std::env::var("SKIN_METHODS_REFERENCE").ok().and_then(|s| s.parse().ok()).unwrap_or(1024);
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("adapter: {}, {width}x{height}, reference light map {reference_size}", gpu.adapter_name());
+    let loaded = load::load(&scene, &scene_file, width, height, gpu.max_texture_side()).unwrap();
+
+    let base_ms = frame_ms(&gpu, &loaded.inputs, &SkinSetup::default(), width, height).0;
+    eprintln!("base pass (Lambert, no shadows): {base_ms:.2} ms");
+    let mut renders = Vec::new();
+    for method in Method::table(reference_size) {
+        let t = Instant::now();
+        let setup = method.setup(&scene, &scene_file, &loaded).unwrap_or_else(|e| panic!("{}: {e}", method.name()));
+        let cpu_setup_s = t.elapsed().as_secs_f64();
+        let (ms, passes) = frame_ms(&gpu, &loaded.inputs, &setup, width, height);
+        let images = draw(&gpu, &loaded.inputs, &setup, width, height);
+        eprintln!("{:>16}: {ms:8.2} ms ({:.2}x base), cpu setup {cpu_setup_s:.2} s", method.name(), ms / base_ms);
+        renders.push((method, images, ms, passes, cpu_setup_s));
+    }
+    let (_, reference, ..) = renders.last().expect("the table ends with the reference");
+    let (ref_ldr, ref_hdr) = (reference.0.srgb_bytes.clone(), reference.1.pixels.clone());
+    let rows: Vec<Row> = renders
+        .iter()
+        .map(|(method, (ldr, hdr), ms, passes, cpu)| Row {
+            method: method.name(),
+            flip_mean: compare::flip_mean(&ref_ldr, &ldr.srgb_bytes, width, height),
+            rmse: compare::rmse(&ref_hdr, &hdr.pixels),
+            frame_ms: *ms,
+            relative_time: ms / base_ms,
+            cpu_setup_s: *cpu,
+            passes: passes.iter().map(|(n, d)| (n.clone(), d.as_secs_f64() * 1e3)).collect(),
+        })
+        .collect();
+    let out = root.join("target");
+    std::fs::create_dir_all(&out).unwrap();
+    let table = markdown(&rows, base_ms, &gpu.adapter_name(), width, height, reference_size);
+    println!("{table}");
+    write(&out.join("skin-methods.md"), &table);
+    write(&out.join("skin-methods.svg"), &svg(&rows));
+    write(&out.join("skin-methods.json"), &serde_json::to_string_pretty(&rows).unwrap());
+    for (method, (ldr, _), ..) in &renders {
+        let path = out.join(format!("skin-method-{}.png", method.name()));
+        let samples: Vec<u16> = ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
+        skinkit_maps::io::write_png(&path, width as usize, height as usize, skinkit_maps::io::PngLayout::Rgb8, &samples)
+            .unwrap();
+    }
+    eprintln!("wrote {}", out.join("skin-methods.{md,svg,json}").display());
+}
+
+fn size() -> (u32, u32) {
+    let parsed = std::env::var("SKIN_METHODS_SIZE").ok().and_then(|s| {
+        let (w, h) = s.split_once('x')?;
+        Some((w.parse().ok()?, h.parse().ok()?))
+    });
+    parsed.unwrap_or((768, 768))
+}
+
+fn write(path: &PathBuf, text: &str) {
+    std::fs::write(path, text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+}
+
+/// The LDR (Reinhard, sRGB) and HDR (linear) renders of one setup.
+fn draw(
+    gpu: &Gpu,
+    inputs: &skinkit_render::shading::RenderInputs,
+    setup: &SkinSetup,
+    width: u32,
+    height: u32,
+) -> (Rendered, Rendered) {
+    let mut once = |format: OutputFormat, tone: ToneCurve| {
+        let inputs = skinkit_render::shading::RenderInputs { tone, ..inputs.clone() };
+        let target = gpu.create_target(width, height, format).unwrap();
+        let scene = gpu.prepare_with(&inputs, setup).unwrap();
+        gpu.draw(&scene, &target).unwrap();
+        gpu.read(&target).unwrap()
+    };
+    (once(OutputFormat::Srgb8, ToneCurve::Reinhard), once(OutputFormat::Hdr32, ToneCurve::None))
+}
+
+/// Median GPU frame time (ms) over `FRAMES` frames after a warm-up, and the median frame's passes.
+fn frame_ms(
+    gpu: &Gpu,
+    inputs: &skinkit_render::shading::RenderInputs,
+    setup: &SkinSetup,
+    width: u32,
+    height: u32,
+) -> (f64, Vec<(String, Duration)>) {
+    let target = gpu.create_target(width, height, OutputFormat::Srgb8).unwrap();
+    let scene = gpu.prepare_with(inputs, setup).unwrap();
+    gpu.draw(&scene, &target).unwrap();
+    let mut frames: Vec<(f64, Vec<(String, Duration)>)> = (0..FRAMES)
+        .map(|_| {
+            let t = Instant::now();
+            match gpu.draw_timed_passes(&scene, &target).unwrap() {
+                Some(passes) => (passes.iter().map(|(_, d)| d.as_secs_f64()).sum::<f64>() * 1e3, passes),
+                None => (t.elapsed().as_secs_f64() * 1e3, Vec::new()),
+            }
+        })
+        .collect();
+    frames.sort_by(|a, b| a.0.total_cmp(&b.0));
+    frames.swap_remove(FRAMES / 2)
+}
+
+fn markdown(rows: &[Row], base_ms: f64, adapter: &str, width: u32, height: u32, reference: u32) -> String {
+    let mut s = format!(
+        "Sample head (`samples/scenes/skin-compare.toml`), {width}x{height}, against the {reference}x{reference} \
+         texture-space reference; {adapter}; base pass {base_ms:.1} ms.\n\n\
+         | method | FLIP mean | relative RMSE | frame (ms) | x base pass | CPU setup (s) |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: |\n"
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {:.4} | {:.4} | {:.1} | {:.2} | {:.2} |\n",
+            r.method, r.flip_mean, r.rmse, r.frame_ms, r.relative_time, r.cpu_setup_s
+        ));
+    }
+    s
+}
+
+/// Error (FLIP mean) against frame time relative to the base pass, log time axis.
+fn svg(rows: &[Row]) -> String {
+    let (w, h, pad) = (720.0, 440.0, 70.0);
+    let plotted: Vec<&Row> = rows.iter().filter(|r| r.relative_time > 0.0 && !r.method.starts_with("reference")).collect();
+    let t_max = plotted.iter().map(|r| r.relative_time).fold(1.0, f64::max) * 1.3;
+    let t_min = plotted.iter().map(|r| r.relative_time).fold(f64::INFINITY, f64::min).min(1.0) * 0.8;
+    let e_max = plotted.iter().map(|r| r.flip_mean as f64).fold(1e-3, f64::max) * 1.15;
+    let x = |t: f64| pad + (t.ln() - t_min.ln()) / (t_max.ln() - t_min.ln()) * (w - 2.0 * pad);
+    let y = |e: f64| h - pad - e / e_max * (h - 2.0 * pad);
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n\
+         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
+         <text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">Skin diffuse methods: error against the reference vs frame time</text>\n\
+         <line x1=\"{pad}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n\
+         <line x1=\"{pad}\" y1=\"{pad}\" x2=\"{pad}\" y2=\"{}\" stroke=\"black\"/>\n\
+         <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frame time / base pass (log)</text>\n\
+         <text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">FLIP mean</text>\n",
+        w / 2.0,
+        h - pad,
+        w - pad,
+        h - pad,
+        h - pad,
+        w / 2.0,
+        h - 25.0,
+        h / 2.0,
+        h / 2.0
+    );
+    for tick in [1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0] {
+        if tick >= t_min && tick <= t_max {
+            s.push_str(&format!(
+                "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{tick}</text>\n",
+                x(tick),
+                h - pad + 16.0
+            ));
+        }
+    }
+    for i in 0..=4 {
+        let e = e_max * i as f64 / 4.0;
+        s.push_str(&format!("<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{e:.3}</text>\n", pad - 6.0, y(e) + 4.0));
+    }
+    for r in plotted {
+        let colour = match r.method.split('-').next().unwrap_or("") {
+            "lambert" => "#444",
+            "lut" => "#c0392b",
+            "tsd" => "#2471a3",
+            _ => "#229954",
+        };
+        let (px, py) = (x(r.relative_time), y(r.flip_mean as f64));
+        s.push_str(&format!(
+            "<circle cx=\"{px:.1}\" cy=\"{py:.1}\" r=\"5\" fill=\"{colour}\"/>\n<text x=\"{:.1}\" y=\"{:.1}\">{}</text>\n",
+            px + 7.0,
+            py - 6.0,
+            r.method
+        ));
+    }
+    s.push_str("</svg>\n");
+    s
+}

@@ -1,0 +1,159 @@
+//! Every way skinkit draws skin's diffuse light, side by side: Lambert, the blog's closed form,
+//! our fit, the pre-integrated LUT at several sizes, texture-space diffusion at several blur
+//! counts and light-map sizes, and the exact texture-space reference ([`super::reference`]) they
+//! are all measured against. [`Method::setup`] turns one method and a scene into what the GPU
+//! draws; [`flip_mean`] and [`rmse`] give the errors of a render against the reference's.
+//!
+//! Every method draws the scene's key light through the same shadow map (a scene with no
+//! shadow-casting light draws none); the pre-integrated methods add shadow scattering, as the
+//! paper's complete local model does.
+
+use std::path::Path;
+
+use super::options::Analytic;
+use super::profile::Profile;
+use super::{reference, setup};
+use crate::load::{self, LoadError, Loaded};
+use crate::passes::{DiffuseMode, SkinSetup};
+use crate::scene::Scene;
+
+/// One way of drawing the diffuse term.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(tag = "method", rename_all = "kebab-case")]
+pub enum Method {
+    /// `max(0, N.L)`, no scattering.
+    Lambert,
+    /// The blog's closed-form curves.
+    Blog,
+    /// Our fit of the LUT.
+    OwnFit,
+    /// The pre-integrated LUT, `size x size`.
+    Lut {
+        /// Texels per side.
+        size: u32,
+    },
+    /// Texture-space diffusion.
+    Tsd {
+        /// Blur passes.
+        passes: u32,
+        /// Light-map side.
+        size: u32,
+    },
+    /// The exact texture-space convolution (CPU), its light map `size` texels wide.
+    Reference {
+        /// Light-map side.
+        size: u32,
+    },
+}
+
+impl Method {
+    /// A short name for tables and file names, e.g. `lut-64`, `tsd-2x1024`.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Lambert => "lambert".into(),
+            Self::Blog => "blog-fit".into(),
+            Self::OwnFit => "own-fit".into(),
+            Self::Lut { size } => format!("lut-{size}"),
+            Self::Tsd { passes, size } => format!("tsd-{passes}x{size}"),
+            Self::Reference { size } => format!("reference-{size}"),
+        }
+    }
+
+    /// The methods of the accuracy-against-time table, reference last.
+    pub fn table(reference_size: u32) -> Vec<Method> {
+        let mut methods = vec![Self::Lambert, Self::Blog, Self::OwnFit];
+        methods.extend([32, 64, 256].map(|size| Self::Lut { size }));
+        for size in [512, 1024] {
+            methods.extend([1, 2, 4].map(|passes| Self::Tsd { passes, size }));
+        }
+        methods.push(Self::Reference { size: reference_size });
+        methods
+    }
+
+    /// The scene with this method's effects (the scene's own `shadows` kept) and settings.
+    pub fn scene(&self, scene: &Scene) -> Scene {
+        let mut scene = scene.clone();
+        let shadows = scene.has_effect("shadows");
+        let ambient = scene.has_effect("sh-ambient");
+        let mut effects: Vec<&str> = Vec::new();
+        match self {
+            Self::Lambert | Self::Reference { .. } => {}
+            Self::Blog | Self::OwnFit => {
+                effects.push("preintegrated-analytic");
+                scene.skin.preintegrated.analytic = if *self == Self::Blog { Analytic::Blog } else { Analytic::Own };
+            }
+            Self::Lut { size } => {
+                effects.push("preintegrated");
+                scene.skin.preintegrated.lut_size = [*size, *size];
+            }
+            Self::Tsd { passes, size } => {
+                effects.push("tsd");
+                scene.skin.tsd.passes = *passes;
+                scene.skin.tsd.size = *size;
+            }
+        }
+        let preintegrated = matches!(self, Self::Blog | Self::OwnFit | Self::Lut { .. });
+        if shadows {
+            effects.push("shadows");
+            if preintegrated {
+                effects.push("shadow-scattering");
+            }
+        }
+        if ambient {
+            effects.push("sh-ambient");
+        }
+        scene.effects = effects.into_iter().map(String::from).collect();
+        scene
+    }
+
+    /// What the GPU draws for this method: the method's scene through the pass graph, or for the
+    /// reference its CPU light map (baked with exact ray-cast shadows for the key light,
+    /// scattered with the full profile, dilated across UV borders) drawn as the diffuse term.
+    ///
+    /// # Errors
+    /// As [`setup::build`].
+    pub fn setup(&self, scene: &Scene, scene_file: &Path, loaded: &Loaded) -> Result<SkinSetup, LoadError> {
+        let scene = self.scene(scene);
+        let graph = load::graph(&scene);
+        let mut built = setup::build(&scene, scene_file, loaded, &graph)?;
+        if let Self::Reference { size } = self {
+            let shadows: Vec<bool> = (0..loaded.inputs.lights.len()).map(|i| graph.key_light == Some(i)).collect();
+            let bake = reference::bake(&loaded.inputs, &shadows, scene.mm_per_unit, *size);
+            let scattered = reference::scatter(&bake, &Profile::default());
+            built.light_map = Some(reference::dilate(&bake.to_texture(&scattered), 4));
+            built.features.diffuse = DiffuseMode::LightMap;
+        }
+        Ok(built)
+    }
+}
+
+/// Mean FLIP (LDR, NVIDIA's nv-flip at 67 pixels per degree: a 0.7 m view of a 24-inch 4K
+/// screen) of two sRGB-encoded RGBA8 images of one size.
+pub fn flip_mean(reference: &[u8], test: &[u8], width: u32, height: u32) -> f32 {
+    let rgb = |rgba: &[u8]| -> Vec<u8> { rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
+    let (r, t) = (rgb(reference), rgb(test));
+    let r = nv_flip::FlipImageRgb8::with_data(width, height, &r);
+    let t = nv_flip::FlipImageRgb8::with_data(width, height, &t);
+    let error = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&error).mean()
+}
+
+/// Root-mean-square difference of linear RGB over the pixels that are not black in either image
+/// (the head, not the background), relative to the reference's mean over them.
+pub fn rmse(reference: &[[f32; 4]], test: &[[f32; 4]]) -> f32 {
+    let (mut sum, mut level, mut n) = (0.0f64, 0.0f64, 0usize);
+    for (r, t) in reference.iter().zip(test) {
+        if r[..3].iter().chain(&t[..3]).all(|&v| v == 0.0) {
+            continue;
+        }
+        for c in 0..3 {
+            sum += ((r[c] - t[c]) as f64).powi(2);
+            level += r[c] as f64;
+        }
+        n += 3;
+    }
+    if n == 0 || level <= 0.0 {
+        return 0.0;
+    }
+    ((sum / n as f64).sqrt() / (level / n as f64)) as f32
+}
