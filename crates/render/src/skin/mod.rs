@@ -3,4 +3,7 @@
 //! per-vertex curvature, and the exact texture-space reference every real-time effect is
 //! measured against.
 
+pub mod lut;
+pub mod lut_file;
 pub mod profile;
+pub mod shadow;
