@@ -191,6 +191,22 @@ fn profile_weights_sum_to_one_per_channel() {
 }
 
 #[test]
+fn the_oracle_is_equation_1_1_as_profile_defines_it() {
+    // Where the kernel is wide (r = 1 mm), main's midpoint ring integral converges well: the two
+    // definitions must agree.
+    for (normalisation, domain) in configs() {
+        for n_dot_l in [-1.0, -0.4, 0.0, 0.3, 1.0] {
+            let profile = Profile::new(normalisation);
+            let want = skinkit_render::skin::profile::ring_integral(&profile, domain, n_dot_l, 1.0, 200_000);
+            let got = diffuse_oracle(normalisation, domain, n_dot_l, 1.0);
+            for c in 0..3 {
+                assert!((got[c] - want[c]).abs() < 1e-6, "{n_dot_l}: {got:?} vs {want:?}");
+            }
+        }
+    }
+}
+
+#[test]
 fn diffuse_matches_quadrature_over_the_whole_table() {
     for (normalisation, domain) in configs() {
         let lut = DiffuseLut::build(&diffuse_spec(64, normalisation, domain)).unwrap();

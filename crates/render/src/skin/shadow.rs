@@ -21,10 +21,12 @@
 //! - `R1` is the profile's 1-D marginal ([`super::profile::Profile::marginal`]), not its radial
 //!   slice: light crossing a straight edge is the 2-D profile integrated along the edge, a 1-D
 //!   convolution with the marginal. The paper's listing weights by the radial slice `R(|x|)`
-//!   (`Scatter(abs(a))`), which over-weights the narrow Gaussians relative to the wide ones. The
-//!   marginal of a sum of radial Gaussians is the sum of 1-D Gaussians with the same variances and
-//!   weights whichever normalisation the radial profile uses, so this table does not depend on
-//!   [`super::profile::Normalisation`]. It integrates to 1 per channel.
+//!   (`Scatter(abs(a))`). In its 1-D normalisation that slice is itself a sum of 1-D Gaussians with
+//!   the same weights but variances `1.414 v`, i.e. the marginal of a wider profile; a 2-D
+//!   normalised slice would over-weight the narrow Gaussians (peaks scale as `1/v`, not
+//!   `1/sqrt(v)`). The marginal of a sum of radial Gaussians is the sum of 1-D Gaussians with the
+//!   same variances and weights whichever normalisation the radial profile uses, so this table
+//!   does not depend on [`super::profile::Normalisation`]. It integrates to 1 per channel.
 //! - The paper's `R(x / w)` form (the profile in penumbra units) and the listing's
 //!   `newPenumbra(location + a / width)` are this integral with `x` in mm.
 //!
