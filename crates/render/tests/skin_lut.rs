@@ -160,13 +160,11 @@ fn diffuse_error(lut: &DiffuseLut, every: u32) -> f64 {
 fn assert_monotonic_rows(texels: &[[f32; 3]], width: u32, what: &str) {
     for (j, row) in texels.chunks(width as usize).enumerate() {
         for (i, pair) in row.windows(2).enumerate() {
-            for c in 0..3 {
+            for (c, (before, after)) in pair[0].iter().zip(pair[1]).enumerate() {
                 assert!(
-                    pair[1][c] >= pair[0][c] - 1e-7,
-                    "{what}: row {j}, channel {c} decreases from column {i} ({}) to {} ({})",
-                    pair[0][c],
-                    i + 1,
-                    pair[1][c]
+                    after >= before - 1e-7,
+                    "{what}: row {j}, channel {c} decreases from column {i} ({before}) to {} ({after})",
+                    i + 1
                 );
             }
         }
