@@ -44,6 +44,9 @@ enum Command {
     Face(cmd::stitch::FaceArgs),
     /// Render a scene (mesh, maps, Lafortune skin, lights, cameras) with the bundled wgpu renderer.
     Render(cmd::render::Args),
+    /// Build a pre-integrated skin table (diffuse falloff or shadow scattering) as a float EXR.
+    #[command(subcommand)]
+    Lut(cmd::lut::Command),
     /// Open a scene in the interactive viewer (orbit, move the light, toggle the normal map and
     /// specular); built with `--features viewer`.
     #[cfg(feature = "viewer")]
@@ -63,6 +66,7 @@ fn main() {
         Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
         Command::Face(args) => cmd::stitch::run_face(args, &out),
         Command::Render(args) => cmd::render::run(args, &out),
+        Command::Lut(command) => cmd::lut::run(command, &out),
         #[cfg(feature = "viewer")]
         Command::View(args) => cmd::render::view(args, &out),
     };

@@ -4,6 +4,7 @@ pub mod batch;
 pub mod capture;
 pub mod demo;
 pub mod figures;
+pub mod lut;
 pub mod render;
 pub mod rig;
 pub mod samples;

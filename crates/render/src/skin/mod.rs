@@ -1,7 +1,26 @@
 //! Skin scattering on the CPU: the diffusion profile, the pre-integrated tables (diffuse falloff
 //! and shadow scattering), their closed-form fits, the spherical-harmonic form for ambient light,
 //! per-vertex curvature, and the exact texture-space reference every real-time effect is
-//! measured against.
+//! measured against; the scene's scattering settings and what the GPU passes are given.
+//!
+//! - [`profile`]: the sum-of-Gaussians diffusion profile and equation 1.1 by brute force.
+//! - [`lut`], [`shadow`], [`lut_file`]: the pre-integrated diffuse and shadow-scattering tables
+//!   and their EXR files (`skinkit lut`).
+//! - [`fit`]: the blog's closed form and our own fit of the diffuse table.
+//! - [`sh`]: order-2 SH environments and the skin's zonal convolution factors.
+//! - [`curvature`]: per-vertex 1/r from the mesh.
+//! - [`reference`]: the exact texture-space convolution.
+//! - [`options`], [`setup`], [`compare`]: scene settings, the GPU setup of a scene's pass graph,
+//!   and every method side by side.
 
+pub mod compare;
+pub mod curvature;
+pub mod fit;
+pub mod lut;
+pub mod lut_file;
 pub mod options;
 pub mod profile;
+pub mod reference;
+pub mod setup;
+pub mod sh;
+pub mod shadow;

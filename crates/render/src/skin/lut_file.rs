@@ -1,0 +1,264 @@
+//! The pre-integrated tables ([`super::lut`], [`super::shadow`]) as float RGB OpenEXR files, with
+//! their definitions in header attributes so another engine can read one without guessing.
+//!
+//! Pixels are 32-bit float R, G, B, uncompressed, row 0 of the image = row 0 of the table (the
+//! top). Attributes (all in the layer header):
+//!
+//! | name | type | value |
+//! | --- | --- | --- |
+//! | `skinkit.table` | text | `diffuse` or `shadow` |
+//! | `skinkit.x`, `skinkit.y` | text | what the columns and rows hold |
+//! | `skinkit.cache_key` | text | the spec's cache key |
+//! | `skinkit.profile` | text | the diffusion profile |
+//! | `skinkit.normalisation` | text | `2d` or `1d` (diffuse) |
+//! | `skinkit.domain` | text | `full` or `half` (diffuse) |
+//! | `skinkit.inv_r_min`, `skinkit.inv_r_max` | f32 | curvature range, 1/mm (diffuse) |
+//! | `skinkit.filter` | text | `box` (shadow: the shadow-map filter, linear-ramp penumbra) |
+//! | `skinkit.new_penumbra` | f32 | new penumbra width / filtered width (shadow) |
+//! | `skinkit.w_min_mm`, `skinkit.w_max_mm` | f32 | penumbra width range, mm (shadow) |
+//! | `skinkit.profile_slice` | text | `marginal` (shadow) |
+//!
+//! Files are written atomically ([`skinkit_maps::io::write_atomic`]). Readers come in a pair:
+//! [`read`] loads a file and calls [`decode`] on its bytes.
+
+use std::collections::BTreeMap;
+use std::io::Cursor;
+use std::path::Path;
+
+use exr::meta::attribute::{AttributeValue, Text};
+use exr::prelude::{
+    Encoding, Image, Layer, LayerAttributes, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage,
+};
+
+use super::lut::{DiffuseLut, MAX_SIDE};
+use super::shadow::ShadowLut;
+
+/// Errors reading or writing a table file; messages name the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LutFileError {
+    /// Writing failed (the folder, the encoder or the rename); the target is untouched.
+    #[error(transparent)]
+    Write(#[from] skinkit_maps::Error),
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// Not an RGB float EXR this module can read.
+    #[error("{path}: not a readable table: {reason}")]
+    Decode { path: String, reason: String },
+    /// Sides beyond the table limit, refused before decoding pixels.
+    #[error("{path}: {width}x{height} is larger than a table may be ({max} per side)")]
+    TooLarge { path: String, width: usize, height: usize, max: u32 },
+}
+
+/// One header attribute of a table file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LutAttribute {
+    /// A text attribute.
+    Text(String),
+    /// A 32-bit float attribute.
+    F32(f32),
+}
+
+/// A table file read back: its pixels and its `skinkit.*` attributes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LutImage {
+    pub width: usize,
+    pub height: usize,
+    /// Row-major RGB, row 0 at the top.
+    pub texels: Vec<[f32; 3]>,
+    /// Every attribute whose name starts with `skinkit.` (other types are skipped).
+    pub attributes: BTreeMap<String, LutAttribute>,
+}
+
+impl LutImage {
+    /// The text attribute `name`, if present with that type.
+    pub fn text(&self, name: &str) -> Option<&str> {
+        match self.attributes.get(name) {
+            Some(LutAttribute::Text(t)) => Some(t),
+            _ => None,
+        }
+    }
+
+    /// The float attribute `name`, if present with that type.
+    pub fn float(&self, name: &str) -> Option<f32> {
+        match self.attributes.get(name) {
+            Some(LutAttribute::F32(v)) => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// The texel at column `i`, row `j`.
+    pub fn texel(&self, i: usize, j: usize) -> [f32; 3] {
+        self.texels[j * self.width + i]
+    }
+}
+
+/// The attributes [`write_diffuse`] stores for `lut`.
+pub fn diffuse_attributes(lut: &DiffuseLut) -> BTreeMap<String, LutAttribute> {
+    let s = &lut.spec;
+    let mut a = common_attributes("diffuse", &lut.cache_key());
+    text(&mut a, "x", "n_dot_l = 2 u - 1 at column centres u = (i + 0.5) / width; sample at u = n_dot_l * 0.5 + 0.5");
+    text(
+        &mut a,
+        "y",
+        "inv_r (1/mm) = inv_r_min + j (inv_r_max - inv_r_min) / (height - 1) at row centres, row 0 at the top",
+    );
+    text(&mut a, "normalisation", s.normalisation.name());
+    text(&mut a, "domain", s.domain.name());
+    float(&mut a, "inv_r_min", s.inv_r_min);
+    float(&mut a, "inv_r_max", s.inv_r_max);
+    text(&mut a, "equation", "Penner-Borshukov 2011 eq. 1.1, clamped cosine, denominator with the same r");
+    a
+}
+
+/// The attributes [`write_shadow`] stores for `lut`.
+pub fn shadow_attributes(lut: &ShadowLut) -> BTreeMap<String, LutAttribute> {
+    let s = &lut.spec;
+    let mut a = common_attributes("shadow", &lut.cache_key());
+    text(&mut a, "x", "shadow value s = (i + 0.5) / width at column centres; sample at u = s");
+    text(
+        &mut a,
+        "y",
+        "penumbra width w (mm) = w_min_mm + j (w_max_mm - w_min_mm) / (height - 1) at row centres, row 0 at the top",
+    );
+    text(&mut a, "filter", "box");
+    text(&mut a, "penumbra", "P(t) = clamp(0.5 + t, 0, 1), P^-1(s) = s - 0.5; new penumbra a linear ramp");
+    text(&mut a, "profile_slice", "marginal");
+    float(&mut a, "new_penumbra", s.new_penumbra);
+    float(&mut a, "w_min_mm", s.w_min_mm);
+    float(&mut a, "w_max_mm", s.w_max_mm);
+    text(&mut a, "equation", "Penner-Borshukov 2011 sec. 1.6, P_S(s, w) = int P'(P^-1(s) w + x) R1(x) dx");
+    a
+}
+
+fn common_attributes(table: &str, cache_key: &str) -> BTreeMap<String, LutAttribute> {
+    let mut a = BTreeMap::new();
+    text(&mut a, "table", table);
+    text(&mut a, "cache_key", cache_key);
+    text(&mut a, "profile", "d'Eon-Luebke 2007 sum of 6 Gaussians (green weight 0.336)");
+    a
+}
+
+fn text(map: &mut BTreeMap<String, LutAttribute>, name: &str, value: &str) {
+    map.insert(format!("skinkit.{name}"), LutAttribute::Text(value.to_owned()));
+}
+
+fn float(map: &mut BTreeMap<String, LutAttribute>, name: &str, value: f32) {
+    map.insert(format!("skinkit.{name}"), LutAttribute::F32(value));
+}
+
+/// Writes a diffuse table as a float RGB EXR with its definitions (module docs), atomically.
+///
+/// # Errors
+/// When the folder is not writable or encoding fails.
+pub fn write_diffuse(path: &Path, lut: &DiffuseLut) -> Result<(), LutFileError> {
+    let (w, h) = (lut.spec.width as usize, lut.spec.height as usize);
+    write(path, w, h, &lut.texels, &diffuse_attributes(lut))
+}
+
+/// Writes a shadow table as a float RGB EXR with its definitions (module docs), atomically.
+///
+/// # Errors
+/// When the folder is not writable or encoding fails.
+pub fn write_shadow(path: &Path, lut: &ShadowLut) -> Result<(), LutFileError> {
+    let (w, h) = (lut.spec.width as usize, lut.spec.height as usize);
+    write(path, w, h, &lut.texels, &shadow_attributes(lut))
+}
+
+fn write(
+    path: &Path,
+    width: usize,
+    height: usize,
+    texels: &[[f32; 3]],
+    attributes: &BTreeMap<String, LutAttribute>,
+) -> Result<(), LutFileError> {
+    let mut layer_attributes = LayerAttributes::default();
+    for (name, value) in attributes {
+        let value = match value {
+            LutAttribute::Text(t) => AttributeValue::Text(exr_text(t)),
+            LutAttribute::F32(v) => AttributeValue::F32(*v),
+        };
+        layer_attributes.other.insert(exr_text(name), value);
+    }
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let [r, g, b] = texels[pos.y() * width + pos.x()];
+        (r, g, b)
+    });
+    let layer = Layer::new((width, height), layer_attributes, Encoding::UNCOMPRESSED, channels);
+    let image = Image::from_layer(layer);
+    skinkit_maps::io::write_atomic(path, |out| {
+        image
+            .write()
+            .to_buffered(out)
+            .map_err(|e| skinkit_maps::Error::Encode { path: path.to_owned(), reason: e.to_string() })
+    })?;
+    Ok(())
+}
+
+/// Our attribute texts are ASCII; anything else is replaced rather than panicking.
+fn exr_text(s: &str) -> Text {
+    let ascii: String = s.chars().map(|c| if c.is_ascii() { c } else { '?' }).collect();
+    Text::new_or_panic(ascii)
+}
+
+/// Reads a table file written by [`write_diffuse`] or [`write_shadow`].
+///
+/// # Errors
+/// When the file cannot be read, is not an RGB EXR, or is larger than [`MAX_SIDE`] per side.
+pub fn read(path: &Path) -> Result<LutImage, LutFileError> {
+    let name = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| LutFileError::Io { path: name.clone(), source })?;
+    decode(&bytes, &name)
+}
+
+/// Decodes the bytes of a table file; `name` appears in errors.
+///
+/// # Errors
+/// As [`read`].
+pub fn decode(bytes: &[u8], name: &str) -> Result<LutImage, LutFileError> {
+    let bad = |e: exr::error::Error| LutFileError::Decode { path: name.to_owned(), reason: e.to_string() };
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(bad)?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| LutFileError::Decode { path: name.to_owned(), reason: "no layer".to_owned() })?;
+    let (width, height) = (header.layer_size.width(), header.layer_size.height());
+    if width > MAX_SIDE as usize || height > MAX_SIDE as usize {
+        return Err(LutFileError::TooLarge { path: name.to_owned(), width, height, max: MAX_SIDE });
+    }
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size, _| (size.width(), vec![[0.0f32; 3]; size.width() * size.height()]),
+            |(w, data): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b): (f32, f32, f32)| {
+                data[pos.y() * *w + pos.x()] = [r, g, b]
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(bad)?;
+    let layer = &image.layer_data;
+    let attributes =
+        layer.attributes.other.iter().chain(image.attributes.other.iter()).filter_map(skinkit_attribute).collect();
+    let size = layer.size;
+    Ok(LutImage { width: size.width(), height: size.height(), texels: layer.channel_data.pixels.1.clone(), attributes })
+}
+
+fn skinkit_attribute((name, value): (&Text, &AttributeValue)) -> Option<(String, LutAttribute)> {
+    let name = name.to_string();
+    if !name.starts_with("skinkit.") {
+        return None;
+    }
+    match value {
+        AttributeValue::Text(t) => Some((name, LutAttribute::Text(t.to_string()))),
+        AttributeValue::F32(v) => Some((name, LutAttribute::F32(*v))),
+        _ => None,
+    }
+}
