@@ -3,4 +3,5 @@
 //! per-vertex curvature, and the exact texture-space reference every real-time effect is
 //! measured against.
 
+pub mod fit;
 pub mod profile;
