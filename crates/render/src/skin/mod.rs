@@ -5,3 +5,4 @@
 
 pub mod fit;
 pub mod profile;
+pub mod sh;
