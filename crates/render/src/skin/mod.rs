@@ -4,3 +4,4 @@
 //! measured against.
 
 pub mod profile;
+pub mod curvature;
