@@ -3,5 +3,6 @@
 //! per-vertex curvature, and the exact texture-space reference every real-time effect is
 //! measured against.
 
-pub mod profile;
 pub mod curvature;
+pub mod profile;
+pub mod reference;
