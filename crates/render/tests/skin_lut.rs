@@ -538,6 +538,9 @@ fn diffuse_file_round_trips_pixels_and_definitions() {
     assert!(matches!(image.attributes.get("skinkit.inv_r_max"), Some(LutAttribute::F32(_))));
     // No temporary file is left behind.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    // The table comes back whole, spec included; it is not a shadow table.
+    assert!(image.clone().into_shadow("diffuse.exr").unwrap_err().to_string().contains("not a shadow table"));
+    assert_eq!(image.into_diffuse("diffuse.exr").unwrap(), lut);
 }
 
 #[test]
@@ -556,6 +559,7 @@ fn shadow_file_round_trips_pixels_and_definitions() {
     assert_eq!(image.float("skinkit.w_min_mm"), Some(0.5));
     assert_eq!(image.float("skinkit.w_max_mm"), Some(32.0));
     assert_eq!(image.float("skinkit.new_penumbra"), Some(0.25));
+    assert_eq!(image.into_shadow("shadow.exr").unwrap(), lut);
 }
 
 #[test]

@@ -26,7 +26,9 @@
 //!   [`DiffuseLutSpec::v_for`].
 //!
 //! [`DiffuseLut::sample`] reads the table exactly as a GPU's bilinear, clamp-to-edge sampler would
-//! at `(N.L * 0.5 + 0.5, v_for(1/r))`.
+//! at `(N.L * 0.5 + 0.5, v_for(1/r))` (with exact blend weights; GPUs quantise them to about 8
+//! bits, an error far below the table's own smoothness). Upload as `Rgba32Float` or `Rgba16Float`
+//! (the values lie in `[0, 1]`); 32-bit float textures are not filterable everywhere.
 //!
 //! # How it is built
 //!

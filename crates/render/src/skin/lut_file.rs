@@ -19,7 +19,8 @@
 //! | `skinkit.profile_slice` | text | `marginal` (shadow) |
 //!
 //! Files are written atomically ([`skinkit_maps::io::write_atomic`]). Readers come in a pair:
-//! [`read`] loads a file and calls [`decode`] on its bytes.
+//! [`read`] loads a file and calls [`decode`] on its bytes; [`LutImage::into_diffuse`] and
+//! [`LutImage::into_shadow`] turn what was read back into a table with its spec.
 
 use std::collections::BTreeMap;
 use std::io::Cursor;
@@ -30,8 +31,9 @@ use exr::prelude::{
     Encoding, Image, Layer, LayerAttributes, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage,
 };
 
-use super::lut::{DiffuseLut, MAX_SIDE};
-use super::shadow::ShadowLut;
+use super::lut::{DiffuseLut, DiffuseLutSpec, MAX_SIDE};
+use super::profile::{Domain, Normalisation};
+use super::shadow::{ShadowLut, ShadowLutSpec};
 
 /// Errors reading or writing a table file; messages name the file.
 #[derive(Debug, thiserror::Error)]
@@ -96,6 +98,68 @@ impl LutImage {
     pub fn texel(&self, i: usize, j: usize) -> [f32; 3] {
         self.texels[j * self.width + i]
     }
+
+    /// The diffuse table this file holds, its spec read back from the attributes (so a renderer
+    /// can load a cached build and check its [`DiffuseLut::cache_key`]); `name` appears in errors.
+    ///
+    /// # Errors
+    /// When `skinkit.table` is not `diffuse`, an attribute is missing or unknown, or the spec it
+    /// gives does not validate.
+    pub fn into_diffuse(self, name: &str) -> Result<DiffuseLut, LutFileError> {
+        self.expect_table("diffuse", name)?;
+        let normalisation = match self.required_text("skinkit.normalisation", name)? {
+            "2d" => Normalisation::TwoD,
+            "1d" => Normalisation::OneD,
+            other => return Err(decode_error(name, format!("unknown skinkit.normalisation `{other}`"))),
+        };
+        let domain = match self.required_text("skinkit.domain", name)? {
+            "full" => Domain::Full,
+            "half" => Domain::Half,
+            other => return Err(decode_error(name, format!("unknown skinkit.domain `{other}`"))),
+        };
+        let (width, height) = (self.width as u32, self.height as u32);
+        let inv_r_min = self.required_float("skinkit.inv_r_min", name)?;
+        let inv_r_max = self.required_float("skinkit.inv_r_max", name)?;
+        let spec = DiffuseLutSpec { width, height, normalisation, domain, inv_r_min, inv_r_max };
+        spec.validate().map_err(|e| decode_error(name, e))?;
+        Ok(DiffuseLut { spec, texels: self.texels })
+    }
+
+    /// The shadow table this file holds, its spec read back from the attributes.
+    ///
+    /// # Errors
+    /// As [`LutImage::into_diffuse`], for `skinkit.table = shadow`.
+    pub fn into_shadow(self, name: &str) -> Result<ShadowLut, LutFileError> {
+        self.expect_table("shadow", name)?;
+        let spec = ShadowLutSpec {
+            width: self.width as u32,
+            height: self.height as u32,
+            w_min_mm: self.required_float("skinkit.w_min_mm", name)?,
+            w_max_mm: self.required_float("skinkit.w_max_mm", name)?,
+            new_penumbra: self.required_float("skinkit.new_penumbra", name)?,
+        };
+        spec.validate().map_err(|e| decode_error(name, e))?;
+        Ok(ShadowLut { spec, texels: self.texels })
+    }
+
+    fn expect_table(&self, table: &str, name: &str) -> Result<(), LutFileError> {
+        match self.required_text("skinkit.table", name)? {
+            t if t == table => Ok(()),
+            other => Err(decode_error(name, format!("holds a {other} table, not a {table} table"))),
+        }
+    }
+
+    fn required_text(&self, attribute: &str, name: &str) -> Result<&str, LutFileError> {
+        self.text(attribute).ok_or_else(|| decode_error(name, format!("no text attribute {attribute}")))
+    }
+
+    fn required_float(&self, attribute: &str, name: &str) -> Result<f32, LutFileError> {
+        self.float(attribute).ok_or_else(|| decode_error(name, format!("no f32 attribute {attribute}")))
+    }
+}
+
+fn decode_error(name: &str, reason: impl ToString) -> LutFileError {
+    LutFileError::Decode { path: name.to_owned(), reason: reason.to_string() }
 }
 
 /// The attributes [`write_diffuse`] stores for `lut`.
