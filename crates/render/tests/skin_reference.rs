@@ -483,8 +483,9 @@ fn to_texture_and_dilate() {
     assert!(dilated_edge.y > centre_edge.y);
 }
 
-/// The sample head (12.5k vertices, mm) with a shadowed key light: bake and scatter times at
-/// 512 and 1024 texels. A measurement, not a check: run with
+/// The sample head (12.5k vertices, mm) with two shadowed lights: bake and scatter times at
+/// 512 and 1024 texels. Measured on 2 shared cores (load 3-4): 512: 259584 texels, bake 0.65 s,
+/// scatter 49 s; 1024: 1037824 texels, bake 2.4 s, scatter 598 s. A measurement, not a check: run with
 /// `cargo test --release -p skinkit-render --test skin_reference -- --ignored --nocapture`.
 #[test]
 #[ignore]

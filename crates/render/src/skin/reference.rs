@@ -27,7 +27,7 @@
 //! `M_i = sum_j E_j W_ij / sum_j W_ij`,  `W_ij = integral over texel j of R(|p_i - q|) dq`
 //!
 //! over the covered texels `j` within [`support_mm`] (`3.5 sigma` of the profile's widest
-//! Gaussian: 9.53 mm for [`Normalisation::TwoD`], where that Gaussian has fallen to
+//! Gaussian: 9.53 mm for the 2-D profile, where that Gaussian has fallen to
 //! `exp(-6.125) = 2.2e-3` of its peak and keeps 99.78 % of its 2-D mass, so at most 0.017 % of the
 //! red profile's energy, and none of green's or blue's above 1e-5, is cut), with distances in 3-D
 //! (mm). Dividing by the summed weights is the LUT's own normalisation (equation 1.1 divides by
@@ -43,9 +43,9 @@
 //! `exp(-dz^2 / 2v) * B(dx, a) * B(dy, b)` with `(dx, dy, dz)` the offset in the rectangle's frame
 //! and `B(x, a)` the mass of the 1-D Gaussian on `[x - a/2, x + a/2]` (from `erfc`, or, when
 //! `a < sigma`, the midpoint rule with its second- and fourth-order terms: relative error below
-//! 5e-5 within two sigma, and five times fewer `erfc` calls on a head). It
+//! 5e-5 within two sigma; it took the 512-texel head's scatter from 72 s to 49 s). It
 //! is exact for flat rectangular texels and tends to `R(d) A_j` for small ones; Gaussians below
-//! `exp(-20)` of their peak over the whole texel are skipped. With [`Normalisation::OneD`] each
+//! `exp(-20)` of their peak over the whole texel are skipped. With [`crate::skin::profile::Normalisation::OneD`] each
 //! Gaussian's integral is scaled by its normalisation relative to the 2-D one.
 //!
 //! Texels whose shading normal faces away from the receiver's (`n_i . n_j < 0`) are left out: the
@@ -60,8 +60,8 @@
 //! seams read skin, not black.
 //!
 //! # Hard cases
-//! Triangles with an index out of range, a non-finite corner or zero UV area cover nothing and
-//! cast no shadow; a non-finite or non-positive `mm_per_unit` or `size = 0` gives a bake with no
+//! Triangles with an index out of range or a non-finite corner cover nothing and cast no shadow;
+//! triangles with zero UV area cover nothing but still cast shadows; a non-finite or non-positive `mm_per_unit` or `size = 0` gives a bake with no
 //! covered texel. Missing `shadows` entries count as `false`. Every output is finite.
 
 use std::collections::HashMap;
