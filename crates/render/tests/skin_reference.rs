@@ -508,7 +508,11 @@ fn measure_sample_head() {
         Light { kind: LightKind::Point { position: Vec3::new(-300.0, 50.0, 300.0) }, color: Vec3::ONE, intensity: 4e4 };
     let scene = inputs(vertices, mesh.indices.clone(), vec![key, fill]);
     println!("threads: {}", rayon::current_num_threads());
-    for size in [512, 1024] {
+    // SKINKIT_MEASURE_SIZES=256,512 picks other sizes.
+    let sizes: Vec<u32> = std::env::var("SKINKIT_MEASURE_SIZES")
+        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_else(|_| vec![512, 1024]);
+    for size in sizes {
         let start = std::time::Instant::now();
         let b = bake(&scene, &[true, true], HEAD_MM_PER_UNIT, size);
         let baked = start.elapsed();

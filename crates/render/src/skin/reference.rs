@@ -50,8 +50,8 @@
 //!
 //! Texels whose shading normal faces away from the receiver's (`n_i . n_j < 0`) are left out: the
 //! stand-in for a geodesic distance, so light does not bleed through lips, eyelids and ears that
-//! are close in 3-D but far along the skin. Sums run over a uniform grid of cells of the support
-//! size, cells in a fixed order and texels in index order within a cell, in f64: the result has
+//! are close in 3-D but far along the skin. Sums run over a uniform grid of cells a third of the
+//! support, cells in a fixed order and texels in index order within a cell, in f64: the result has
 //! the same bits whatever the thread count.
 //!
 //! # Textures ([`ReferenceBake::to_texture`], [`dilate`])
@@ -430,35 +430,57 @@ fn midpoint_correction(t: f64, r: f64) -> f64 {
     1.0 + r2 / 24.0 * (t2 - 1.0) + r2 * r2 / 1920.0 * (t2 * t2 - 6.0 * t2 + 3.0)
 }
 
-/// Covered texels bucketed in cubes of the support's size.
+/// Covered texels bucketed in cubes of a fraction of the support's size.
 struct Grid {
     cell: f64,
+    /// Cells on each side of a texel's own that can hold texels within the support.
+    reach: i32,
+    support: f64,
     cells: HashMap<[i32; 3], Vec<u32>>,
 }
 
+/// Cells per support radius: finer cells drop more candidates beyond the support (the 27 cells
+/// of side `r` hold 2.9 times the texels of a disc of radius `r` on a surface).
+const CELLS_PER_SUPPORT: f64 = 3.0;
+
 impl Grid {
-    fn new(bake: &ReferenceBake, cell: f64) -> Self {
+    fn new(bake: &ReferenceBake, support: f64) -> Self {
+        let cell = support / CELLS_PER_SUPPORT;
         let mut cells: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
         for (i, &p) in bake.position_mm.iter().enumerate() {
             if bake.covered[i] && p.is_finite() {
                 cells.entry(Self::key(p, cell)).or_default().push(i as u32);
             }
         }
-        Self { cell, cells }
+        Self { cell, reach: CELLS_PER_SUPPORT.ceil() as i32, support, cells }
     }
 
     fn key(p: Vec3, cell: f64) -> [i32; 3] {
         p.to_array().map(|x| (x as f64 / cell).floor() as i32)
     }
 
-    /// Texels in the 27 cells around `p`, in a fixed order.
+    /// Texels in the cells around `p` whose box comes within the support, in a fixed order.
     fn near(&self, p: Vec3) -> impl Iterator<Item = u32> + '_ {
         let c = Self::key(p, self.cell);
-        (-1..=1)
-            .flat_map(move |dz| (-1..=1).flat_map(move |dy| (-1..=1).map(move |dx| [c[0] + dx, c[1] + dy, c[2] + dz])))
+        let q = p.to_array().map(f64::from);
+        let r = self.reach;
+        (-r..=r)
+            .flat_map(move |dz| (-r..=r).flat_map(move |dy| (-r..=r).map(move |dx| [c[0] + dx, c[1] + dy, c[2] + dz])))
+            .filter(move |k| self.box_distance2(*k, q) <= self.support * self.support)
             .filter_map(|k| self.cells.get(&k))
             .flatten()
             .copied()
+    }
+
+    /// Squared distance from `q` to cell `k`'s box.
+    fn box_distance2(&self, k: [i32; 3], q: [f64; 3]) -> f64 {
+        (0..3)
+            .map(|a| {
+                let lo = k[a] as f64 * self.cell;
+                let d = (lo - q[a]).max(q[a] - (lo + self.cell)).max(0.0);
+                d * d
+            })
+            .sum()
     }
 }
 
