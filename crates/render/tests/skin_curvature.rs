@@ -248,3 +248,25 @@ fn hard_cases_stay_finite() {
     }
     assert!(vertex_curvature(&[], &[], 1.0).is_empty());
 }
+
+#[test]
+fn sample_head_curvature_is_finite_and_head_sized() {
+    use skinkit_render::head::{HEAD_MM_PER_UNIT, sample_head};
+    let head = sample_head();
+    let h = vertex_curvature(&head.positions, &head.indices, HEAD_MM_PER_UNIT);
+    assert!(h.iter().all(|v| v.is_finite() && *v >= 0.0));
+    let mut sorted = h.clone();
+    sorted.sort_by(f32::total_cmp);
+    let at = |q: f64| sorted[((sorted.len() - 1) as f64 * q) as usize];
+    println!(
+        "sample head 1/r (1/mm): 5% {:.4}, median {:.4}, 95% {:.4}, max {:.4}",
+        at(0.05),
+        at(0.5),
+        at(0.95),
+        at(1.0)
+    );
+    // The head is an ellipsoid of semi-axes 75-105 mm before its features: most of it has
+    // 1/r between 1/150 and 1/50 per mm, and no feature is sharper than a 1 mm radius.
+    assert!((1.0 / 150.0..1.0 / 50.0).contains(&at(0.5)), "{}", at(0.5));
+    assert!(at(1.0) < 1.0, "{}", at(1.0));
+}
