@@ -41,8 +41,12 @@
 //! | | own | 0.0090, 0.0017, 0.00096 | 0.0016, 0.00036, 0.00018 |
 //!
 //! The blog's largest errors are in red near the terminator at r = 2 mm: its table scatters
-//! far more light past N.L = 0 than ours (which uses the 2-D normalisation, where the narrow
-//! Gaussians dominate the ring), so it is brighter there by up to 0.14.
+//! far more light past N.L = 0 than ours, so it is brighter there by up to 0.14. Its table was
+//! most likely built with the pre-integrated paper's listing normalisation
+//! ([`super::profile::Normalisation::OneD`], full ring): against that table the blog's rms error
+//! falls to 0.030, 0.0069, 0.0017 (max 0.19, 0.022, 0.0058), and its zonal factors agree with it
+//! to 3% ([`super::sh`]). [`fit_own_direct`] takes any samples, so the same form can be refitted
+//! to another definition's table.
 //!
 //! The WGSL twins are in `shaders/skin_fit.wgsl` ([`SKIN_FIT_WGSL`]).
 

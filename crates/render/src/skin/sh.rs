@@ -26,7 +26,13 @@
 //!   texture). Of the signs lost in extraction, `1.0 - x` and `1 - rc^3` are certain; the ZH0
 //!   coefficients are read as positive (`+0.061659 / (3.2 curva + 0.4)` makes red reach
 //!   Lambert's 0.8862 at r = 16 mm; a minus would leave it at 0.852). The blog has no band 2:
-//!   [`blog_zonal`] uses Lambert's `pi / 4` there.
+//!   [`blog_zonal`] uses Lambert's `pi / 4` there. They follow the table of the paper's listing
+//!   normalisation ([`super::profile::Normalisation::OneD`]) over the full ring: against its
+//!   factors the blog is within 3.0%, 0.26%, 0.15% (A_0, red, green, blue) and 1.7%, 0.21%,
+//!   0.13% (A_1) for 1/r in [0.0625, 0.5] (the half ring misses A_1 red at r = 2 mm by 17%).
+//!   Against ours ([`skin_zonal`], 2-D normalisation, far less red scattered) it is off by up to
+//!   13%, 0.70%, 0.16% (A_0) and 23%, 1.0%, 0.37% (A_1), worst at r = 2 mm, where the blog's
+//!   red A_0 = 3.63 and A_1 = 1.57 against our 3.20 and 2.03 (Lambert: 3.14, 2.09).
 
 use glam::Vec3;
 
