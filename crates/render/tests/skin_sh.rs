@@ -1,6 +1,9 @@
 //! Order-2 SH for ambient light on skin (`skin::sh`) against closed forms (Funk-Hecke,
 //! Ramamoorthi-Hanrahan) and brute-force 2-D integration over the sphere.
 
+// Index loops over bands and channels mirror the formulas' subscripts.
+#![allow(clippy::needless_range_loop)]
+
 use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_render::skin::fit::reference_direct;
