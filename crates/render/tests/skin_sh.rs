@@ -357,3 +357,20 @@ fn per_channel_normals_pick_each_channel() {
     }
     assert_eq!(sh.convolve_per_channel([Vec3::Z; 3], &zonal), sh.convolve(Vec3::Z, &zonal));
 }
+
+#[test]
+fn nine_samples_interpolate_the_factors_closely() {
+    // The table's resolution stated in `ZonalTable`'s docs: 9 samples over [0, 1] mm^-1.
+    let table = ZonalTable::build(0.0, 1.0, 9).unwrap();
+    let mut worst = 0.0f32;
+    for i in 0..8 {
+        let inv_r = (i as f32 + 0.5) / 8.0;
+        let (lerped, exact) = (table.sample(inv_r), skin_zonal(inv_r));
+        for l in 0..3 {
+            for c in 0..3 {
+                worst = worst.max((lerped[l][c] / exact[l][c] - 1.0).abs());
+            }
+        }
+    }
+    assert!(worst < 2.5e-3, "{worst}");
+}

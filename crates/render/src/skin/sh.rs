@@ -255,7 +255,9 @@ pub fn skin_irradiance(sh: &Sh9, n: Vec3, inv_r_mm: f32) -> [f32; 3] {
 
 /// [`skin_zonal`] sampled at `n` values of 1/r, evenly from `inv_r_min` to `inv_r_max`
 /// inclusive, for a GPU texture: width `n` (1/r along u, texel centres on the samples), 3 rows
-/// (row l holds `A_l`), RGB ([`ZonalTable::texels`]).
+/// (row l holds `A_l`), RGB ([`ZonalTable::texels`]). Linear interpolation between 9 samples
+/// over [0, 1] mm^-1 is within 0.2% of [`skin_zonal`] (the error falls as `1 / n^2`); each
+/// sample costs one [`skin_zonal`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ZonalTable {
     /// 1/r of the first sample, mm^-1.
