@@ -115,7 +115,7 @@ fn draw(
     width: u32,
     height: u32,
 ) -> (Rendered, Rendered) {
-    let mut once = |format: OutputFormat, tone: ToneCurve| {
+    let once = |format: OutputFormat, tone: ToneCurve| {
         let inputs = skinkit_render::shading::RenderInputs { tone, ..inputs.clone() };
         let target = gpu.create_target(width, height, format).unwrap();
         let scene = gpu.prepare_with(&inputs, setup).unwrap();

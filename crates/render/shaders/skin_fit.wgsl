@@ -47,7 +47,7 @@ fn blog_direct(ndl: vec3<f32>, inv_r: f32) -> vec3<f32> {
     let curva = (1.0 / (curvature * (0.5 - 0.0625) + 0.0625) - 2.0) / (16.0 - 2.0);
     let one_minus = 1.0 - curva;
     let one_minus2 = one_minus * one_minus;
-    let blend = one_minus2 * (-1.0 * one_minus2) + 1.0;
+    let blend = one_minus2 * -one_minus2 + 1.0;
     let c0 = blog_curve0(ndl01);
     let c1 = blog_curve1(ndl01);
     return c0 + (c1 - c0) * blend;

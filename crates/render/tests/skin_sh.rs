@@ -1,6 +1,9 @@
 //! Order-2 SH for ambient light on skin (`skin::sh`) against closed forms (Funk-Hecke,
 //! Ramamoorthi-Hanrahan) and brute-force 2-D integration over the sphere.
 
+// Index loops over bands and channels mirror the formulas' subscripts.
+#![allow(clippy::needless_range_loop)]
+
 use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_render::skin::fit::reference_direct;
@@ -290,8 +293,13 @@ fn blog_zonal_is_lambert_at_16_mm_and_close_to_ours_over_its_range() {
         }
         println!("1/r {inv_r:.4}: blog {:?} ours {:?}", &blog[..2], &ours[..2]);
     }
-    println!("worst relative error A0 {:?} A1 {:?}", worst[0], worst[1]);
-    assert!(worst.iter().flatten().all(|e| *e < 0.5), "{worst:?}");
+    // The errors stated in the module docs: the blog follows a table with more red scattering.
+    let stated = [[0.13, 0.0070, 0.0016], [0.23, 0.010, 0.0037]];
+    for l in 0..2 {
+        for c in 0..3 {
+            assert!((worst[l][c] / stated[l][c] - 1.0).abs() < 0.05, "{worst:?}");
+        }
+    }
 }
 
 fn validate(source: &str) -> Result<naga::Module, String> {
@@ -316,4 +324,53 @@ fn fs_main(@location(0) n: vec3<f32>, @location(1) inv_r: f32) -> @location(0) v
     assert_eq!(module.entry_points.len(), 1);
     assert!(!sh::SKIN_SH_WGSL.contains("@group") && !sh::SKIN_SH_WGSL.contains("@fragment"));
     assert!(validate(&format!("{}\n{}", sh::SKIN_SH_WGSL, caller.replace("sh9_convolve(", "sh9_convolved("))).is_err());
+}
+
+#[test]
+fn blog_zonal_follows_the_listing_normalisation() {
+    // The interpretation in the module docs: the blog's factors are those of the 1-D
+    // normalised profile over the full ring, within 3% (A_0 red is the worst).
+    use skinkit_render::skin::profile::{Domain, Normalisation, Profile, ring_integral};
+    let listing = Profile::new(Normalisation::OneD);
+    let mut worst = 0.0f64;
+    for i in 0..=7 {
+        let inv_r = 0.0625 + (0.5 - 0.0625) * f64::from(i) / 7.0;
+        let theirs = zonal_factors(|c| ring_integral(&listing, Domain::Full, c, inv_r, 8192), sh::ZONAL_STEPS);
+        let blog = blog_zonal(inv_r as f32);
+        for l in 0..2 {
+            for c in 0..3 {
+                worst = worst.max((f64::from(blog[l][c]) / theirs[l][c] - 1.0).abs());
+            }
+        }
+    }
+    assert!(worst < 0.031, "{worst}");
+}
+
+#[test]
+fn per_channel_normals_pick_each_channel() {
+    let sh = Sh9::gradient([1.0, 0.5, 0.2], [0.1, 0.2, 0.3], Vec3::Y);
+    let zonal = skin_zonal(0.5);
+    let normals = [Vec3::Y, Vec3::X, -Vec3::Y];
+    let got = sh.convolve_per_channel(normals, &zonal);
+    for c in 0..3 {
+        assert_eq!(got[c], sh.convolve(normals[c], &zonal)[c]);
+    }
+    assert_eq!(sh.convolve_per_channel([Vec3::Z; 3], &zonal), sh.convolve(Vec3::Z, &zonal));
+}
+
+#[test]
+fn nine_samples_interpolate_the_factors_closely() {
+    // The table's resolution stated in `ZonalTable`'s docs: 9 samples over [0, 1] mm^-1.
+    let table = ZonalTable::build(0.0, 1.0, 9).unwrap();
+    let mut worst = 0.0f32;
+    for i in 0..8 {
+        let inv_r = (i as f32 + 0.5) / 8.0;
+        let (lerped, exact) = (table.sample(inv_r), skin_zonal(inv_r));
+        for l in 0..3 {
+            for c in 0..3 {
+                worst = worst.max((lerped[l][c] / exact[l][c] - 1.0).abs());
+            }
+        }
+    }
+    assert!(worst < 2.5e-3, "{worst}");
 }
