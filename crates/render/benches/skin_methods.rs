@@ -88,9 +88,16 @@ fn main() {
     write(&out.join("skin-methods.json"), &serde_json::to_string_pretty(&rows).unwrap());
     for (method, (ldr, _), ..) in &renders {
         let path = out.join(format!("skin-method-{}.png", method.name()));
-        let samples: Vec<u16> = ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
-        skinkit_maps::io::write_png(&path, width as usize, height as usize, skinkit_maps::io::PngLayout::Rgb8, &samples)
-            .unwrap();
+        let samples: Vec<u16> =
+            ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
+        skinkit_maps::io::write_png(
+            &path,
+            width as usize,
+            height as usize,
+            skinkit_maps::io::PngLayout::Rgb8,
+            &samples,
+        )
+        .unwrap();
     }
     eprintln!("wrote {}", out.join("skin-methods.{md,svg,json}").display());
 }
@@ -168,7 +175,8 @@ fn markdown(rows: &[Row], base_ms: f64, adapter: &str, width: u32, height: u32, 
 /// Error (FLIP mean) against frame time relative to the base pass, log time axis.
 fn svg(rows: &[Row]) -> String {
     let (w, h, pad) = (720.0, 440.0, 70.0);
-    let plotted: Vec<&Row> = rows.iter().filter(|r| r.relative_time > 0.0 && !r.method.starts_with("reference")).collect();
+    let plotted: Vec<&Row> =
+        rows.iter().filter(|r| r.relative_time > 0.0 && !r.method.starts_with("reference")).collect();
     let t_max = plotted.iter().map(|r| r.relative_time).fold(1.0, f64::max) * 1.3;
     let t_min = plotted.iter().map(|r| r.relative_time).fold(f64::INFINITY, f64::min).min(1.0) * 0.8;
     let e_max = plotted.iter().map(|r| r.flip_mean as f64).fold(1e-3, f64::max) * 1.15;

@@ -451,14 +451,27 @@ pub fn plan(
         base_reads.push("diffuse LUT".into());
     }
     if graph.zonal_table {
-        resources.push(table("zonal table", 64, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
+        let n = crate::skin::setup::ZONAL_SAMPLES as u32;
+        resources.push(table("zonal table", n, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
         base_reads.push("zonal table".into());
     }
     if let Some(key) = graph.key_light {
-        let n = skin.shadow.map_size;
+        let shadow = &skin.shadow;
+        let (n, filter) = if graph.shadow_lut {
+            let (_, radius) = crate::passes::bounding_sphere(&inputs.vertices);
+            let size = crate::skin::setup::scattering_map_size(
+                shadow.map_size,
+                shadow.scatter_filter,
+                shadow.scatter_width_mm,
+                radius * scene.mm_per_unit,
+            );
+            (size, shadow.scatter_filter)
+        } else {
+            (shadow.map_size, shadow.filter)
+        };
         resources.push(Resource {
             name: "shadow map".into(),
-            detail: format!("{n}x{n} Depth32Float, light[{key}], {0}x{0} box filter", skin.shadow.filter),
+            detail: format!("{n}x{n} Depth32Float, light[{key}], {filter}x{filter} box filter"),
             bytes: 4 * n as u64 * n as u64,
         });
         passes.push(Pass {
@@ -470,7 +483,8 @@ pub fn plan(
         base_reads.push("shadow map".into());
     }
     if graph.shadow_lut {
-        resources.push(table("shadow LUT", 64, 64, "shadow scattering P_S(s, w), box-filter penumbra"));
+        let n = crate::skin::setup::SHADOW_LUT_SIDE;
+        resources.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), box-filter penumbra"));
         base_reads.push("shadow LUT".into());
     }
     if graph.tsd {

@@ -171,7 +171,10 @@ fn shadows_need_a_shadow_casting_light_and_the_effect() {
     // Both: one shadow map before the base pass, no LUT.
     let (passes, resources, _) = graph_of(&format!("effects = [\"shadows\"]\n{SHADOW_LIGHT}"));
     assert_eq!(passes, ["shadow map", "base"]);
-    assert!(resources.iter().any(|r| r == "shadow map") && !resources.iter().any(|r| r.contains("LUT")), "{resources:?}");
+    assert!(
+        resources.iter().any(|r| r == "shadow map") && !resources.iter().any(|r| r.contains("LUT")),
+        "{resources:?}"
+    );
 }
 
 #[test]

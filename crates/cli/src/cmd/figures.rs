@@ -60,8 +60,18 @@ pub struct SkinPanel {
 /// The methods of the skin figure: name, effects, extra tables, whether it is the reference.
 const SKIN_METHODS: [(&str, &str, &str, bool); 6] = [
     ("lambert", r#"["shadows"]"#, "", false),
-    ("blog-fit", r#"["preintegrated-analytic", "shadows", "shadow-scattering"]"#, "[preintegrated]\nanalytic = \"blog\"\n", false),
-    ("own-fit", r#"["preintegrated-analytic", "shadows", "shadow-scattering"]"#, "[preintegrated]\nanalytic = \"own\"\n", false),
+    (
+        "blog-fit",
+        r#"["preintegrated-analytic", "shadows", "shadow-scattering"]"#,
+        "[preintegrated]\nanalytic = \"blog\"\n",
+        false,
+    ),
+    (
+        "own-fit",
+        r#"["preintegrated-analytic", "shadows", "shadow-scattering"]"#,
+        "[preintegrated]\nanalytic = \"own\"\n",
+        false,
+    ),
     ("lut-256", r#"["preintegrated", "shadows", "shadow-scattering"]"#, "", false),
     ("tsd-3x1024", r#"["tsd", "shadows"]"#, "[tsd]\npasses = 3\nsize = 1024\n", false),
     ("reference-1024", r#"["shadows"]"#, "", true),
@@ -241,12 +251,7 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
         panels.push((name, image, seconds));
     }
     let skin = skin_figure(&panels, &dir.join("figure-skin.png"))?;
-    Ok(FiguresReport {
-        figure7: figure7.display().to_string(),
-        figure8: figure8.display().to_string(),
-        skin,
-        renders,
-    })
+    Ok(FiguresReport { figure7: figure7.display().to_string(), figure8: figure8.display().to_string(), skin, renders })
 }
 
 /// The skin figure: the six panels in a 3 x 2 grid, each method's FLIP mean against the last.

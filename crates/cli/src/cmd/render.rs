@@ -165,14 +165,7 @@ fn explain(job: &Job) -> Result<Explained> {
     let plan = load::plan(&r.scene, &job.scene, &loaded, r.width, r.height, target_format)?;
     let mut warnings = loaded.warnings;
     warnings.extend(plan.notes.iter().cloned());
-    Ok(Explained {
-        scene: job.scene.display().to_string(),
-        adapter,
-        width: r.width,
-        height: r.height,
-        plan,
-        warnings,
-    })
+    Ok(Explained { scene: job.scene.display().to_string(), adapter, width: r.width, height: r.height, plan, warnings })
 }
 
 /// Renders every image of a job and writes them.

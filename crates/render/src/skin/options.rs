@@ -27,6 +27,8 @@
 //! filter = 5                    # box filter: filter x filter taps (odd), a linear-ramp penumbra
 //! bias = 1.5                    # depth bias in shadow-map texels
 //! new_penumbra = 0.25           # shadow-scattering: the sharp penumbra's share of the filtered one
+//! scatter_width_mm = 8.0        # shadow-scattering: the filtered penumbra's width on flat skin
+//! scatter_filter = 11           # shadow-scattering: box filter taps per side (odd) spanning it
 //!
 //! [tsd]                         # read by tsd (Gosselin et al. 2004)
 //! size = 1024                   # light map texels per side
@@ -152,11 +154,17 @@ pub struct ShadowOptions {
     pub bias: f32,
     /// The sharp penumbra's width as a share of the filtered one.
     pub new_penumbra: f32,
+    /// With shadow scattering, the filtered penumbra's width (mm) on skin facing the light: the
+    /// paper asks the filter to be wide enough to hold most of the profile, so the map's
+    /// resolution is lowered until `filter` texels span this width.
+    pub scatter_width_mm: f32,
+    /// With shadow scattering, the box filter's taps per side (odd).
+    pub scatter_filter: u32,
 }
 
 impl Default for ShadowOptions {
     fn default() -> Self {
-        Self { map_size: 2048, filter: 5, bias: 1.5, new_penumbra: 0.25 }
+        Self { map_size: 2048, filter: 5, bias: 1.5, new_penumbra: 0.25, scatter_width_mm: 8.0, scatter_filter: 11 }
     }
 }
 
@@ -237,6 +245,8 @@ pub(crate) struct RawShadow {
     filter: Option<u32>,
     bias: Option<f32>,
     new_penumbra: Option<f32>,
+    scatter_width_mm: Option<f32>,
+    scatter_filter: Option<u32>,
 }
 
 #[derive(Deserialize, Default)]
@@ -351,15 +361,27 @@ impl RawEnvironment {
 impl RawShadow {
     fn check(self) -> Result<ShadowOptions, Refusal> {
         let d = ShadowOptions::default();
-        let filter = side("shadow.filter", self.filter.unwrap_or(d.filter), 1, 15)?;
-        if filter % 2 == 0 {
-            return Err(("shadow.filter".into(), format!("must be odd (taps centred on the texel), not {filter}")));
-        }
+        let odd = |field: &str, v: u32| -> Result<u32, Refusal> {
+            let v = side(field, v, 1, 15)?;
+            match v % 2 {
+                1 => Ok(v),
+                _ => Err((field.into(), format!("must be odd (taps centred on the texel), not {v}"))),
+            }
+        };
+        let filter = odd("shadow.filter", self.filter.unwrap_or(d.filter))?;
+        let scatter_filter = odd("shadow.scatter_filter", self.scatter_filter.unwrap_or(d.scatter_filter))?;
         Ok(ShadowOptions {
             map_size: side("shadow.map_size", self.map_size.unwrap_or(d.map_size), 16, 16384)?,
             filter,
             bias: in_range("shadow.bias", self.bias.unwrap_or(d.bias), 0.0, 1000.0)?,
             new_penumbra: in_range("shadow.new_penumbra", self.new_penumbra.unwrap_or(d.new_penumbra), 0.01, 1.0)?,
+            scatter_width_mm: in_range(
+                "shadow.scatter_width_mm",
+                self.scatter_width_mm.unwrap_or(d.scatter_width_mm),
+                0.1,
+                1000.0,
+            )?,
+            scatter_filter,
         })
     }
 }
