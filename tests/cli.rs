@@ -256,7 +256,7 @@ fn demo_reports_every_mold_with_both_solvers() {
     // Figures 7 (the head without and with the face map) and 8 (a patch under four lights),
     // rendered on the test machine's adapter (lavapipe in CI: scripts/test installs it).
     let renders = &report["renders"];
-    assert_eq!(renders["renders"].as_array().unwrap().len(), 6, "{renders}");
+    assert_eq!(renders["renders"].as_array().unwrap().len(), 12, "{renders}");
     let read = |name: &str| {
         let p = skinkit_maps::io::read_photo(&tmp.path().join("render").join(name), &Default::default()).unwrap();
         let skinkit_maps::Samples::U8(v) = p.samples() else { panic!("{name} is not 8-bit") };
@@ -273,6 +273,18 @@ fn demo_reports_every_mold_with_both_solvers() {
         .count();
     assert!(differ > 768 * 768 / 20, "figure 7's panels differ in only {differ} pixels");
     assert!(tmp.path().join("render").join("head-skin.toml").is_file());
+    // The skin figure: six methods in a 3 x 2 grid, each with its FLIP mean against the
+    // reference (the last panel, 0 against itself; the others differ from it but stay close).
+    let (ws, hs, _) = read("figure-skin.png");
+    assert_eq!((ws, hs), (3 * 768, 2 * 768));
+    let methods = renders["skin"]["methods"].as_array().unwrap();
+    let names: Vec<&str> = methods.iter().map(|m| m["method"].as_str().unwrap()).collect();
+    assert_eq!(names, ["lambert", "blog-fit", "own-fit", "lut-256", "tsd-3x1024", "reference-512"]);
+    for m in methods {
+        let flip = m["flip_mean"].as_f64().unwrap();
+        let last = m["method"] == "reference-512";
+        assert!(if last { flip == 0.0 } else { flip > 0.0 && flip < 0.2 }, "{m}");
+    }
 }
 
 /// Writes `count` 16-bit photos of a flat RGB patch lit by the rig's lights, plus its rig.

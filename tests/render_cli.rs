@@ -209,3 +209,84 @@ fn no_adapter_is_one_sentence_with_the_fix() {
     let e = stderr(&o);
     assert!(e.contains("mesa-vulkan-drivers") && e.contains("WGPU_BACKEND=vulkan"), "{e}");
 }
+
+/// `head_scene` with its light casting shadows.
+fn shadowed_head_scene(dir: &Path, extra: &str) -> PathBuf {
+    let path = head_scene(dir, None, extra);
+    let text = std::fs::read_to_string(&path).unwrap().replace("intensity = 4.0", "intensity = 4.0\nshadows = true");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn explain_json(scene: &Path) -> serde_json::Value {
+    let o = skinkit(&["render", s(scene), "--explain", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn names(v: &serde_json::Value, key: &str) -> Vec<String> {
+    v["plan"][key].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect()
+}
+
+#[test]
+fn explain_shows_the_graph_each_scene_asks_for() {
+    let tmp = tempfile::tempdir().unwrap();
+    let pre = explain_json(&shadowed_head_scene(
+        tmp.path(),
+        "effects = [\"preintegrated\", \"shadows\", \"shadow-scattering\"]",
+    ));
+    assert_eq!(names(&pre, "passes"), ["shadow map", "base"]);
+    let resources = names(&pre, "resources");
+    for name in ["diffuse LUT", "shadow LUT", "shadow map", "per-vertex curvature"] {
+        assert!(resources.iter().any(|r| r == name), "{name}: {resources:?}");
+    }
+    let tsd = explain_json(&shadowed_head_scene(tmp.path(), "effects = [\"tsd\", \"shadows\"]\n[tsd]\npasses = 2"));
+    assert_eq!(
+        names(&tsd, "passes"),
+        ["shadow map", "tsd back-face pre-pass", "tsd light map", "tsd blur 1", "tsd blur 2", "base"]
+    );
+    assert!(!names(&tsd, "resources").iter().any(|r| r.contains("LUT")));
+    // `shadows` with no shadow-casting light: no shadow map, and the warning says why.
+    let none = explain_json(&head_scene(tmp.path(), None, "effects = [\"shadows\"]"));
+    assert_eq!(names(&none, "passes"), ["base"]);
+    let warnings = none["warnings"].as_array().unwrap();
+    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("no light")), "{warnings:?}");
+}
+
+#[test]
+fn skin_effects_and_the_reference_render_and_change_the_picture() {
+    let tmp = tempfile::tempdir().unwrap();
+    let render = |scene: &Path, name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name);
+        let mut args = vec!["render", s(scene), "--out", s(&out), "--json"];
+        args.extend_from_slice(extra);
+        let o = skinkit(&args);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        pixels(&out).2
+    };
+    let lambert = render(&shadowed_head_scene(tmp.path(), "effects = [\"shadows\"]"), "lambert.png", &[]);
+    let env = "\n[environment]\nsky = [0.3, 0.3, 0.35]\nground = [0.05, 0.04, 0.03]";
+    let skin = render(
+        &shadowed_head_scene(
+            tmp.path(),
+            &format!("effects = [\"preintegrated\", \"shadows\", \"shadow-scattering\", \"sh-ambient\"]{env}"),
+        ),
+        "skin.png",
+        &[],
+    );
+    let reference =
+        render(&shadowed_head_scene(tmp.path(), "effects = [\"shadows\"]"), "reference.png", &["--reference", "64"]);
+    let differs = |a: &[u8], b: &[u8]| a.iter().zip(b).filter(|(x, y)| x.abs_diff(**y) > 8).count();
+    assert!(differs(&lambert, &skin) > 100, "the skin effects changed {} samples", differs(&lambert, &skin));
+    assert!(differs(&lambert, &reference) > 100, "the reference changed {} samples", differs(&lambert, &reference));
+    let o = skinkit(&[
+        "render",
+        s(&head_scene(tmp.path(), None, "")),
+        "--out",
+        s(&tmp.path().join("x.png")),
+        "--reference",
+        "4",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--reference"), "{}", stderr(&o));
+}

@@ -16,6 +16,7 @@ override CURVATURE_MODE: u32 = 0u;
 override SH_AMBIENT: bool = false;
 override SHADOWS: bool = false;
 override SHADOW_SCATTERING: bool = false;
+override TRANSLUCENT_SHADOWS: bool = false;
 
 const MAX_LIGHTS: u32 = 4u;
 const MAX_LOBES: u32 = 4u;
@@ -83,6 +84,7 @@ struct Globals {
 @group(0) @binding(10) var lut_sampler: sampler;
 @group(0) @binding(11) var blurred_sampler: sampler;
 @group(0) @binding(12) var kernel_map: texture_2d<f32>;
+@group(0) @binding(13) var shadow_opacity: texture_2d<f32>;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -316,6 +318,20 @@ fn shadow_visibility(world: vec3<f32>, geo_n: vec3<f32>, t: vec3<f32>, b: vec3<f
     return sum / f32(taps * taps);
 }
 
+// Light let through the translucent casters in front of `world` (Gosselin et al.'s translucent
+// shadows): one minus their summed opacity per channel, 1 without translucent casters.
+fn translucent_transmittance(world: vec3<f32>, geo_n: vec3<f32>) -> vec3<f32> {
+    if !TRANSLUCENT_SHADOWS {
+        return vec3<f32>(1.0);
+    }
+    let p = shadow_coords(world + geo_n * (globals.shadow.z * globals.shadow.w));
+    if p.z <= 0.0 || p.z >= 1.0 || p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0 {
+        return vec3<f32>(1.0);
+    }
+    let opacity = textureSampleLevel(shadow_opacity, lut_sampler, p.xy, 0.0).rgb;
+    return clamp(vec3<f32>(1.0) - opacity, vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
 // The filtered penumbra's width on this surface in mm: filter taps x texel, stretched by the
 // slope of the surface to the light.
 fn penumbra_mm(cos_light: f32) -> f32 {
@@ -443,7 +459,9 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
         let e = light_irradiance(i, input.world);
         var shadow_diffuse = vec3<f32>(1.0);
         var shadow_specular = 1.0;
-        if SHADOWS && i == key {
+        // With a light map the key light's shadow is already in it (and its specular is
+        // attenuated by the light map below): no shadow-map lookups here.
+        if SHADOWS && DIFFUSE_MODE != 4u && i == key {
             let s = shadow_visibility(input.world, geo_n, input.frame_t, input.frame_b);
             shadow_diffuse = vec3<f32>(s);
             shadow_specular = s;
@@ -452,6 +470,9 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
                 shadow_diffuse = shadow_scattered(s, penumbra_mm(cos_light));
                 shadow_specular = sharp_shadow(s);
             }
+            let through = translucent_transmittance(input.world, geo_n);
+            shadow_diffuse *= through;
+            shadow_specular *= luminance(through);
         }
         if DIFFUSE_MODE == 4u {
             unshadowed += e * max(l.z, 0.0);
@@ -492,6 +513,26 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
 @vertex
 fn vs_shadow(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
     return globals.shadow_view_proj * vec4<f32>(position, 1.0);
+}
+
+struct TranslucentOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) opacity: vec3<f32>,
+}
+
+// Translucent casters into the shadow map's opacity channels (depth-tested against the opaque
+// depth, not written; blended additively).
+@vertex
+fn vs_translucent(@location(0) position: vec3<f32>, @location(1) opacity: vec3<f32>) -> TranslucentOut {
+    var out: TranslucentOut;
+    out.clip = globals.shadow_view_proj * vec4<f32>(position, 1.0);
+    out.opacity = opacity;
+    return out;
+}
+
+@fragment
+fn fs_translucent(input: TranslucentOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(input.opacity, 0.0);
 }
 
 // ---- texture-space diffusion (Gosselin et al. 2004) ------------------------------------------
@@ -547,9 +588,10 @@ fn fs_light_map(input: TextureSpaceOut) -> @location(0) vec4<f32> {
     let key = u32(globals.blur.w);
     let count = min(globals.counts.x, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
-        var visibility = 1.0;
+        var visibility = vec3<f32>(1.0);
         if SHADOWS && i == key {
-            visibility = shadow_visibility(input.world, geo_n, input.frame_t, input.frame_b);
+            let s = shadow_visibility(input.world, geo_n, input.frame_t, input.frame_b);
+            visibility = s * translucent_transmittance(input.world, geo_n);
         }
         e += light_irradiance(i, input.world) * max(dot(n, light_direction(i, input.world)), 0.0) * visibility;
     }

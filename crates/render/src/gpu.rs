@@ -176,6 +176,17 @@ pub struct PreparedScene {
 struct ShadowResources {
     depth: wgpu::Texture,
     bind_group: wgpu::BindGroup,
+    /// Summed opacity of the translucent casters (with their buffers), when there are any.
+    opacity: Option<wgpu::Texture>,
+    casters: Vec<CasterBuffers>,
+}
+
+/// One translucent caster's positions, per-vertex opacity and indices.
+struct CasterBuffers {
+    positions: wgpu::Buffer,
+    opacity: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    count: u32,
 }
 
 /// Texture-space diffusion: the UV-space depth of the culling pre-pass, two light maps for the
@@ -202,8 +213,11 @@ impl PreparedScene {
     /// The passes [`Gpu::draw`] runs for this scene, in order.
     pub fn pass_names(&self) -> Vec<String> {
         let mut names = Vec::new();
-        if self.shadow.is_some() {
+        if let Some(shadow) = &self.shadow {
             names.push("shadow map".to_string());
+            if shadow.opacity.is_some() {
+                names.push("translucent shadows".to_string());
+            }
         }
         if let Some(tsd) = &self.tsd {
             names.push("tsd back-face pre-pass".to_string());
@@ -259,6 +273,7 @@ pub struct Gpu {
 enum PipelineKey {
     Base(OutputFormat, Features),
     Shadow,
+    Translucent,
     TsdPrepass(Features),
     LightMap(Features),
     Blur,
@@ -441,19 +456,21 @@ impl Gpu {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let textures = self.skin_textures(inputs, skin);
-        let shadow = skin.shadow.as_ref().map(|s| {
-            let depth = self.depth_texture("shadow map", s.map_size, s.map_size, true);
-            let bind_group = self.create_bind_group(&textures, &uniforms, None, None);
-            (depth, bind_group)
+        let shadow = skin.shadow.as_ref().map(|s| self.shadow_resources(s, &textures, &uniforms));
+        let shadow_views = shadow.as_ref().map(|s| {
+            (s.depth.create_view(&Default::default()), s.opacity.as_ref().map(|o| o.create_view(&Default::default())))
         });
-        let tsd = skin.tsd.as_ref().map(|t| self.tsd_resources(t, &textures, &uniforms, shadow.as_ref().map(|s| &s.0)));
+        let (shadow_view, opacity_view) = match &shadow_views {
+            Some((depth, opacity)) => (Some(depth), opacity.as_ref()),
+            None => (None, None),
+        };
+        let tsd = skin.tsd.as_ref().map(|t| self.tsd_resources(t, &textures, &uniforms, shadow_view, opacity_view));
         let light_map = match (&tsd, &textures.light_map) {
             (Some(tsd), _) => Some(tsd.maps[(tsd.passes % 2) as usize].create_view(&Default::default())),
             (None, Some(map)) => Some(map.create_view(&Default::default())),
             (None, None) => None,
         };
-        let shadow_view = shadow.as_ref().map(|s| s.0.create_view(&Default::default()));
-        let bind_group = self.create_bind_group(&textures, &uniforms, shadow_view.as_ref(), light_map.as_ref());
+        let bind_group = self.create_bind_group(&textures, &uniforms, shadow_view, opacity_view, light_map.as_ref());
         let vertices = self.buffer("vertices", bytemuck::cast_slice(&inputs.vertices), wgpu::BufferUsages::VERTEX);
         let skin_data: Vec<[f32; 2]> =
             if skin.vertex_skin.is_empty() { vec![[0.0; 2]; inputs.vertices.len()] } else { skin.vertex_skin.clone() };
@@ -471,9 +488,55 @@ impl Gpu {
             background: inputs.background,
             features: skin.features,
             bounds,
-            shadow: shadow.map(|(depth, bind_group)| ShadowResources { depth, bind_group }),
+            shadow,
             tsd,
         })
+    }
+
+    fn shadow_resources(
+        &self,
+        s: &passes::ShadowSetup,
+        textures: &SceneTextures,
+        uniforms: &wgpu::Buffer,
+    ) -> ShadowResources {
+        let depth = self.depth_texture("shadow map", s.map_size, s.map_size, true);
+        let bind_group = self.create_bind_group(textures, uniforms, None, None, None);
+        let opacity = (!s.translucent.is_empty()).then(|| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("shadow opacity"),
+                size: extent(s.map_size, s.map_size),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: LIGHT_MAP_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        });
+        let casters = s
+            .translucent
+            .iter()
+            .filter(|c| !c.indices.is_empty() && c.indices.iter().all(|&i| (i as usize) < c.positions.len()))
+            .map(|c| CasterBuffers {
+                positions: self.buffer(
+                    "translucent positions",
+                    bytemuck::cast_slice(&c.positions),
+                    wgpu::BufferUsages::VERTEX,
+                ),
+                opacity: self.buffer(
+                    "translucent opacity",
+                    bytemuck::cast_slice(&vec![c.opacity; c.positions.len()]),
+                    wgpu::BufferUsages::VERTEX,
+                ),
+                indices: self.buffer(
+                    "translucent indices",
+                    bytemuck::cast_slice(&c.indices),
+                    wgpu::BufferUsages::INDEX,
+                ),
+                count: c.indices.len() as u32,
+            })
+            .collect();
+        ShadowResources { depth, bind_group, opacity, casters }
     }
 
     fn tsd_resources(
@@ -481,7 +544,8 @@ impl Gpu {
         tsd: &passes::TsdSetup,
         textures: &SceneTextures,
         uniforms: &wgpu::Buffer,
-        shadow: Option<&wgpu::Texture>,
+        shadow: Option<&wgpu::TextureView>,
+        opacity: Option<&wgpu::TextureView>,
     ) -> TsdResources {
         let size = tsd.size;
         let depth = self.depth_texture("tsd texture-space depth", size, size, false);
@@ -500,8 +564,7 @@ impl Gpu {
             })
         };
         let maps = [map("tsd light map A"), map("tsd light map B")];
-        let shadow_view = shadow.map(|t| t.create_view(&Default::default()));
-        let bind_group = self.create_bind_group(textures, uniforms, shadow_view.as_ref(), None);
+        let bind_group = self.create_bind_group(textures, uniforms, shadow, opacity, None);
         let sampler = |label, filter| {
             self.device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some(label),
@@ -631,6 +694,11 @@ impl Gpu {
             let writes = timestamp_writes(timer, ran.len() as u32);
             ran.push(true);
             self.encode_shadow(&mut encoder, scene, shadow, writes);
+            if let Some(opacity) = &shadow.opacity {
+                let writes = timestamp_writes(timer, ran.len() as u32);
+                ran.push(true);
+                self.encode_translucent(&mut encoder, shadow, opacity, writes);
+            }
         }
         if let Some(tsd) = &scene.tsd {
             let camera = glam::Mat4::from_cols_array_2d(&scene.globals.view_proj);
@@ -696,6 +764,39 @@ impl Gpu {
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..scene.index_count, 0, 0..1);
+    }
+
+    /// Translucent casters into the opacity channels: cleared to 0, added up where the opaque
+    /// depth does not hide them.
+    fn encode_translucent(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        shadow: &ShadowResources,
+        opacity: &wgpu::Texture,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let depth = shadow.depth.create_view(&Default::default());
+        let view = opacity.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("translucent shadows pass"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)))],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::Translucent));
+        pass.set_bind_group(0, &shadow.bind_group, &[]);
+        for caster in &shadow.casters {
+            pass.set_vertex_buffer(0, caster.positions.slice(..));
+            pass.set_vertex_buffer(1, caster.opacity.slice(..));
+            pass.set_index_buffer(caster.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..caster.count, 0, 0..1);
+        }
     }
 
     /// The TSD passes: back-face pre-pass into the UV-space depth, the light map (depth "equal":
@@ -977,12 +1078,15 @@ impl Gpu {
                 label: Some("shadow compare sampler"),
                 address_mode_u: wgpu::AddressMode::ClampToEdge,
                 address_mode_v: wgpu::AddressMode::ClampToEdge,
-                mag_filter: wgpu::FilterMode::Nearest,
-                min_filter: wgpu::FilterMode::Nearest,
+                // Each tap compares bilinearly (a one-texel tent): the box of taps stays a ramp
+                // across a straight edge, without the staircase of nearest compares.
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
                 compare: Some(wgpu::CompareFunction::LessEqual),
                 ..Default::default()
             }),
             light_map_placeholder: placeholder(),
+            opacity_placeholder: placeholder(),
         }
     }
 
@@ -993,6 +1097,7 @@ impl Gpu {
         textures: &SceneTextures,
         uniforms: &wgpu::Buffer,
         shadow: Option<&wgpu::TextureView>,
+        opacity: Option<&wgpu::TextureView>,
         light_map: Option<&wgpu::TextureView>,
     ) -> wgpu::BindGroup {
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
@@ -1004,6 +1109,8 @@ impl Gpu {
         let given_light_map = textures.light_map.as_ref().map(view);
         let light_map = light_map.or(given_light_map.as_ref()).unwrap_or(&light_map_placeholder);
         let shadow = shadow.unwrap_or(&shadow_placeholder);
+        let opacity_placeholder = view(&textures.opacity_placeholder);
+        let opacity = opacity.unwrap_or(&opacity_placeholder);
         let tex = |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
         let smp =
             |binding, sampler| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::Sampler(sampler) };
@@ -1024,6 +1131,7 @@ impl Gpu {
                 smp(10, &textures.lut_sampler),
                 smp(11, &textures.blurred_sampler),
                 tex(12, &kernel),
+                tex(13, opacity),
             ],
         })
     }
@@ -1057,9 +1165,15 @@ impl Gpu {
         ];
         let shadow_buffers =
             [Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode, attributes: &position_only })];
+        let translucent_position = wgpu::vertex_attr_array![0 => Float32x3];
+        let translucent_opacity = wgpu::vertex_attr_array![1 => Float32x3];
+        let translucent_buffers = [
+            Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode, attributes: &translucent_position }),
+            Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode, attributes: &translucent_opacity }),
+        ];
         let features = match key {
             PipelineKey::Base(_, f) | PipelineKey::TsdPrepass(f) | PipelineKey::LightMap(f) => f,
-            PipelineKey::Shadow | PipelineKey::Blur => Features::default(),
+            PipelineKey::Shadow | PipelineKey::Translucent | PipelineKey::Blur => Features::default(),
         };
         let constants = features.constants();
         let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
@@ -1088,6 +1202,14 @@ impl Gpu {
                 None,
                 None,
                 depth(true, wgpu::CompareFunction::Less),
+            ),
+            PipelineKey::Translucent => (
+                "translucent shadows pipeline",
+                "vs_translucent",
+                &translucent_buffers,
+                Some("fs_translucent"),
+                Some(LIGHT_MAP_FORMAT),
+                depth(false, wgpu::CompareFunction::Less),
             ),
             PipelineKey::TsdPrepass(_) => (
                 "tsd back-face pre-pass pipeline",
@@ -1258,6 +1380,7 @@ struct SceneTextures {
     light_map: Option<wgpu::Texture>,
     shadow_placeholder: wgpu::Texture,
     light_map_placeholder: wgpu::Texture,
+    opacity_placeholder: wgpu::Texture,
     map_sampler: wgpu::Sampler,
     blurred_sampler: wgpu::Sampler,
     lut_sampler: wgpu::Sampler,
@@ -1372,6 +1495,7 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             sampler(10, wgpu::SamplerBindingType::Filtering),
             sampler(11, wgpu::SamplerBindingType::Filtering),
             texture(12, float),
+            texture(13, float),
         ],
     })
 }

@@ -356,13 +356,24 @@ pub fn graph(scene: &Scene) -> Graph {
     };
     let shadows = key_light.is_some();
     let shadow_scattering = shadows && scene.has_effect("shadow-scattering");
+    let translucent_shadows = shadows && !scene.translucent.is_empty();
+    if !shadows && !scene.translucent.is_empty() {
+        notes.push("[[translucent]] casters tint only the key light's shadow map, and none is drawn".into());
+    }
     let sh_ambient = scene.has_effect("sh-ambient");
     let derivative = diffuse.reads_curvature() && pre.curvature == CurvatureSource::Derivative;
     let zonal_table = sh_ambient && diffuse.reads_curvature();
     let tsd = diffuse == DiffuseMode::LightMap;
     let vertex_curvature = (diffuse.reads_curvature() && !derivative) || zonal_table || tsd;
     Graph {
-        features: Features { diffuse, derivative_curvature: derivative, sh_ambient, shadows, shadow_scattering },
+        features: Features {
+            diffuse,
+            derivative_curvature: derivative,
+            sh_ambient,
+            shadows,
+            shadow_scattering,
+            translucent_shadows,
+        },
         key_light,
         diffuse_lut: diffuse == DiffuseMode::Lut,
         shadow_lut: shadow_scattering,
@@ -481,6 +492,24 @@ pub fn plan(
             writes: vec!["shadow map".into()],
         });
         base_reads.push("shadow map".into());
+        if graph.features.translucent_shadows {
+            resources.push(Resource {
+                name: "shadow opacity".into(),
+                detail: format!(
+                    "{n}x{n} Rgba16Float: opacity of {} translucent caster(s), summed",
+                    scene.translucent.len()
+                ),
+                bytes: 8 * n as u64 * n as u64,
+            });
+            passes.push(Pass {
+                name: "translucent shadows".into(),
+                what: "translucent casters seen from the key light, their opacity added where no opaque surface is in front"
+                    .into(),
+                reads: ["uniforms", "shadow map"].map(String::from).to_vec(),
+                writes: vec!["shadow opacity".into()],
+            });
+            base_reads.push("shadow opacity".into());
+        }
     }
     if graph.shadow_lut {
         let n = crate::skin::setup::SHADOW_LUT_SIDE;

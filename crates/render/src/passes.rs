@@ -59,11 +59,13 @@ pub struct Features {
     pub shadows: bool,
     /// The shadow-scattering LUT on the key light's penumbra.
     pub shadow_scattering: bool,
+    /// Translucent casters tint the key light (the shadow map's opacity channels).
+    pub translucent_shadows: bool,
 }
 
 impl Features {
     /// The pipeline-overridable constants of base.wgsl.
-    pub fn constants(&self) -> [(&'static str, f64); 5] {
+    pub fn constants(&self) -> [(&'static str, f64); 6] {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         [
             ("DIFFUSE_MODE", self.diffuse.code()),
@@ -71,6 +73,7 @@ impl Features {
             ("SH_AMBIENT", flag(self.sh_ambient)),
             ("SHADOWS", flag(self.shadows)),
             ("SHADOW_SCATTERING", flag(self.shadow_scattering)),
+            ("TRANSLUCENT_SHADOWS", flag(self.translucent_shadows)),
         ]
     }
 }
@@ -120,6 +123,19 @@ pub struct ShadowSetup {
     pub texel: f32,
     /// Shadow scattering: the sharp penumbra's share of the filtered one.
     pub new_penumbra: f32,
+    /// Translucent casters drawn into the map's opacity channels.
+    pub translucent: Vec<TranslucentCaster>,
+}
+
+/// A translucent shadow caster as the shadow pass draws it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TranslucentCaster {
+    /// Positions in object space.
+    pub positions: Vec<[f32; 3]>,
+    /// Triangle list.
+    pub indices: Vec<u32>,
+    /// Opacity per channel.
+    pub opacity: [f32; 3],
 }
 
 /// Texture-space diffusion's settings.

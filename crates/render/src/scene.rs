@@ -108,6 +108,18 @@ pub struct Scene {
     pub effects: Vec<String>,
     /// The scattering tables (`[preintegrated]`, `[environment]`, `[shadow]`, `[tsd]`).
     pub skin: SkinOptions,
+    /// Translucent shadow casters (`[[translucent]]`): they tint the key light's shadow map
+    /// (Gosselin et al.'s translucent shadows) and are not drawn themselves.
+    pub translucent: Vec<Translucent>,
+}
+
+/// A translucent shadow caster.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Translucent {
+    /// Its mesh, resolved against the scene's folder.
+    pub mesh: PathBuf,
+    /// Opacity per channel in [0, 1] (light through it keeps `1 - opacity`).
+    pub opacity: Vec3,
 }
 
 impl Scene {
@@ -329,6 +341,15 @@ struct RawScene {
     environment: Option<RawEnvironment>,
     shadow: Option<RawShadow>,
     tsd: Option<RawTsd>,
+    #[serde(default)]
+    translucent: Vec<RawTranslucent>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTranslucent {
+    mesh: PathBuf,
+    opacity: [f32; 3],
 }
 
 #[derive(Deserialize)]
@@ -435,6 +456,15 @@ impl Checker<'_> {
             output: self.output(raw.output)?,
             effects,
             skin,
+            translucent: raw
+                .translucent
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    let opacity = self.in_range3(&format!("translucent[{i}].opacity"), t.opacity, 0.0, 1.0)?;
+                    Ok(Translucent { mesh: self.base.join(&t.mesh), opacity })
+                })
+                .collect::<Result<_>>()?,
         })
     }
 

@@ -251,3 +251,14 @@ fn contradicting_or_incomplete_effects_are_refused_by_name() {
     let e = refused("[tsd]\nblur = 3");
     assert!(e.contains("blur"), "{e}");
 }
+
+#[test]
+fn translucent_casters_add_their_pass_only_to_a_shadow_map() {
+    let lens = "[[translucent]]\nmesh = \"quad.obj\"\nopacity = [0.5, 0.2, 0.1]\n";
+    let (passes, resources, _) = graph_of(&format!("effects = [\"shadows\"]\n{lens}{SHADOW_LIGHT}"));
+    assert_eq!(passes, ["shadow map", "translucent shadows", "base"]);
+    assert!(resources.iter().any(|r| r == "shadow opacity"), "{resources:?}");
+    let (passes, _, notes) = graph_of(lens);
+    assert_eq!(passes, ["base"]);
+    assert!(notes.iter().any(|n| n.contains("translucent")), "{notes:?}");
+}

@@ -69,7 +69,7 @@ fn shadow_setup(inputs: &RenderInputs, filter: u32) -> ShadowSetup {
     let (centre, radius) = passes::bounding_sphere(&inputs.vertices);
     let map_size = 256;
     let (view_proj, texel) = passes::light_view_proj(&inputs.lights[0], centre, radius, map_size);
-    ShadowSetup { light: 0, map_size, filter, bias: 1.0, view_proj, texel, new_penumbra: 0.25 }
+    ShadowSetup { light: 0, map_size, filter, bias: 1.0, view_proj, texel, new_penumbra: 0.25, translucent: Vec::new() }
 }
 
 fn render(gpu: &Gpu, inputs: &RenderInputs, skin: &SkinSetup) -> Vec<[f32; 4]> {
@@ -241,9 +241,13 @@ fn every_feature_combination_compiles_and_draws_finite_pixels() {
                 sh_ambient,
                 shadows,
                 shadow_scattering: shadows && derivative_curvature,
+                translucent_shadows: shadows && sh_ambient,
             };
             let mut skin = tsd_skin(&scene, 1, shadows);
             skin.features = features;
+            if let Some(shadow) = skin.shadow.as_mut().filter(|_| features.translucent_shadows) {
+                shadow.translucent = vec![lens()];
+            }
             skin.tsd = (diffuse == DiffuseMode::LightMap).then(|| tsd_setup(1));
             skin.diffuse_lut = table();
             skin.shadow_lut = table();
@@ -253,4 +257,50 @@ fn every_feature_combination_compiles_and_draws_finite_pixels() {
             assert!(pixels.iter().flatten().all(|v| v.is_finite()), "{features:?}: non-finite pixels");
         }
     }
+}
+
+/// A translucent quad over x < 0 at z = 0.5 (where the opaque blocker sits in the other tests),
+/// stopping 70% of red, nothing of green, 40% of blue.
+fn lens() -> passes::TranslucentCaster {
+    passes::TranslucentCaster {
+        positions: vec![[-3.0, -3.0, 0.5], [0.0, -3.0, 0.5], [0.0, 3.0, 0.5], [-3.0, 3.0, 0.5]],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        opacity: [0.7, 0.0, 0.4],
+    }
+}
+
+#[test]
+fn translucent_casters_tint_the_key_light_where_they_cover_it() {
+    let gpu = gpu();
+    // No opaque blocker: the floor alone, and the lens above its left half.
+    let scene = inputs(floor_and_blocker(false));
+    let mut shadow = shadow_setup(&scene, 1);
+    shadow.translucent = vec![lens()];
+    let skin = SkinSetup {
+        features: Features { shadows: true, translucent_shadows: true, ..Default::default() },
+        shadow: Some(shadow),
+        ..Default::default()
+    };
+    let prepared = gpu.prepare_with(&scene, &skin).unwrap();
+    assert_eq!(prepared.pass_names(), ["shadow map", "translucent shadows", "base"]);
+    let pixels = render(&gpu, &scene, &skin);
+    let y = SIZE as usize / 2;
+    let at = |x: usize| pixels[y * SIZE as usize + x];
+    let e = lit_value();
+    let (left, right) = (at(16), at(SIZE as usize - 16));
+    for (c, through) in [0.3f32, 1.0, 0.6].iter().enumerate() {
+        assert!(
+            (left[c] - e * through).abs() < 2e-3 * e,
+            "under the lens, channel {c}: {} vs {}",
+            left[c],
+            e * through
+        );
+        assert!((right[c] - e).abs() < 1e-3 * e, "beside it, channel {c}: {} vs {e}", right[c]);
+    }
+    // Behind an opaque blocker the lens adds nothing (the blocker's own shadow is already black)
+    // and without the feature the lens is ignored.
+    let plain =
+        render(&gpu, &scene, &SkinSetup { features: Features { shadows: true, ..Default::default() }, ..skin.clone() });
+    let l = plain[y * SIZE as usize + 16];
+    assert!((l[0] - e).abs() < 1e-3 * e, "without translucent shadows the lens is ignored: {}", l[0]);
 }

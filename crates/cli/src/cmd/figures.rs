@@ -74,11 +74,11 @@ const SKIN_METHODS: [(&str, &str, &str, bool); 6] = [
     ),
     ("lut-256", r#"["preintegrated", "shadows", "shadow-scattering"]"#, "", false),
     ("tsd-3x1024", r#"["tsd", "shadows"]"#, "[tsd]\npasses = 3\nsize = 1024\n", false),
-    ("reference-1024", r#"["shadows"]"#, "", true),
+    ("reference-512", r#"["shadows"]"#, "", true),
 ];
 
 /// Side of the reference's light map in the skin figure.
-pub const REFERENCE_TEXELS: u32 = 1024;
+pub const REFERENCE_TEXELS: u32 = 512;
 
 /// The skin figure's scene: the head wearing `normal_map`, a warm key light from the side
 /// casting the nose's shadow, a dim fill, `effects` and `tables`.

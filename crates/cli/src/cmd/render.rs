@@ -139,6 +139,12 @@ struct Resolved {
 }
 
 fn resolve(job: &Job) -> Result<Resolved> {
+    resolve_for(job, false)
+}
+
+/// [`resolve`]; with `explain`, a scene without an output path explains as a PNG (nothing is
+/// written).
+fn resolve_for(job: &Job, explain: bool) -> Result<Resolved> {
     let scene = Scene::load(&job.scene)?;
     let (width, height) = match job.size {
         Some((w, h)) => (side(w, "--size")?, side(h, "--size")?),
@@ -146,6 +152,7 @@ fn resolve(job: &Job) -> Result<Resolved> {
     };
     let path = match (&job.out, &scene.output.path) {
         (Some(p), _) | (None, Some(p)) => p.clone(),
+        (None, None) if explain => PathBuf::from("explain.png"),
         (None, None) => bail!("{}: no output: give --out IMG or `output.path` in the scene", job.scene.display()),
     };
     let format = scene::OutputFormat::from_path(&path)
@@ -154,7 +161,7 @@ fn resolve(job: &Job) -> Result<Resolved> {
 }
 
 fn explain(job: &Job) -> Result<Explained> {
-    let r = resolve(job)?;
+    let r = resolve_for(job, true)?;
     let (target_format, _) = load::target_for(r.format);
     let gpu = Gpu::new();
     let (adapter, limit) = match &gpu {

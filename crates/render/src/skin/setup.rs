@@ -96,6 +96,7 @@ pub fn build(scene: &Scene, scene_file: &Path, loaded: &Loaded, graph: &Graph) -
             view_proj,
             texel,
             new_penumbra: options.new_penumbra,
+            translucent: translucent_casters(scene, graph)?,
         });
     }
     if graph.shadow_lut {
@@ -111,6 +112,25 @@ pub fn build(scene: &Scene, scene_file: &Path, loaded: &Loaded, graph: &Graph) -
         setup.tsd = Some(tsd_setup(scene)?);
     }
     Ok(setup)
+}
+
+/// The scene's translucent casters, loaded (only when the graph draws translucent shadows).
+fn translucent_casters(scene: &Scene, graph: &Graph) -> Result<Vec<passes::TranslucentCaster>, LoadError> {
+    if !graph.features.translucent_shadows {
+        return Ok(Vec::new());
+    }
+    scene
+        .translucent
+        .iter()
+        .map(|t| {
+            let mesh = crate::mesh::Mesh::load(&t.mesh)?.mesh;
+            Ok(passes::TranslucentCaster {
+                positions: mesh.positions.iter().map(|p| p.to_array()).collect(),
+                indices: mesh.indices,
+                opacity: t.opacity.to_array(),
+            })
+        })
+        .collect()
 }
 
 /// The shadow map side whose `filter` texels span `width_mm` across a sphere of `radius_mm`
