@@ -36,6 +36,10 @@
 //! up = [0.0, 1.0, 0.0]          # default +y
 //! fov_deg = 30.0                # default 30
 //!
+//! [[translucent]]               # optional: tints the key light's shadow map, not drawn itself
+//! mesh = "lens.obj"
+//! opacity = [0.6, 0.3, 0.2]     # per channel, in [0, 1]
+//!
 //! [output]
 //! size = [1024, 1024]           # default 1024 x 1024
 //! path = "render.png"           # optional; .png (sRGB 8-bit) or .exr (linear HDR)

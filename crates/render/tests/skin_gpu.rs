@@ -304,3 +304,39 @@ fn translucent_casters_tint_the_key_light_where_they_cover_it() {
     let l = plain[y * SIZE as usize + 16];
     assert!((l[0] - e).abs() < 1e-3 * e, "without translucent shadows the lens is ignored: {}", l[0]);
 }
+
+#[test]
+fn tsd_culling_skips_an_off_screen_head_and_reuses_a_distant_ones_light_map() {
+    let gpu = gpu();
+    let scene = inputs(floor_and_blocker(false));
+    let target = gpu.create_target(SIZE, SIZE, OutputFormat::Hdr32).unwrap();
+    // Frustum culling: looking away from the floor, no TSD pass runs (zero time) but the base does.
+    let mut away = scene.clone();
+    away.camera = Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::new(0.0, 0.0, 10.0), Vec3::Y, 45.0, 1.0);
+    let prepared = gpu.prepare_with(&away, &tsd_skin(&away, 2, false)).unwrap();
+    if let Some(passes) = gpu.draw_timed_passes(&prepared, &target).unwrap() {
+        for (name, d) in &passes {
+            assert_eq!(name.starts_with("tsd"), d.is_zero(), "{name}: {d:?}");
+        }
+    }
+    // Distance culling: with a threshold above the head's size the first frame fills the light
+    // map and later frames keep it, so moving the light changes nothing; without it they follow.
+    // From afar (the camera inside the head's bounding sphere never counts as distant).
+    let mut scene = scene;
+    scene.camera = Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0, 1.0);
+    let frame_after_moving_light = |reuse_below_px: f32| {
+        let mut skin = tsd_skin(&scene, 1, false);
+        skin.tsd.as_mut().unwrap().reuse_below_px = reuse_below_px;
+        let mut prepared = gpu.prepare_with(&scene, &skin).unwrap();
+        gpu.draw(&prepared, &target).unwrap();
+        let dim = Light { kind: LightKind::Directional { toward: Vec3::Z }, color: Vec3::ONE, intensity: 1.0 };
+        prepared.set_light(0, &dim);
+        gpu.draw(&prepared, &target).unwrap();
+        gpu.read(&target).unwrap().pixels[(SIZE / 2 * SIZE + SIZE / 2) as usize][0]
+    };
+    let e = lit_value();
+    let reused = frame_after_moving_light(1e9);
+    let updated = frame_after_moving_light(0.0);
+    assert!((reused - e).abs() < 2e-3 * e, "the reused light map keeps the first frame's light: {reused} vs {e}");
+    assert!((updated - e / 2.0).abs() < 2e-3 * e, "an updated light map follows the light: {updated} vs {}", e / 2.0);
+}
