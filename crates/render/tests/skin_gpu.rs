@@ -340,3 +340,26 @@ fn tsd_culling_skips_an_off_screen_head_and_reuses_a_distant_ones_light_map() {
     assert!((reused - e).abs() < 2e-3 * e, "the reused light map keeps the first frame's light: {reused} vs {e}");
     assert!((updated - e / 2.0).abs() < 2e-3 * e, "an updated light map follows the light: {updated} vs {}", e / 2.0);
 }
+
+#[test]
+fn sh_ambient_matches_the_cpu_irradiance_of_the_environment() {
+    use skinkit_render::skin::sh::Sh9;
+    let gpu = gpu();
+    let mut scene = inputs(floor_and_blocker(false));
+    scene.lights[0].intensity = 0.0;
+    // The floor faces +z; a gradient sky along +z gives it a closed-form irradiance.
+    let sh = Sh9::gradient([0.6, 0.5, 0.4], [0.1, 0.05, 0.02], Vec3::Z);
+    let skin = SkinSetup {
+        features: Features { sh_ambient: true, ..Default::default() },
+        sh: sh.coeffs,
+        ..Default::default()
+    };
+    let pixels = render(&gpu, &scene, &skin);
+    let centre = pixels[(SIZE / 2 * SIZE + SIZE / 2) as usize];
+    let expected = sh.irradiance_lambert(Vec3::Z);
+    for c in 0..3 {
+        // rho_d / pi * E with rho_d = 0.5.
+        let want = 0.5 / std::f32::consts::PI * expected[c];
+        assert!((centre[c] - want).abs() < 1e-4 + 1e-4 * want, "channel {c}: {} vs {want}", centre[c]);
+    }
+}
