@@ -28,7 +28,7 @@ const GAUSSIANS: usize = WEIGHTS.len();
 const CELLS_PER_SUPPORT: f32 = 4.0;
 
 /// One covered source texel, packed for the inner loop.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct Source {
     position: Vec3,
     normal: Vec3,
@@ -40,6 +40,8 @@ struct Source {
     half_diagonal: f32,
     /// Gaussians from this index on are wider than the texel (midpoint rule).
     first_midpoint: u32,
+    /// Beyond this squared distance the narrow pass has nothing to add (mm^2).
+    narrow_reach2: f32,
     irradiance: [f32; 3],
 }
 
@@ -92,7 +94,8 @@ impl Kernel {
         let dy = offset.dot(s.v_axis);
         let mut w = [0.0f32; 3];
         for (k, g) in self.gaussians.iter().enumerate() {
-            if n2 > g.reach2 {
+            let wide = k >= FIRST_WIDE && k as u32 >= s.first_midpoint;
+            if wide || n2 > g.reach2 {
                 continue;
             }
             let value =
@@ -200,7 +203,7 @@ impl Cells {
             .map(|i| (key(bake.position_mm[i], cell), i as u32))
             .collect();
         entries.sort_unstable();
-        let sources = entries.iter().map(|&(_, i)| source(bake, kernel, i as usize)).collect();
+        let sources: Vec<Source> = entries.iter().map(|&(_, i)| source(bake, kernel, i as usize)).collect();
         Self {
             cell,
             support,
@@ -261,6 +264,10 @@ fn source(bake: &ReferenceBake, kernel: &Kernel, i: usize) -> Source {
     let f = bake.footprint[i];
     let (a, b) = (f.u_mm as f64, f.v_mm as f64);
     let first_midpoint = kernel.gaussians.iter().position(|g| a.max(b) < MIDPOINT_RATIO * g.sigma).unwrap_or(GAUSSIANS);
+    let half_diagonal = 0.5 * a.hypot(b);
+    // The widest Gaussian the narrow pass takes for this source.
+    let widest = first_midpoint.max(FIRST_WIDE).min(GAUSSIANS) - 1;
+    let reach = (kernel.gaussians[widest].reach2 as f64).sqrt() + half_diagonal;
     Source {
         position: bake.position_mm[i],
         normal: bake.normal[i],
@@ -268,8 +275,9 @@ fn source(bake: &ReferenceBake, kernel: &Kernel, i: usize) -> Source {
         v_axis: f.v_axis,
         a: f.u_mm,
         b: f.v_mm,
-        half_diagonal: (0.5 * a.hypot(b)) as f32,
+        half_diagonal: half_diagonal as f32,
         first_midpoint: first_midpoint as u32,
+        narrow_reach2: (reach * reach * (1.0 + 1e-4)) as f32,
         irradiance: bake.irradiance[i],
     }
 }
@@ -293,30 +301,176 @@ pub(super) fn scatter(bake: &ReferenceBake, profile: &Profile) -> Vec<[f32; 3]> 
 
 /// The receivers of one grid cell.
 fn scatter_cell(cells: &Cells, kernel: &Kernel, (start, end): (usize, usize)) -> Vec<(u32, [f32; 3])> {
-    let slices = cells.candidates(cells.keys[start]);
-    (start..end).map(|r| (cells.texels[r], receive(cells, kernel, &slices, &cells.sources[r]))).collect()
+    let near = Near::new(cells, cells.keys[start]);
+    (start..end).map(|r| (cells.texels[r], receive(&near, kernel, &cells.sources[r]))).collect()
 }
 
-/// `M_i` for one receiver from the candidate slices.
-fn receive(cells: &Cells, kernel: &Kernel, slices: &[(usize, usize)], receiver: &Source) -> [f32; 3] {
-    let support2 = cells.support * cells.support;
-    let (p, n) = (receiver.position, receiver.normal);
-    let (mut light, mut total) = ([0.0f64; 3], [0.0f64; 3]);
-    for &(start, end) in slices {
-        for s in &cells.sources[start..end] {
-            let d = p - s.position;
-            let d2 = d.length_squared();
-            if d2 > support2 || n.dot(s.normal) < 0.0 {
-                continue;
-            }
-            let w = kernel.weight(s, d, d2);
-            for c in 0..3 {
-                light[c] += (s.irradiance[c] * w[c]) as f64;
-                total[c] += w[c] as f64;
-            }
+/// The sources within the support of some point of one grid cell, gathered in (cell, index)
+/// order: every receiver of the cell reads one contiguous list.
+struct Near {
+    support: f32,
+    sources: Vec<Source>,
+    columns: Columns,
+}
+
+impl Near {
+    fn new(cells: &Cells, k: [i32; 3]) -> Self {
+        let lo = Vec3::new(k[2] as f32, k[1] as f32, k[0] as f32) * cells.cell;
+        let hi = lo + Vec3::splat(cells.cell);
+        let reach = cells.support * (1.0 + 1e-4) + 1e-4;
+        let sources: Vec<Source> = cells
+            .candidates(k)
+            .into_iter()
+            .flat_map(|(start, end)| &cells.sources[start..end])
+            .filter(|s| {
+                let gap = (lo - s.position).max(s.position - hi).max(Vec3::ZERO);
+                gap.length_squared() <= reach * reach
+            })
+            .copied()
+            .collect();
+        let columns = Columns::new(&sources);
+        Self { support: cells.support, sources, columns }
+    }
+}
+
+/// `M_i` for one receiver from its cell's sources: the wide Gaussians over lanes
+/// ([`wide_pass`]), the rest pair by pair ([`narrow_pass`]).
+fn receive(near: &Near, kernel: &Kernel, receiver: &Source) -> [f32; 3] {
+    let (l, t) = wide_pass(near, kernel, receiver, 0, near.sources.len());
+    let (nl, nt) = narrow_pass(near, kernel, receiver, 0, near.sources.len());
+    let light = std::array::from_fn(|c| l[c] as f64 + nl[c]);
+    let total = std::array::from_fn(|c| t[c] as f64 + nt[c]);
+    normalised(light, total, receiver.irradiance)
+}
+
+/// Lanes of the wide pass (one SSE vector).
+const LANES: usize = 4;
+
+/// Gaussians from this index on are taken in the wide pass for every source wider-than-texel.
+const FIRST_WIDE: usize = 3;
+
+/// The source columns the wide pass reads, one entry per sorted source.
+struct Columns {
+    p: [Vec<f32>; 3],
+    n: [Vec<f32>; 3],
+    u: [Vec<f32>; 3],
+    v: [Vec<f32>; 3],
+    a: Vec<f32>,
+    b: Vec<f32>,
+    e: [Vec<f32>; 3],
+    /// Per wide Gaussian: 1 where the source takes it by the midpoint rule, else 0.
+    midpoint: [Vec<f32>; GAUSSIANS - FIRST_WIDE],
+}
+
+impl Columns {
+    fn new(sources: &[Source]) -> Self {
+        let len = sources.len() + LANES;
+        let column = || Vec::with_capacity(len);
+        let mut c = Self {
+            p: std::array::from_fn(|_| column()),
+            n: std::array::from_fn(|_| column()),
+            u: std::array::from_fn(|_| column()),
+            v: std::array::from_fn(|_| column()),
+            a: column(),
+            b: column(),
+            e: std::array::from_fn(|_| column()),
+            midpoint: std::array::from_fn(|_| column()),
+        };
+        for s in sources {
+            c.push(s);
+        }
+        // A vector's worth of zeros so the last group's loads stay in bounds.
+        for _ in 0..LANES {
+            c.push(&Source::default());
+        }
+        c
+    }
+
+    fn push(&mut self, s: &Source) {
+        for i in 0..3 {
+            self.p[i].push(s.position[i]);
+            self.n[i].push(s.normal[i]);
+            self.u[i].push(s.u_axis[i]);
+            self.v[i].push(s.v_axis[i]);
+            self.e[i].push(s.irradiance[i]);
+        }
+        self.a.push(s.a);
+        self.b.push(s.b);
+        for (k, m) in self.midpoint.iter_mut().enumerate() {
+            m.push(if (k + FIRST_WIDE) as u32 >= s.first_midpoint { 1.0 } else { 0.0 });
         }
     }
-    normalised(light, total, receiver.irradiance)
+}
+
+/// The wide Gaussians' (index [`FIRST_WIDE`] on) midpoint-rule weights of sources
+/// `start..end`, everywhere in the support (beyond their skip radius they add less than
+/// `exp(-20)` of their peak), in [`LANES`] independent f32 sums: `(light, total)` per channel.
+fn wide_pass(near: &Near, kernel: &Kernel, r: &Source, start: usize, end: usize) -> ([f32; 3], [f32; 3]) {
+    let mut acc = [[0.0f32; LANES]; 6];
+    #[cfg(target_arch = "x86_64")]
+    let mut j = simd::wide_lanes(near, kernel, r, start, end, &mut acc);
+    #[cfg(not(target_arch = "x86_64"))]
+    let mut j = start;
+    while j < end {
+        for l in 0..LANES.min(end - j) {
+            let w = wide_weight(near, kernel, r, j + l);
+            lane_add(&mut acc, l, w, near, j + l);
+        }
+        j += LANES;
+    }
+    let sum = |x: &[f32; LANES]| x.iter().sum::<f32>();
+    (std::array::from_fn(|c| sum(&acc[c])), std::array::from_fn(|c| sum(&acc[3 + c])))
+}
+
+#[inline(always)]
+fn lane_add(acc: &mut [[f32; LANES]; 6], l: usize, w: [f32; 3], near: &Near, j: usize) {
+    for c in 0..3 {
+        acc[c][l] += near.columns.e[c][j] * w[c];
+        acc[3 + c][l] += w[c];
+    }
+}
+
+/// One source's wide-Gaussian weights, branch-free (0 outside the support or across opposed
+/// normals).
+#[inline(always)]
+fn wide_weight(near: &Near, kernel: &Kernel, r: &Source, j: usize) -> [f32; 3] {
+    let c = &near.columns;
+    let d = [r.position.x - c.p[0][j], r.position.y - c.p[1][j], r.position.z - c.p[2][j]];
+    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let facing = r.normal.x * c.n[0][j] + r.normal.y * c.n[1][j] + r.normal.z * c.n[2][j];
+    let inside = if d2 <= near.support * near.support && facing >= 0.0 { 1.0 } else { 0.0 };
+    let dx = d[0] * c.u[0][j] + d[1] * c.u[1][j] + d[2] * c.u[2][j];
+    let dy = d[0] * c.v[0][j] + d[1] * c.v[1][j] + d[2] * c.v[2][j];
+    let (a, b) = (c.a[j], c.b[j]);
+    let mut w = [0.0f32; 3];
+    for (m, g) in kernel.gaussians[FIRST_WIDE..].iter().enumerate() {
+        let cx = correction(dx * g.inv_sigma, a * g.inv_sigma);
+        let cy = correction(dy * g.inv_sigma, b * g.inv_sigma);
+        let value = inside * c.midpoint[m][j] * g.peak * a * b * exp_neg(d2 * g.neg_inv_2v) * cx * cy;
+        for ch in 0..3 {
+            w[ch] += g.weights[ch] * value;
+        }
+    }
+    w
+}
+
+/// The Gaussians the wide pass leaves out (narrow ones, and wide ones of sources larger than
+/// their sigma), pair by pair within their skip radius, in f64 sums.
+fn narrow_pass(near: &Near, kernel: &Kernel, r: &Source, start: usize, end: usize) -> ([f64; 3], [f64; 3]) {
+    let (mut light, mut total) = ([0.0f64; 3], [0.0f64; 3]);
+    for s in &near.sources[start..end] {
+        let d = r.position - s.position;
+        let d2 = d.length_squared();
+        if d2 > s.narrow_reach2 || d2 > near.support * near.support || r.normal.dot(s.normal) < 0.0 {
+            continue;
+        }
+        let w = kernel.weight(s, d, d2);
+        for c in 0..3 {
+            light[c] += (s.irradiance[c] * w[c]) as f64;
+            total[c] += w[c] as f64;
+        }
+    }
+    (light, total)
 }
 
 /// `light / total`, the receiver's own irradiance where nothing weighs, 0 where not finite.
@@ -325,6 +479,129 @@ fn normalised(light: [f64; 3], total: [f64; 3], e: [f32; 3]) -> [f32; 3] {
         let m = if total[c] > 0.0 { (light[c] / total[c]) as f32 } else { e[c] };
         if m.is_finite() { m } else { 0.0 }
     })
+}
+
+/// The wide pass four sources at a time in SSE2 (always present on x86-64): the same operations
+/// in the same order as [`wide_weight`] and [`exp_neg`].
+#[cfg(target_arch = "x86_64")]
+mod simd {
+    use std::arch::x86_64::*;
+
+    use super::{FIRST_WIDE, Kernel, LANES, Near, Source};
+
+    /// Accumulates sources `start..end` into `acc` in groups of [`LANES`], the last one masked;
+    /// returns `end`.
+    pub(super) fn wide_lanes(
+        near: &Near,
+        kernel: &Kernel,
+        r: &Source,
+        start: usize,
+        end: usize,
+        acc: &mut [[f32; LANES]; 6],
+    ) -> usize {
+        // SAFETY: SSE2 is part of x86-64; loads read `j..j + 4` with `j < end <= sources`, and
+        // every column has `LANES` entries of padding past the sources.
+        unsafe { lanes(near, kernel, r, start, end, acc) }
+    }
+
+    #[inline(always)]
+    unsafe fn load(col: &[f32], j: usize) -> __m128 {
+        debug_assert!(j + 4 <= col.len());
+        unsafe { _mm_loadu_ps(col.as_ptr().add(j)) }
+    }
+
+    unsafe fn lanes(
+        near: &Near,
+        kernel: &Kernel,
+        r: &Source,
+        start: usize,
+        end: usize,
+        acc: &mut [[f32; LANES]; 6],
+    ) -> usize {
+        unsafe {
+            let c = &near.columns;
+            let set = _mm_set1_ps;
+            let (px, py, pz) = (set(r.position.x), set(r.position.y), set(r.position.z));
+            let (nx, ny, nz) = (set(r.normal.x), set(r.normal.y), set(r.normal.z));
+            let support2 = set(near.support * near.support);
+            let mut sums = [_mm_setzero_ps(); 6];
+            let mut j = start;
+            while j < end {
+                let lane = _mm_add_epi32(_mm_set1_epi32(j as i32), _mm_setr_epi32(0, 1, 2, 3));
+                let live = _mm_castsi128_ps(_mm_cmplt_epi32(lane, _mm_set1_epi32(end as i32)));
+                let d = [
+                    _mm_sub_ps(px, load(&c.p[0], j)),
+                    _mm_sub_ps(py, load(&c.p[1], j)),
+                    _mm_sub_ps(pz, load(&c.p[2], j)),
+                ];
+                let dot = |a: [__m128; 3], b: [__m128; 3]| {
+                    _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2]))
+                };
+                let d2 = dot(d, d);
+                let facing = dot([nx, ny, nz], [load(&c.n[0], j), load(&c.n[1], j), load(&c.n[2], j)]);
+                let inside = _mm_and_ps(_mm_cmple_ps(d2, support2), _mm_cmpge_ps(facing, _mm_setzero_ps()));
+                let inside = _mm_and_ps(inside, live);
+                let dx = dot(d, [load(&c.u[0], j), load(&c.u[1], j), load(&c.u[2], j)]);
+                let dy = dot(d, [load(&c.v[0], j), load(&c.v[1], j), load(&c.v[2], j)]);
+                let (a, b) = (load(&c.a, j), load(&c.b, j));
+                let mut w = [_mm_setzero_ps(); 3];
+                for (m, g) in kernel.gaussians[FIRST_WIDE..].iter().enumerate() {
+                    let inv = set(g.inv_sigma);
+                    let cx = correction(_mm_mul_ps(dx, inv), _mm_mul_ps(a, inv));
+                    let cy = correction(_mm_mul_ps(dy, inv), _mm_mul_ps(b, inv));
+                    let mut value = _mm_mul_ps(load(&c.midpoint[m], j), set(g.peak));
+                    value = _mm_mul_ps(_mm_mul_ps(value, a), b);
+                    value = _mm_mul_ps(value, exp_neg(_mm_mul_ps(d2, set(g.neg_inv_2v))));
+                    value = _mm_and_ps(_mm_mul_ps(_mm_mul_ps(value, cx), cy), inside);
+                    for ch in 0..3 {
+                        if g.weights[ch] != 0.0 {
+                            w[ch] = _mm_add_ps(w[ch], _mm_mul_ps(set(g.weights[ch]), value));
+                        }
+                    }
+                }
+                for ch in 0..3 {
+                    sums[ch] = _mm_add_ps(sums[ch], _mm_mul_ps(load(&c.e[ch], j), w[ch]));
+                    sums[3 + ch] = _mm_add_ps(sums[3 + ch], w[ch]);
+                }
+                j += LANES;
+            }
+            for (slot, v) in acc.iter_mut().zip(sums) {
+                _mm_storeu_ps(slot.as_mut_ptr(), v);
+            }
+            end.max(start)
+        }
+    }
+
+    /// `super::correction` on four lanes.
+    #[inline(always)]
+    unsafe fn correction(t: __m128, r: __m128) -> __m128 {
+        unsafe {
+            let set = _mm_set1_ps;
+            let (t2, r2) = (_mm_mul_ps(t, t), _mm_mul_ps(r, r));
+            let second = _mm_mul_ps(_mm_mul_ps(r2, set(1.0 / 24.0)), _mm_sub_ps(t2, set(1.0)));
+            let quartic = _mm_add_ps(_mm_sub_ps(_mm_mul_ps(t2, t2), _mm_mul_ps(set(6.0), t2)), set(3.0));
+            let fourth = _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(r2, r2), set(1.0 / 1920.0)), quartic);
+            _mm_add_ps(_mm_add_ps(set(1.0), second), fourth)
+        }
+    }
+
+    /// `super::exp_neg` on four lanes (finite inputs).
+    #[inline(always)]
+    unsafe fn exp_neg(x: __m128) -> __m128 {
+        unsafe {
+            let set = _mm_set1_ps;
+            let magic = set(12_582_912.0);
+            let x = _mm_max_ps(_mm_min_ps(x, _mm_setzero_ps()), set(-87.0));
+            let n = _mm_sub_ps(_mm_add_ps(_mm_mul_ps(x, set(std::f32::consts::LOG2_E)), magic), magic);
+            let r = _mm_sub_ps(_mm_sub_ps(x, _mm_mul_ps(n, set(0.693_145_75))), _mm_mul_ps(n, set(1.428_606_8e-6)));
+            let mut p = set(1.0 / 5040.0);
+            for k in [1.0 / 720.0, 1.0 / 120.0, 1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0] {
+                p = _mm_add_ps(set(k), _mm_mul_ps(r, p));
+            }
+            let scale = _mm_castsi128_ps(_mm_slli_epi32(_mm_add_epi32(_mm_cvtps_epi32(n), _mm_set1_epi32(127)), 23));
+            _mm_mul_ps(scale, p)
+        }
+    }
 }
 
 #[cfg(test)]
