@@ -1,18 +1,25 @@
 //! The fast evaluation behind [`super::scatter`]: the same sums as [`super::scatter_exact`] (the
-//! brute-force oracle), organised so a head at 512 texels scatters in seconds, not a minute.
+//! brute-force oracle), organised for speed. Measured on the sample head (2 shared cores): see
+//! "Speed" in the parent module's docs.
 //!
-//! - Source texels are packed once ([`Source`]: position, normal, footprint axes and sides, its
-//!   half-diagonal and which Gaussians take the midpoint rule) and sorted by their grid cell,
-//!   cells in `(z, y, x)` order: the cells of one `(y, z)` row are then one contiguous slice, so a
-//!   receiver cell finds its candidates as a few dozen slices (found once per cell by binary
-//!   search, each row trimmed in x to the sphere of the support) instead of hash lookups per cell.
-//! - Weights are evaluated in f32 with an inlined polynomial exponential ([`exp_neg`], relative
-//!   error below 3e-7) and, for Gaussians narrower than the texel, a Chebyshev `erfc` ([`erfc`],
-//!   below 1e-6 where it matters) in place of libm's (which took two thirds of the oracle's time
-//!   at 256 texels). Per-Gaussian constants (`-1 / 2v`, `1 / sigma`, normalisers, the skip
-//!   radius) are computed once. The result is within 1e-5 relative of the oracle (a test).
-//! - Sums are accumulated in f64, receivers in a fixed order, sources in (cell, index) order
-//!   within each: the same bits whatever the thread count.
+//! - Neighbours: source texels are packed once ([`Source`]) and sorted by grid cell (a quarter
+//!   of the support), cells in `(z, y, x)` order, so the cells of one `(y, z)` row are one
+//!   contiguous slice found by binary search. Each receiver cell gathers, once, the sources
+//!   whose distance to the cell's box is within the support ([`Near`]); its receivers all read
+//!   that one list (on the head about 2.2 times the support's disc: the surface folds).
+//! - The wide pass: the three widest Gaussians (variances 0.567, 1.99 and 7.41 mm^2, reaching
+//!   nearly the whole support and wider than any texel of a 256-or-finer head map) by the
+//!   corrected midpoint rule, branch-free over four sources at a time in SSE2 ([`simd`]), outside
+//!   the support or across opposed normals masked to zero. Evaluated beyond their own skip radius
+//!   they add less than `exp(-20)` of their peak there, which the oracle drops.
+//! - The narrow pass: the other Gaussians (and the wide ones of texels larger than their sigma)
+//!   pair by pair within each source's skip radius, the oracle's midpoint and separable erfc
+//!   formulas in f32, with an inlined polynomial exponential ([`exp_neg`], relative error below
+//!   3e-7) and a Chebyshev `erfc` ([`erfc`], below 1e-6) in place of libm's (two thirds of the
+//!   oracle's time at 256 texels).
+//! - Sums: f32 over lanes and per pass, f64 across them, receivers in a fixed order and sources
+//!   in (cell, index) order: the same bits whatever the thread count. The result is within 1e-5
+//!   relative of the oracle (a test; 4e-7 measured).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -23,8 +30,8 @@ use crate::skin::profile::{Profile, WEIGHTS};
 /// Number of Gaussians in the profile.
 const GAUSSIANS: usize = WEIGHTS.len();
 
-/// Grid cells per support radius: the rows of a receiver cell then cover about 1.3 times the
-/// support's disc on a surface.
+/// Grid cells per support radius: smaller cells gather fewer sources beyond the support but
+/// share each gathered list among fewer receivers.
 const CELLS_PER_SUPPORT: f32 = 4.0;
 
 /// One covered source texel, packed for the inner loop.
@@ -139,22 +146,24 @@ fn box_mass(g: &Gaussian, x: f32, a: f32) -> f32 {
 fn erfc(x: f32) -> f32 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
-    let c = [
-        -1.265_512_2,
-        1.000_023_7,
-        0.374_091_96,
-        0.096_784_18,
-        -0.186_288_06,
-        0.278_868_07,
-        -1.135_204,
-        1.488_515_9,
-        -0.822_152_2,
-        0.170_872_77,
-    ];
-    let poly = c.iter().rev().fold(0.0f32, |acc, &ck| acc * t + ck);
+    let poly = ERFC.iter().rev().fold(0.0f32, |acc, &ck| acc * t + ck);
     let r = t * exp_neg(poly - z * z);
     if x >= 0.0 { r } else { 2.0 - r }
 }
+
+/// The coefficients of [`erfc`]'s polynomial in `t`, constant term first.
+const ERFC: [f32; 10] = [
+    -1.265_512_2,
+    1.000_023_7,
+    0.374_091_96,
+    0.096_784_18,
+    -0.186_288_06,
+    0.278_868_07,
+    -1.135_204,
+    1.488_515_9,
+    -0.822_152_2,
+    0.170_872_77,
+];
 
 /// One Gaussian over a texel smaller than its sigma: density at the offset times the area and
 /// the corrected midpoint rule along both sides (the oracle's `midpoint_correction`).
@@ -311,6 +320,9 @@ struct Near {
     support: f32,
     sources: Vec<Source>,
     columns: Columns,
+    /// The sources within their own narrow-pass reach of the cell.
+    narrow: Vec<Source>,
+    narrow_columns: Columns,
 }
 
 impl Near {
@@ -329,7 +341,16 @@ impl Near {
             .copied()
             .collect();
         let columns = Columns::new(&sources);
-        Self { support: cells.support, sources, columns }
+        let narrow: Vec<Source> = sources
+            .iter()
+            .filter(|s| {
+                let gap = (lo - s.position).max(s.position - hi).max(Vec3::ZERO);
+                gap.length_squared() <= s.narrow_reach2 * (1.0 + 1e-4) + 1e-4
+            })
+            .copied()
+            .collect();
+        let narrow_columns = Columns::new(&narrow);
+        Self { support: cells.support, sources, columns, narrow, narrow_columns }
     }
 }
 
@@ -337,7 +358,10 @@ impl Near {
 /// ([`wide_pass`]), the rest pair by pair ([`narrow_pass`]).
 fn receive(near: &Near, kernel: &Kernel, receiver: &Source) -> [f32; 3] {
     let (l, t) = wide_pass(near, kernel, receiver, 0, near.sources.len());
-    let (nl, nt) = narrow_pass(near, kernel, receiver, 0, near.sources.len());
+    #[cfg(target_arch = "x86_64")]
+    let (nl, nt) = simd::narrow_pass(near, kernel, receiver);
+    #[cfg(not(target_arch = "x86_64"))]
+    let (nl, nt) = narrow_pass(near, kernel, receiver);
     let light = std::array::from_fn(|c| l[c] as f64 + nl[c]);
     let total = std::array::from_fn(|c| t[c] as f64 + nt[c]);
     normalised(light, total, receiver.irradiance)
@@ -357,6 +381,8 @@ struct Columns {
     v: [Vec<f32>; 3],
     a: Vec<f32>,
     b: Vec<f32>,
+    half_diagonal: Vec<f32>,
+    first_midpoint: Vec<f32>,
     e: [Vec<f32>; 3],
     /// Per wide Gaussian: 1 where the source takes it by the midpoint rule, else 0.
     midpoint: [Vec<f32>; GAUSSIANS - FIRST_WIDE],
@@ -373,6 +399,8 @@ impl Columns {
             v: std::array::from_fn(|_| column()),
             a: column(),
             b: column(),
+            half_diagonal: column(),
+            first_midpoint: column(),
             e: std::array::from_fn(|_| column()),
             midpoint: std::array::from_fn(|_| column()),
         };
@@ -396,6 +424,8 @@ impl Columns {
         }
         self.a.push(s.a);
         self.b.push(s.b);
+        self.half_diagonal.push(s.half_diagonal);
+        self.first_midpoint.push(s.first_midpoint as f32);
         for (k, m) in self.midpoint.iter_mut().enumerate() {
             m.push(if (k + FIRST_WIDE) as u32 >= s.first_midpoint { 1.0 } else { 0.0 });
         }
@@ -456,9 +486,10 @@ fn wide_weight(near: &Near, kernel: &Kernel, r: &Source, j: usize) -> [f32; 3] {
 
 /// The Gaussians the wide pass leaves out (narrow ones, and wide ones of sources larger than
 /// their sigma), pair by pair within their skip radius, in f64 sums.
-fn narrow_pass(near: &Near, kernel: &Kernel, r: &Source, start: usize, end: usize) -> ([f64; 3], [f64; 3]) {
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+fn narrow_pass(near: &Near, kernel: &Kernel, r: &Source) -> ([f64; 3], [f64; 3]) {
     let (mut light, mut total) = ([0.0f64; 3], [0.0f64; 3]);
-    for s in &near.sources[start..end] {
+    for s in &near.narrow {
         let d = r.position - s.position;
         let d2 = d.length_squared();
         if d2 > s.narrow_reach2 || d2 > near.support * near.support || r.normal.dot(s.normal) < 0.0 {
@@ -487,7 +518,7 @@ fn normalised(light: [f64; 3], total: [f64; 3], e: [f32; 3]) -> [f32; 3] {
 mod simd {
     use std::arch::x86_64::*;
 
-    use super::{FIRST_WIDE, Kernel, LANES, Near, Source};
+    use super::{ERFC, FIRST_WIDE, Gaussian, Kernel, LANES, Near, Source};
 
     /// Accumulates sources `start..end` into `acc` in groups of [`LANES`], the last one masked;
     /// returns `end`.
@@ -569,6 +600,131 @@ mod simd {
                 _mm_storeu_ps(slot.as_mut_ptr(), v);
             }
             end.max(start)
+        }
+    }
+
+    /// The narrow pass over the cell's narrow list, four sources at a time: per Gaussian the
+    /// lanes that need it (within its skip radius, and narrower than the texel or below
+    /// [`FIRST_WIDE`]) take the oracle's separable form, each side by the midpoint rule or erfc.
+    pub(super) fn narrow_pass(near: &Near, kernel: &Kernel, r: &Source) -> ([f64; 3], [f64; 3]) {
+        // SAFETY: as in `wide_lanes`, over the narrow list's padded columns.
+        unsafe { narrow_lanes(near, kernel, r) }
+    }
+
+    unsafe fn narrow_lanes(near: &Near, kernel: &Kernel, r: &Source) -> ([f64; 3], [f64; 3]) {
+        unsafe {
+            let c = &near.narrow_columns;
+            let end = near.narrow.len();
+            let set = _mm_set1_ps;
+            let zero = _mm_setzero_ps();
+            let (px, py, pz) = (set(r.position.x), set(r.position.y), set(r.position.z));
+            let (nx, ny, nz) = (set(r.normal.x), set(r.normal.y), set(r.normal.z));
+            let support2 = set(near.support * near.support);
+            let mut sums = [zero; 6];
+            let mut j = 0;
+            while j < end {
+                let lane = _mm_add_epi32(_mm_set1_epi32(j as i32), _mm_setr_epi32(0, 1, 2, 3));
+                let live = _mm_castsi128_ps(_mm_cmplt_epi32(lane, _mm_set1_epi32(end as i32)));
+                let d = [
+                    _mm_sub_ps(px, load(&c.p[0], j)),
+                    _mm_sub_ps(py, load(&c.p[1], j)),
+                    _mm_sub_ps(pz, load(&c.p[2], j)),
+                ];
+                let d2 = dot(d, d);
+                let facing = dot([nx, ny, nz], [load(&c.n[0], j), load(&c.n[1], j), load(&c.n[2], j)]);
+                let inside = _mm_and_ps(_mm_cmple_ps(d2, support2), _mm_cmpge_ps(facing, zero));
+                let inside = _mm_and_ps(inside, live);
+                let nearest = _mm_max_ps(_mm_sub_ps(_mm_sqrt_ps(d2), load(&c.half_diagonal, j)), zero);
+                let n2 = _mm_mul_ps(nearest, nearest);
+                let dx = dot(d, [load(&c.u[0], j), load(&c.u[1], j), load(&c.u[2], j)]);
+                let dy = dot(d, [load(&c.v[0], j), load(&c.v[1], j), load(&c.v[2], j)]);
+                let dz2 = _mm_max_ps(_mm_sub_ps(_mm_sub_ps(d2, _mm_mul_ps(dx, dx)), _mm_mul_ps(dy, dy)), zero);
+                let (a, b) = (load(&c.a, j), load(&c.b, j));
+                let first_midpoint = load(&c.first_midpoint, j);
+                let mut w = [zero; 3];
+                for (k, g) in kernel.gaussians.iter().enumerate() {
+                    let mut need = _mm_and_ps(inside, _mm_cmple_ps(n2, set(g.reach2)));
+                    if k >= FIRST_WIDE {
+                        need = _mm_and_ps(need, _mm_cmpgt_ps(first_midpoint, set(k as f32)));
+                    }
+                    if _mm_movemask_ps(need) == 0 {
+                        continue;
+                    }
+                    let mass = _mm_mul_ps(side_mass(g, dx, a), side_mass(g, dy, b));
+                    let value =
+                        _mm_mul_ps(_mm_mul_ps(set(g.scale32), exp_neg(_mm_mul_ps(dz2, set(g.neg_inv_2v)))), mass);
+                    let value = _mm_and_ps(value, need);
+                    for ch in 0..3 {
+                        if g.weights[ch] != 0.0 {
+                            w[ch] = _mm_add_ps(w[ch], _mm_mul_ps(set(g.weights[ch]), value));
+                        }
+                    }
+                }
+                for ch in 0..3 {
+                    sums[ch] = _mm_add_ps(sums[ch], _mm_mul_ps(load(&c.e[ch], j), w[ch]));
+                    sums[3 + ch] = _mm_add_ps(sums[3 + ch], w[ch]);
+                }
+                j += LANES;
+            }
+            let mut lanes = [[0.0f32; LANES]; 6];
+            for (slot, v) in lanes.iter_mut().zip(sums) {
+                _mm_storeu_ps(slot.as_mut_ptr(), v);
+            }
+            let sum = |x: &[f32; LANES]| x.iter().map(|&v| v as f64).sum::<f64>();
+            (std::array::from_fn(|ch| sum(&lanes[ch])), std::array::from_fn(|ch| sum(&lanes[3 + ch])))
+        }
+    }
+
+    #[inline(always)]
+    unsafe fn dot(a: [__m128; 3], b: [__m128; 3]) -> __m128 {
+        unsafe { _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2])) }
+    }
+
+    /// `super::box_mass` on four lanes: the midpoint rule where `a < sigma`, erfc elsewhere
+    /// (each computed only when some lane takes it).
+    #[inline(always)]
+    unsafe fn side_mass(g: &Gaussian, x: __m128, a: __m128) -> __m128 {
+        unsafe {
+            let set = _mm_set1_ps;
+            let small = _mm_cmplt_ps(a, set(g.sigma as f32));
+            let mask = _mm_movemask_ps(small);
+            let mut out = _mm_setzero_ps();
+            if mask != 0 {
+                let t = _mm_mul_ps(x, set(g.inv_sigma));
+                let density = exp_neg(_mm_mul_ps(set(-0.5), _mm_mul_ps(t, t)));
+                let mid = _mm_mul_ps(
+                    _mm_mul_ps(_mm_mul_ps(a, set(g.peak_1d)), density),
+                    correction(t, _mm_mul_ps(a, set(g.inv_sigma))),
+                );
+                out = _mm_and_ps(mid, small);
+            }
+            if mask != 0xf {
+                let ax = _mm_andnot_ps(set(-0.0), x);
+                let half = _mm_mul_ps(set(0.5), a);
+                let s = set(g.inv_sigma * std::f32::consts::FRAC_1_SQRT_2);
+                let lo = erfc(_mm_mul_ps(_mm_sub_ps(ax, half), s));
+                let hi = erfc(_mm_mul_ps(_mm_add_ps(ax, half), s));
+                let big = _mm_mul_ps(set(0.5), _mm_sub_ps(lo, hi));
+                out = _mm_or_ps(out, _mm_andnot_ps(small, big));
+            }
+            out
+        }
+    }
+
+    /// `super::erfc` on four lanes.
+    #[inline(always)]
+    unsafe fn erfc(x: __m128) -> __m128 {
+        unsafe {
+            let set = _mm_set1_ps;
+            let z = _mm_andnot_ps(set(-0.0), x);
+            let t = _mm_div_ps(set(1.0), _mm_add_ps(set(1.0), _mm_mul_ps(set(0.5), z)));
+            let mut poly = _mm_setzero_ps();
+            for ck in ERFC.iter().rev() {
+                poly = _mm_add_ps(_mm_mul_ps(poly, t), set(*ck));
+            }
+            let r = _mm_mul_ps(t, exp_neg(_mm_sub_ps(poly, _mm_mul_ps(z, z))));
+            let negative = _mm_cmplt_ps(x, _mm_setzero_ps());
+            _mm_or_ps(_mm_andnot_ps(negative, r), _mm_and_ps(negative, _mm_sub_ps(set(2.0), r)))
         }
     }
 
