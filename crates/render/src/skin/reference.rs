@@ -58,7 +58,7 @@
 //! [`scatter_exact`] evaluates every pair with [`texel_weight`] in f64 (libm `exp` and `erfc`)
 //! over a hashed grid: the oracle. [`scatter`] computes the same sums with the wide Gaussians in
 //! SSE2 over per-cell gathered source lists and the narrow ones in f32 (the private `fast`
-//! module), within 1e-5 relative of the oracle (`tests/skin_reference.rs`; measured 4e-7 worst
+//! module), within 1e-5 relative of the oracle (`tests/skin_reference.rs`; measured 5e-7 worst
 //! on the sample head at 256 texels). SPEED_TABLE
 //!
 //! # Textures ([`ReferenceBake::to_texture`], [`dilate`])
