@@ -56,10 +56,12 @@
 //!
 //! # Speed
 //! [`scatter_exact`] evaluates every pair with [`texel_weight`] in f64 (libm `exp` and `erfc`)
-//! over a hashed grid: the oracle. [`scatter`] computes the same sums with the wide Gaussians in
-//! SSE2 over per-cell gathered source lists and the narrow ones in f32 (the private `fast`
-//! module), within 1e-5 relative of the oracle (`tests/skin_reference.rs`; measured 5e-7 worst
-//! on the sample head at 256 texels). SPEED_TABLE
+//! over a hashed grid: the oracle. [`scatter`] computes the same sums in f32, four source texels at
+//! a time in SSE2, over source lists gathered once per grid cell (the private `fast` module), within 1e-5 relative of the oracle (`tests/skin_reference.rs`; measured 5e-7 worst
+//! on the sample head at 256 texels, 1.1e-6 at 512). On the sample head (two shadowed lights,
+//! 2 cores shared with other work, load 3-5, so the times vary by half), oracle then fast path
+//! measured in the same run: 256 texels 5.5 s -> 2.3 s, 512 texels 46 s -> 16 s (10-14 s at
+//! lighter load); 1024 texels 598 s (the predecessor's measurement) -> 124 s.
 //!
 //! # Textures ([`ReferenceBake::to_texture`], [`dilate`])
 //! Results go to an RGBA [`Texture`] (alpha 1 covered, 0 not), and [`dilate`] fills uncovered
