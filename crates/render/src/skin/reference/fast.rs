@@ -577,11 +577,21 @@ mod simd {
                 let facing = dot([nx, ny, nz], [load(&c.n[0], j), load(&c.n[1], j), load(&c.n[2], j)]);
                 let inside = _mm_and_ps(_mm_cmple_ps(d2, support2), _mm_cmpge_ps(facing, _mm_setzero_ps()));
                 let inside = _mm_and_ps(inside, live);
+                if _mm_movemask_ps(inside) == 0 {
+                    j += LANES;
+                    continue;
+                }
+                let nearest = _mm_max_ps(_mm_sub_ps(_mm_sqrt_ps(d2), load(&c.half_diagonal, j)), _mm_setzero_ps());
+                let n2 = _mm_mul_ps(nearest, nearest);
                 let dx = dot(d, [load(&c.u[0], j), load(&c.u[1], j), load(&c.u[2], j)]);
                 let dy = dot(d, [load(&c.v[0], j), load(&c.v[1], j), load(&c.v[2], j)]);
                 let (a, b) = (load(&c.a, j), load(&c.b, j));
                 let mut w = [_mm_setzero_ps(); 3];
                 for (m, g) in kernel.gaussians[FIRST_WIDE..].iter().enumerate() {
+                    // Skipped where no lane is within its radius (as the oracle skips it).
+                    if _mm_movemask_ps(_mm_cmple_ps(n2, set(g.reach2))) == 0 {
+                        continue;
+                    }
                     let inv = set(g.inv_sigma);
                     let cx = correction(_mm_mul_ps(dx, inv), _mm_mul_ps(a, inv));
                     let cy = correction(_mm_mul_ps(dy, inv), _mm_mul_ps(b, inv));
