@@ -541,9 +541,9 @@ fn fast_scatter_matches_the_brute_force_oracle() {
 }
 
 /// The sample head (12.5k vertices, mm) with two shadowed lights: bake and scatter times at
-/// 512 and 1024 texels. Measured on 2 shared cores (load 3-5): 512: 259584 texels, bake 0.4 s,
-/// scatter 16 s (the brute-force `scatter_exact` 46 s in the same run, 49 s before the fast
-/// path); 1024: 1037824 texels, scatter 124 s (598 s before). `SKINKIT_MEASURE_EXACT=1` also
+/// 512 and 1024 texels. Measured on 2 shared cores (load 2): 512: 259584 texels, bake 0.25 s,
+/// scatter 6.4 s (the brute-force `scatter_exact` 23.2 s in the same run); 1024: 1037824
+/// texels, scatter 64 s (the oracle 598 s at load 3-4). `SKINKIT_MEASURE_EXACT=1` also
 /// runs the oracle and prints the difference. A measurement, not a check: run with
 /// `cargo test --release -p skinkit-render --test skin_reference -- --ignored --nocapture`.
 #[test]

@@ -59,9 +59,10 @@
 //! over a hashed grid: the oracle. [`scatter`] computes the same sums in f32, four source texels at
 //! a time in SSE2, over source lists gathered once per grid cell (the private `fast` module), within 1e-5 relative of the oracle (`tests/skin_reference.rs`; measured 5e-7 worst
 //! on the sample head at 256 texels, 1.1e-6 at 512). On the sample head (two shadowed lights,
-//! 2 cores shared with other work, load 3-5, so the times vary by half), oracle then fast path
-//! measured in the same run: 256 texels 5.5 s -> 2.3 s, 512 texels 46 s -> 16 s (10-14 s at
-//! lighter load); 1024 texels 598 s (the predecessor's measurement) -> 124 s.
+//! 2 cores shared with other work), oracle then fast path in the same run: at load 2, 256
+//! texels 2.7 s -> 1.1 s, 512 texels 23.2 s -> 6.4 s; at load 3-5, 5.5 s -> 2.3 s and
+//! 46 s -> 16 s (an earlier state of the fast path); 1024 texels 598 s (the oracle, load 3-4)
+//! -> 64 s (the fast path, load 2).
 //!
 //! # Textures ([`ReferenceBake::to_texture`], [`dilate`])
 //! Results go to an RGBA [`Texture`] (alpha 1 covered, 0 not), and [`dilate`] fills uncovered
