@@ -9,7 +9,9 @@ use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex, uv_sphere,
 };
 use skinkit_render::skin::profile::{Normalisation, Profile, VARIANCES_MM2, WEIGHTS};
-use skinkit_render::skin::reference::{Footprint, ReferenceBake, bake, dilate, scatter, support_mm, texel_weight};
+use skinkit_render::skin::reference::{
+    Footprint, ReferenceBake, bake, dilate, scatter, scatter_exact, support_mm, texel_weight,
+};
 
 fn sun(toward: Vec3, intensity: f32) -> Light {
     Light { kind: LightKind::Directional { toward }, color: Vec3::ONE, intensity }
@@ -484,9 +486,65 @@ fn to_texture_and_dilate() {
     assert!(dilated_edge.y > centre_edge.y);
 }
 
+/// Worst and mean relative difference of `fast` against `exact` over covered texels and channels
+/// (relative to the texel's largest channel, floored at 1e-3 of the map's largest value).
+fn relative_difference(b: &ReferenceBake, fast: &[[f32; 3]], exact: &[[f32; 3]]) -> (f64, f64) {
+    let peak = exact.iter().flatten().fold(0.0f32, |m, &x| m.max(x)) as f64;
+    let (mut worst, mut sum, mut count) = (0.0f64, 0.0f64, 0usize);
+    for t in (0..b.covered.len()).filter(|&t| b.covered[t]) {
+        let scale = exact[t].iter().fold(0.0f32, |m, &x| m.max(x)) as f64;
+        let scale = scale.max(1e-3 * peak).max(f64::MIN_POSITIVE);
+        for c in 0..3 {
+            let r = (fast[t][c] as f64 - exact[t][c] as f64).abs() / scale;
+            worst = worst.max(r);
+            sum += r;
+            count += 1;
+        }
+    }
+    (worst, sum / count.max(1) as f64)
+}
+
+/// A bumpy sphere of radius `radius` mm (a curved, non-uniformly lit mesh with shadows) baked at
+/// `size` texels.
+fn bumpy_sphere(radius: f32, size: u32) -> ReferenceBake {
+    let (mut vertices, indices) = uv_sphere(48, 24);
+    for v in &mut vertices {
+        let p = Vec3::from(v.position);
+        let bump = 1.0 + 0.15 * (5.0 * p.x).sin() * (4.0 * p.y).cos();
+        v.position = (p * radius * bump).into();
+    }
+    let lights = vec![sun(Vec3::new(1.0, 0.4, 0.3), 1.0), sun(Vec3::new(-0.2, 1.0, -0.5), 0.5)];
+    bake(&inputs(vertices, indices, lights), &[true, true], 1.0, size)
+}
+
+#[test]
+fn fast_scatter_matches_the_brute_force_oracle() {
+    // Texel sizes from well below the narrow Gaussians' sigma to above the wide ones' (radius
+    // 12 mm at 64 texels: about 1.2 mm texels; 6 mm at 128: 0.3 mm), both profiles.
+    for (radius, size) in [(12.0, 64), (6.0, 128), (30.0, 64)] {
+        let b = bumpy_sphere(radius, size);
+        for profile in [Profile::default(), Profile::new(Normalisation::OneD)] {
+            let fast = scatter(&b, &profile);
+            let exact = scatter_exact(&b, &profile);
+            let (worst, mean) = relative_difference(&b, &fast, &exact);
+            println!(
+                "radius {radius} mm, {size} texels, {}: worst {worst:.2e}, mean {mean:.2e}",
+                profile.normalisation.name()
+            );
+            assert!(worst < 1e-5, "{worst}");
+            // Not a trivial case: the light varies by more than a factor of two over the surface.
+            let red = (0..b.covered.len()).filter(|&t| b.covered[t]).map(|t| exact[t][0]);
+            let (lo, hi) = red.fold((f32::MAX, 0.0f32), |(lo, hi), x| (lo.min(x), hi.max(x)));
+            assert!(hi > 2.0 * lo && hi > 0.0, "{lo} {hi}");
+        }
+    }
+}
+
 /// The sample head (12.5k vertices, mm) with two shadowed lights: bake and scatter times at
-/// 512 and 1024 texels. Measured on 2 shared cores (load 3-4): 512: 259584 texels, bake 0.65 s,
-/// scatter 49 s; 1024: 1037824 texels, bake 2.4 s, scatter 598 s. A measurement, not a check: run with
+/// 512 and 1024 texels. Measured on 2 shared cores (load 2): 512: 259584 texels, bake 0.25 s,
+/// scatter 6.4 s (the brute-force `scatter_exact` 23.2 s in the same run); 1024: 1037824
+/// texels, scatter 64 s (the oracle 598 s at load 3-4). `SKINKIT_MEASURE_EXACT=1` also
+/// runs the oracle and prints the difference. A measurement, not a check: run with
 /// `cargo test --release -p skinkit-render --test skin_reference -- --ignored --nocapture`.
 #[test]
 #[ignore]
@@ -518,6 +576,16 @@ fn measure_sample_head() {
         let baked = start.elapsed();
         let m = scatter(&b, &Profile::default());
         let total = start.elapsed();
+        // SKINKIT_MEASURE_EXACT=1 also times the brute-force oracle and compares.
+        if std::env::var("SKINKIT_MEASURE_EXACT").is_ok() {
+            let start = std::time::Instant::now();
+            let exact = scatter_exact(&b, &Profile::default());
+            let (worst, mean) = relative_difference(&b, &m, &exact);
+            println!(
+                "{size}x{size}: scatter_exact {:.2} s; fast vs exact: worst {worst:.2e}, mean {mean:.2e}",
+                start.elapsed().as_secs_f64()
+            );
+        }
         let covered = b.covered_count();
         let mean_area: f32 = b.area_mm2.iter().sum::<f32>() / covered as f32;
         let shadowed = (0..b.covered.len()).filter(|&t| b.covered[t] && b.irradiance[t][0] == 0.0).count();
