@@ -12,7 +12,9 @@
 //!
 //! Writes `target/skin-methods.md` (the README's table), `target/skin-methods.svg` (error against
 //! time, a log-time scatter plot) and `target/skin-methods.json`; `SKIN_METHODS_SIZE=WxH` changes
-//! the image size (default 768x768), `SKIN_METHODS_REFERENCE=N` the reference light map (1024).
+//! the image size (default 768x768), `SKIN_METHODS_REFERENCE=N` the reference light map (1024),
+//! and `SKIN_METHODS_UNSHADOWED=1` drops the scene's `shadows` (every method and the reference
+//! unshadowed: the diffuse falloff alone), writing `target/skin-methods-unshadowed.*`.
 //!
 //! Run: `WGPU_BACKEND=vulkan cargo bench -p skinkit-render --bench skin_methods`.
 
@@ -46,7 +48,12 @@ fn main() {
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let scene_file = root.join("samples/scenes/skin-compare.toml");
-    let scene = Scene::load(&scene_file).unwrap_or_else(|e| panic!("{e}"));
+    let mut scene = Scene::load(&scene_file).unwrap_or_else(|e| panic!("{e}"));
+    let unshadowed = std::env::var("SKIN_METHODS_UNSHADOWED").is_ok_and(|v| v == "1");
+    if unshadowed {
+        scene.effects.retain(|e| e != "shadows" && e != "shadow-scattering");
+    }
+    let stem = if unshadowed { "skin-methods-unshadowed" } else { "skin-methods" };
     let (width, height) = size();
     let reference_size = std::env::var("SKIN_METHODS_REFERENCE").ok().and_then(|s| s.parse().ok()).unwrap_or(1024);
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
@@ -81,13 +88,16 @@ fn main() {
         .collect();
     let out = root.join("target");
     std::fs::create_dir_all(&out).unwrap();
-    let table = markdown(&rows, base_ms, &gpu.adapter_name(), width, height, reference_size);
+    let mut table = markdown(&rows, base_ms, &gpu.adapter_name(), width, height, reference_size);
+    if unshadowed {
+        table = format!("Unshadowed (the diffuse falloff alone). {table}");
+    }
     println!("{table}");
-    write(&out.join("skin-methods.md"), &table);
-    write(&out.join("skin-methods.svg"), &svg(&rows));
-    write(&out.join("skin-methods.json"), &serde_json::to_string_pretty(&rows).unwrap());
+    write(&out.join(format!("{stem}.md")), &table);
+    write(&out.join(format!("{stem}.svg")), &svg(&rows));
+    write(&out.join(format!("{stem}.json")), &serde_json::to_string_pretty(&rows).unwrap());
     for (method, (ldr, _), ..) in &renders {
-        let path = out.join(format!("skin-method-{}.png", method.name()));
+        let path = out.join(format!("{stem}-{}.png", method.name()));
         let samples: Vec<u16> =
             ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
         skinkit_maps::io::write_png(
@@ -99,7 +109,7 @@ fn main() {
         )
         .unwrap();
     }
-    eprintln!("wrote {}", out.join("skin-methods.{md,svg,json}").display());
+    eprintln!("wrote {}", out.join(format!("{stem}.{{md,svg,json}}")).display());
 }
 
 fn size() -> (u32, u32) {
