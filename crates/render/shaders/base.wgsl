@@ -174,15 +174,24 @@ fn light_irradiance(i: u32, world: vec3<f32>) -> vec3<f32> {
     return light.radiance.rgb / max(dot(d, d), 1e-12);
 }
 
-@vertex
-fn vs_main(input: VertexIn) -> VertexOut {
+// The vertex's texture-space frame (tangent, bitangent = cross(N, T) * handedness, normal),
+// orthonormalised against the normal.
+fn vertex_frame(input: VertexIn) -> mat3x3<f32> {
     let n = normalize_or(input.normal, vec3<f32>(0.0, 0.0, 1.0));
     let t = perpendicular_part(input.tangent.xyz, n);
     var sign = 1.0;
     if input.tangent.w < 0.0 {
         sign = -1.0;
     }
-    let b = cross(n, t) * sign;
+    return mat3x3<f32>(t, cross(n, t) * sign, n);
+}
+
+@vertex
+fn vs_main(input: VertexIn) -> VertexOut {
+    let frame = vertex_frame(input);
+    let t = frame[0];
+    let b = frame[1];
+    let n = frame[2];
     // Object space to the vertex's texture space (the paper's M_T, equation 6).
     let to_ts = transpose(mat3x3<f32>(t, b, n));
     let world = input.position;
@@ -550,19 +559,14 @@ struct TextureSpaceOut {
 // The mesh drawn at its texture coordinates: uv (0, 0) is the light map's top-left texel.
 @vertex
 fn vs_texture_space(input: VertexIn) -> TextureSpaceOut {
-    let n = normalize_or(input.normal, vec3<f32>(0.0, 0.0, 1.0));
-    let t = perpendicular_part(input.tangent.xyz, n);
-    var sign = 1.0;
-    if input.tangent.w < 0.0 {
-        sign = -1.0;
-    }
+    let frame = vertex_frame(input);
     var out: TextureSpaceOut;
     out.clip = vec4<f32>(input.uv.x * 2.0 - 1.0, 1.0 - input.uv.y * 2.0, 0.0, 1.0);
     out.uv = input.uv;
     out.world = input.position;
-    out.frame_t = t;
-    out.frame_b = cross(n, t) * sign;
-    out.frame_n = n;
+    out.frame_t = frame[0];
+    out.frame_b = frame[1];
+    out.frame_n = frame[2];
     out.skin = input.skin;
     return out;
 }

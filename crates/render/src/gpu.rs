@@ -720,11 +720,7 @@ impl Gpu {
             let pipeline = self.pipeline(PipelineKey::Base(target.format, scene.features));
             let mut pass = begin_pass(&mut encoder, &target.color, &target.depth, scene.background, writes);
             pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-            pass.set_vertex_buffer(0, scene.vertices.slice(..));
-            pass.set_vertex_buffer(1, scene.vertex_skin.slice(..));
-            pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..scene.index_count, 0, 0..1);
+            self.draw_mesh(&mut pass, scene, &scene.bind_group);
         }
         if let Some(t) = timer {
             // Passes that were culled wrote no timestamps; resolving unwritten queries is
@@ -760,10 +756,7 @@ impl Gpu {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline(PipelineKey::Shadow));
-        pass.set_bind_group(0, &shadow.bind_group, &[]);
-        pass.set_vertex_buffer(0, scene.vertices.slice(..));
-        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..scene.index_count, 0, 0..1);
+        self.draw_mesh(&mut pass, scene, &shadow.bind_group);
     }
 
     /// Translucent casters into the opacity channels: cleared to 0, added up where the opaque
@@ -800,8 +793,8 @@ impl Gpu {
     }
 
     /// The TSD passes: back-face pre-pass into the UV-space depth, the light map (depth "equal":
-    /// only texels the pre-pass kept), then the ping-pong blurs (the first dilates and covers
-    /// every texel; the later ones only the kept texels).
+    /// only texels the pre-pass kept), then the ping-pong blurs over the whole map (the first
+    /// also dilates into the texels the light map left unwritten).
     fn encode_tsd(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -859,6 +852,8 @@ impl Gpu {
         }
     }
 
+    /// Draws the scene's mesh (both vertex buffers; a pipeline reading only the first ignores
+    /// the second) with `group`.
     fn draw_mesh(&self, pass: &mut wgpu::RenderPass<'_>, scene: &PreparedScene, group: &wgpu::BindGroup) {
         pass.set_bind_group(0, group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
