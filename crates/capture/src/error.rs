@@ -22,6 +22,10 @@ pub enum Error {
     /// Image IO, from the `maps` crate.
     #[error(transparent)]
     Maps(#[from] skinkit_maps::Error),
+    /// What was being done (`cannot read photo a.png`) when `cause` happened; shown as
+    /// `context: cause` (the cause is part of the message, not a separate source).
+    #[error("{context}: {cause}")]
+    Context { context: String, cause: Box<Error> },
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {

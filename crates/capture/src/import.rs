@@ -160,9 +160,7 @@ fn parse_triple(text: &str, name: &str, line: usize) -> Result<Triple> {
 }
 
 fn named(lights: Vec<Light>, origin: &str, format: &str) -> Result<Rig> {
-    let mut rig = Rig::new(lights, origin)?;
-    rig.description = Some(format!("imported from {origin} ({format})"));
-    Ok(rig)
+    Ok(Rig::new(lights, origin)?.with_description(format!("imported from {origin} ({format})")))
 }
 
 fn bad(location: &str, reason: String) -> Error {

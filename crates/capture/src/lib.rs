@@ -4,14 +4,18 @@
 //! * [`rig`]: light rigs (TOML files), their validation and conditioning.
 //! * [`import`]: rigs from public formats (DiLiGenT, UW/Seitz `lights.txt`).
 //! * [`sphere`]: light directions (and intensities) from photos of a mirror or matte sphere.
-//! * [`solve`]: the least-squares and robust per-pixel solves.
+//! * [`solve`]: the least-squares and robust per-pixel solves (distant lights); [`near`]: near
+//!   point lights; [`readings`]: the rules on readings both share.
+//! * [`session`]: a whole capture session as one call (decode, solve, detrend, statistics).
 //! * [`detrend`]: removal of the mold's low-frequency tilt (mean normal of a block rotated to +Z).
 
 pub mod detrend;
 pub mod error;
 pub mod import;
 pub mod near;
+pub mod readings;
 pub mod rig;
+pub mod session;
 pub mod solve;
 pub mod sphere;
 

@@ -13,27 +13,23 @@
 //! `E_i * |P_i|^2 / |P_i - x|^2` (the rig's intensity is the irradiance at the centre). Each pixel
 //! then has its own light matrix, so instead of a cached pseudo-inverse it solves the 3x3 normal
 //! equations `(sum L_i L_i^T) g = sum r_i L_i` over its usable lights, in f64. Readings are dropped
-//! exactly as [`crate::solve`]'s robust method drops them (shadow thresholds absolute and relative
-//! to the pixel's brightest reading, saturation on the raw value); with [`Method::LeastSquares`]
-//! every reading is used.
+//! by the rules of [`crate::readings`], the same as [`crate::solve`]'s robust method (shadow
+//! thresholds absolute and relative to the pixel's brightest reading, saturation on the raw
+//! value); with [`Method::LeastSquares`] every reading is used.
 
 use glam::{DMat3, DVec3, Vec3};
+use nalgebra::Matrix3;
 use rayon::prelude::*;
 use skinkit_maps::{Channels, ColorMap, Grid, NormalMap, ScalarMap};
 
+use crate::readings::{self, LUMA};
 use crate::solve::{AlbedoMap, Method, PhotoStack, Solution, SolveConfig, SolveStats};
 use crate::{Error, Result, Rig};
-
-/// Rec. 709 luminance weights: how RGB readings combine into the one used for the normal.
-const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
-
-/// Smallest `|g|` that still defines a normal (as in the directional solve).
-const MIN_ALBEDO: f64 = 1e-6;
 
 /// Whether `rig` describes near point lights this module can use: every light has a position and
 /// the rig gives the pixel size.
 pub fn applies(rig: &Rig) -> bool {
-    rig.mm_per_pixel.is_some() && !rig.lights.is_empty() && rig.lights.iter().all(|l| l.position.is_some())
+    rig.mm_per_pixel().is_some() && rig.lights().iter().all(|l| l.position().is_some())
 }
 
 /// One light's position and per-channel intensity, in f64.
@@ -61,9 +57,8 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
     config.validate()?;
     let lights = near_lights(stack, rig)?;
     let pitch = rig
-        .mm_per_pixel
+        .mm_per_pixel()
         .map(f64::from)
-        .filter(|p| p.is_finite() && *p > 0.0)
         .ok_or_else(|| Error::InvalidInput("near-light solve: the rig needs a positive mm_per_pixel".into()))?;
     let (w, h) = stack.size();
     let rgb = stack.channels() == Channels::Rgb;
@@ -77,7 +72,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
         .zip(confidence.par_chunks_mut(w))
         .enumerate()
         .map(|(row, ((n_row, a_row), c_row))| {
-            let mut stats = SolveStats { lights_used: vec![0; k + 1], ..SolveStats::default() };
+            let mut stats = SolveStats::empty(k);
             let mut scratch = Pixel::new(k);
             for col in 0..w {
                 let i = row * w + col;
@@ -102,7 +97,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
             }
             stats
         })
-        .reduce(|| SolveStats { lights_used: vec![0; k + 1], ..SolveStats::default() }, merge);
+        .reduce(|| SolveStats::empty(k), SolveStats::merge);
     let grid = |v| Grid::from_vec(w, h, v).expect("sized above");
     let albedo: ColorMap = grid(albedo);
     Ok(Solution {
@@ -113,34 +108,19 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
     })
 }
 
-fn merge(mut a: SolveStats, b: SolveStats) -> SolveStats {
-    a.pixels += b.pixels;
-    a.invalid_count += b.invalid_count;
-    a.masked_count += b.masked_count;
-    a.lights_used.iter_mut().zip(b.lights_used).for_each(|(x, y)| *x += y);
-    a
-}
-
 /// The rig's lights as near lights, after checking them against the stack.
 fn near_lights(stack: &PhotoStack, rig: &Rig) -> Result<Vec<NearLight>> {
-    if stack.len() != rig.lights.len() {
-        return Err(Error::InvalidInput(format!(
-            "rig has {} lights but {} photos were given",
-            rig.lights.len(),
-            stack.len()
-        )));
-    }
-    rig.lights
+    rig.expect_photos(stack.len())?;
+    rig.lights()
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            let p = l.position.map(|p| p.as_dvec3()).filter(|p| p.is_finite() && p.z > 0.0).ok_or_else(|| {
-                Error::InvalidInput(format!(
-                    "near-light solve: light {} needs a position above the mold (z > 0)",
-                    i + 1
-                ))
-            })?;
-            Ok(NearLight { position: p, intensity: l.intensity.as_dvec3(), centre_dist_sq: p.length_squared() })
+            // `Light::new` keeps positions finite and above the mold plane.
+            let p = l
+                .position()
+                .map(|p| p.as_dvec3())
+                .ok_or_else(|| Error::InvalidInput(format!("near-light solve: light {} needs a position", i + 1)))?;
+            Ok(NearLight { position: p, intensity: l.intensity().as_dvec3(), centre_dist_sq: p.length_squared() })
         })
         .collect()
 }
@@ -185,13 +165,13 @@ impl Pixel {
             a += DMat3::from_cols(l * l.x, l * l.y, l * l.z);
             b += l * self.value[j];
         }
-        let condition = frobenius_condition(a)?.sqrt();
-        if condition > config.max_condition {
+        let condition = readings::condition_of(&Matrix3::from_column_slice(&a.to_cols_array()));
+        if !(condition <= config.max_condition) {
             return None;
         }
         let g = a.inverse() * b;
         let len = g.length();
-        if !(len.is_finite() && len > MIN_ALBEDO) {
+        if !readings::defines_normal(len) {
             return None;
         }
         let n = g / len;
@@ -210,13 +190,14 @@ impl Pixel {
             let full = photo.samples().full_scale();
             let mut reading = DVec3::ZERO;
             let mut ok = true;
+            let saturated_at = readings::saturation_level(config, full);
             for c in 0..channels {
                 let s = i * channels + c;
-                ok &= photo.samples().get(s) < config.saturation * full;
+                ok &= photo.samples().get(s) < saturated_at;
                 let ambient = stack.ambient().map_or(0.0, |a| a.linear(s) as f64);
                 reading[c] = (photo.linear(s) as f64 - ambient) / (light.intensity[c] * falloff);
             }
-            let value = if rgb { reading.dot(DVec3::from(LUMA)) } else { reading.x };
+            let value = if rgb { reading.dot(DVec3::from(LUMA.map(f64::from))) } else { reading.x };
             ok &= value.is_finite();
             self.readings[j] = if rgb { reading } else { DVec3::splat(reading.x) };
             self.value[j] = if value.is_finite() { value } else { 0.0 };
@@ -227,7 +208,7 @@ impl Pixel {
     /// Drops readings under the absolute or the pixel-relative shadow threshold.
     fn drop_shadows(&mut self, config: &SolveConfig) {
         let brightest = self.value.iter().zip(&self.usable).filter(|(_, u)| **u).map(|(v, _)| *v).fold(0.0, f64::max);
-        let floor = (config.shadow_abs as f64).max(config.shadow_rel as f64 * brightest);
+        let floor = readings::shadow_floor(config, brightest);
         for (u, v) in self.usable.iter_mut().zip(&self.value) {
             *u &= *v >= floor;
         }
@@ -255,28 +236,9 @@ impl Pixel {
     }
 }
 
-/// `||A||_F ||A^-1||_F`, an upper bound of the 2-norm condition number of the symmetric matrix
-/// `A`, or `None` when `A` is singular.
-fn frobenius_condition(a: DMat3) -> Option<f64> {
-    let det = a.determinant();
-    if !(det.is_finite() && det.abs() > 1e-300) {
-        return None;
-    }
-    let frob = |m: DMat3| (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt();
-    Some(frob(a) * frob(a.inverse()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn frobenius_condition_bounds_the_true_one() {
-        let a = DMat3::from_diagonal(DVec3::new(4.0, 2.0, 1.0));
-        let c = frobenius_condition(a).unwrap();
-        assert!(c >= 4.0 && c < 4.0 * 3.0, "{c}");
-        assert!(frobenius_condition(DMat3::from_diagonal(DVec3::new(1.0, 1.0, 0.0))).is_none());
-    }
 
     #[test]
     fn near_light_geometry_matches_the_renderer_convention() {

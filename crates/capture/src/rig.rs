@@ -22,11 +22,19 @@
 //! ```
 //! Unknown keys are errors. Errors name the file and the light, numbered from 1 in file order
 //! (`rig.toml: light 5: direction has zero length`); TOML syntax errors keep toml's line and
-//! column. A rig needs at least 3 lights with finite values, non-zero directions with `z > 0`
-//! and finite intensities `> 0`.
+//! column. A rig needs at least 3 lights with finite values, non-zero directions with `z > 0`,
+//! finite intensities `> 0`, positions (when given) above the mold plane, and directions that
+//! are not coplanar.
+//!
+//! # Valid by construction
+//! [`Light`] and [`Rig`] keep their fields private: a light is made only by [`Light::new`] (the
+//! one place a direction is normalised and a light checked) and a rig only by [`Rig::new`],
+//! [`Rig::parse`] / [`Rig::load`], [`Rig::turntable`] and the importers, all through one check
+//! (at least 3 lights, rank 3, pixel size). So a `Rig` value can always determine a normal and
+//! no solver checks it again; the photo count is checked by [`Rig::expect_photos`].
 //!
 //! # Conditioning
-//! Before any pixel is solved the rig is checked ([`Rig::check`]): with `L` the k x 3 matrix of
+//! A rig's conditioning is computed once, when it is made ([`Rig::conditioning`]): with `L` the k x 3 matrix of
 //! directions, the least-squares scaled normal `g = albedo * n` has covariance
 //! `sigma^2 (L^T L)^-1` for pixel noise `sigma` (equal intensities), so coplanar lights (rank 2)
 //! cannot determine a normal and a large condition number amplifies noise. For k lights evenly on
@@ -47,28 +55,32 @@ pub const COPLANAR_RATIO: f64 = 1e-3;
 /// Condition number above which [`Conditioning::warning`] speaks up.
 pub const WARN_CONDITION: f64 = 5.0;
 
-/// One light of a rig, in the camera frame (x right, y up, +z toward the camera).
+/// One light of a rig, in the camera frame (x right, y up, +z toward the camera); made by
+/// [`Light::new`] only, so its direction is a unit vector above the mold plane.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Light {
     /// Unit vector from the surface toward the light.
-    pub direction: Vec3,
+    direction: Vec3,
     /// Linear intensity per RGB channel (a scalar intensity is splatted to all three).
-    pub intensity: Vec3,
+    intensity: Vec3,
     /// Position of a near point light in millimetres, origin at the centre of the photographed
     /// field, when known.
-    pub position: Option<Vec3>,
+    position: Option<Vec3>,
 }
 
-/// A light rig: the lights in photo order, plus optional metadata.
-#[derive(Clone, Debug, PartialEq, Default)]
+/// A light rig: the lights in photo order, plus optional metadata. Valid by construction (see
+/// the module docs): at least 3 lights whose directions are not coplanar.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Rig {
-    pub name: Option<String>,
-    pub description: Option<String>,
-    pub lights: Vec<Light>,
+    name: Option<String>,
+    description: Option<String>,
+    lights: Vec<Light>,
     /// An ambient frame (all lights off), relative to the rig file's folder, to subtract.
-    pub ambient: Option<std::path::PathBuf>,
+    ambient: Option<PathBuf>,
     /// Size of a photo pixel on the mold, in millimetres, when known.
-    pub mm_per_pixel: Option<f32>,
+    mm_per_pixel: Option<f32>,
+    /// Of the lights' directions, computed when the rig is made.
+    conditioning: Conditioning,
 }
 
 /// How well a rig's light directions determine a normal (see the module docs).
@@ -104,16 +116,36 @@ impl Light {
     ///
     /// # Errors
     /// A reason (without location) when a value is not finite, the direction has zero length or
-    /// points below the mold plane (`z <= 0`), or an intensity channel is not `> 0`.
+    /// points below the mold plane (`z <= 0`), an intensity channel is not `> 0`, or the position
+    /// is not above the mold plane (`z > 0`).
     pub fn new(direction: Vec3, intensity: Vec3, position: Option<Vec3>) -> Result<Light, String> {
         let direction = unit_direction(direction)?;
         check_intensity(intensity)?;
-        if let Some(p) = position
-            && !p.is_finite()
-        {
-            return Err(format!("position {} is not finite", show(p)));
+        if let Some(p) = position {
+            if !p.is_finite() {
+                return Err(format!("position {} is not finite", show(p)));
+            }
+            if p.z <= 0.0 {
+                return Err(format!("position {} is not above the mold plane (z > 0)", show(p)));
+            }
         }
         Ok(Light { direction, intensity, position })
+    }
+
+    /// Unit vector from the surface toward the light.
+    pub fn direction(&self) -> Vec3 {
+        self.direction
+    }
+
+    /// Linear intensity per RGB channel, each `> 0`.
+    pub fn intensity(&self) -> Vec3 {
+        self.intensity
+    }
+
+    /// Position of a near point light in millimetres (origin at the centre of the photographed
+    /// field, `z > 0`), when known.
+    pub fn position(&self) -> Option<Vec3> {
+        self.position
     }
 
     /// Mean of the RGB intensity, for grey solves.
@@ -153,35 +185,95 @@ fn show(v: Vec3) -> String {
 }
 
 impl Rig {
-    /// A rig from validated lights (metadata empty).
+    /// A rig of `lights` (metadata empty); `origin` names the rig in messages.
     ///
     /// # Errors
-    /// [`Error::BadFile`] for fewer than 3 lights or an invalid light (`origin: light i: ...`).
+    /// [`Error::BadFile`] for fewer than 3 lights; [`Error::BadRig`] for coplanar (rank-deficient)
+    /// directions, which cannot determine a normal.
     pub fn new(lights: Vec<Light>, origin: &str) -> Result<Rig> {
-        let rig = Rig { lights, ..Rig::default() };
-        rig.validate(origin)?;
-        Ok(rig)
+        if lights.len() < 3 {
+            return Err(bad(origin, too_few(lights.len())));
+        }
+        let conditioning = conditioning_of(&lights);
+        if conditioning.rank < 3 {
+            return Err(Error::BadRig(format!(
+                "{origin}: rig lights are coplanar (condition number {:.1e}): they cannot determine a normal; move some lights to another elevation",
+                conditioning.condition_number
+            )));
+        }
+        Ok(Rig { name: None, description: None, lights, ambient: None, mm_per_pixel: None, conditioning })
     }
 
-    /// Checks every field as the file loader does; `origin` names the rig in messages.
+    /// The rig with a name.
+    pub fn with_name(mut self, name: impl Into<String>) -> Rig {
+        self.name = Some(name.into());
+        self
+    }
+
+    /// The rig with a description.
+    pub fn with_description(mut self, description: impl Into<String>) -> Rig {
+        self.description = Some(description.into());
+        self
+    }
+
+    /// The rig with an ambient frame (all lights off) to subtract, or none.
+    pub fn with_ambient(mut self, ambient: Option<PathBuf>) -> Rig {
+        self.ambient = ambient;
+        self
+    }
+
+    /// The rig with the size of a photo pixel on the mold in millimetres, or none.
     ///
     /// # Errors
-    /// [`Error::BadFile`] naming `origin` and the light (numbered from 1).
-    pub fn validate(&self, origin: &str) -> Result<()> {
-        if self.lights.len() < 3 {
-            return Err(bad(origin, too_few(self.lights.len())));
-        }
-        for (i, l) in self.lights.iter().enumerate() {
-            Light::new(l.direction, l.intensity, l.position)
-                .map_err(|reason| bad(&format!("{origin}: light {}", i + 1), reason))?;
-            if (l.direction.length() - 1.0).abs() > 1e-4 {
-                return Err(bad(&format!("{origin}: light {}", i + 1), "direction is not a unit vector".into()));
-            }
-        }
-        if let Some(mm) = self.mm_per_pixel
+    /// [`Error::BadFile`] naming `origin` when the size is not finite and `> 0`.
+    pub fn with_mm_per_pixel(mut self, mm_per_pixel: Option<f32>, origin: &str) -> Result<Rig> {
+        if let Some(mm) = mm_per_pixel
             && !(mm.is_finite() && mm > 0.0)
         {
             return Err(bad(origin, format!("mm_per_pixel {mm} must be finite and > 0")));
+        }
+        self.mm_per_pixel = mm_per_pixel;
+        Ok(self)
+    }
+
+    pub fn name(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+
+    pub fn description(&self) -> Option<&str> {
+        self.description.as_deref()
+    }
+
+    /// The lights in photo order (at least 3).
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// Number of lights (at least 3), which is the number of photos a capture needs.
+    pub fn light_count(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// The ambient frame (all lights off) to subtract, when the rig names one.
+    pub fn ambient(&self) -> Option<&Path> {
+        self.ambient.as_deref()
+    }
+
+    /// Size of a photo pixel on the mold in millimetres (finite, `> 0`), when known.
+    pub fn mm_per_pixel(&self) -> Option<f32> {
+        self.mm_per_pixel
+    }
+
+    /// Checks that `photos` photos were given for this rig: one per light.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the counts differ.
+    pub fn expect_photos(&self, photos: usize) -> Result<()> {
+        if photos != self.lights.len() {
+            return Err(Error::InvalidInput(format!(
+                "rig has {} lights but {photos} photos were given",
+                self.lights.len()
+            )));
         }
         Ok(())
     }
@@ -245,29 +337,23 @@ impl Rig {
     /// `count` lights evenly on a ring: azimuth `360 i / count` degrees from +x, counter-clockwise
     /// seen from the camera; `elevation_deg` above the mold plane (90 is the camera axis).
     ///
-    /// # Panics
-    /// Never; invalid arguments give a rig that [`Rig::validate`] refuses.
-    pub fn turntable(count: usize, elevation_deg: f64, intensity: f32) -> Rig {
+    /// # Errors
+    /// As [`Light::new`] and [`Rig::new`] ([`Error::BadFile`] naming the light, [`Error::BadRig`]
+    /// for coplanar lights, e.g. an elevation of 90 degrees or fewer than 3 lights).
+    pub fn turntable(count: usize, elevation_deg: f64, intensity: f32) -> Result<Rig> {
         let e = elevation_deg.to_radians();
         let lights = (0..count)
             .map(|i| {
                 let a = std::f64::consts::TAU * i as f64 / count as f64;
                 // Snap the rounding residue of cos(90 deg) and friends to zero so rig files read cleanly.
                 let d = [e.cos() * a.cos(), e.cos() * a.sin(), e.sin()].map(|c| if c.abs() < 1e-12 { 0.0 } else { c });
-                Light {
-                    direction: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32),
-                    intensity: Vec3::splat(intensity),
-                    position: None,
-                }
+                Light::new(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32), Vec3::splat(intensity), None)
+                    .map_err(|reason| bad(&format!("turntable-{count}: light {}", i + 1), reason))
             })
-            .collect();
-        Rig {
-            name: Some(format!("turntable-{count}")),
-            description: Some(format!("{count} lights evenly on a ring at elevation {elevation_deg} deg")),
-            lights,
-            ambient: None,
-            mm_per_pixel: None,
-        }
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Rig::new(lights, &format!("turntable-{count}"))?
+            .with_name(format!("turntable-{count}"))
+            .with_description(format!("{count} lights evenly on a ring at elevation {elevation_deg} deg")))
     }
 
     /// Unit light directions in photo order.
@@ -285,45 +371,10 @@ impl Rig {
         DMatrix::from_fn(self.lights.len(), 3, |r, c| self.lights[r].direction[c] as f64)
     }
 
-    /// Condition number, noise amplification and rank of the direction matrix (module docs).
+    /// Condition number, noise amplification and rank of the direction matrix (module docs),
+    /// computed when the rig was made (rank 3 always).
     pub fn conditioning(&self) -> Conditioning {
-        let l = self.directions_matrix();
-        if l.nrows() == 0 {
-            return Conditioning {
-                condition_number: f64::INFINITY,
-                noise_amplification: f64::INFINITY,
-                tilt_amplification: f64::INFINITY,
-                rank: 0,
-            };
-        }
-        let s = l.clone().svd(false, false).singular_values;
-        let (max, min) = (s.max(), if s.len() < 3 { 0.0 } else { s.min() });
-        let rank = s.iter().filter(|&&v| v > COPLANAR_RATIO * max).count();
-        let noise = s.iter().map(|v| 1.0 / (v * v)).sum::<f64>() + if s.len() < 3 { f64::INFINITY } else { 0.0 };
-        Conditioning {
-            condition_number: if min > 0.0 { max / min } else { f64::INFINITY },
-            noise_amplification: noise.sqrt(),
-            tilt_amplification: tilt_amplification(&l),
-            rank,
-        }
-    }
-
-    /// Conditioning of a rig that can determine a normal.
-    ///
-    /// # Errors
-    /// [`Error::BadRig`] for fewer than 3 lights or coplanar / rank-deficient directions.
-    pub fn check(&self) -> Result<Conditioning> {
-        if self.lights.len() < 3 {
-            return Err(Error::BadRig(too_few(self.lights.len())));
-        }
-        let c = self.conditioning();
-        if c.rank < 3 {
-            return Err(Error::BadRig(format!(
-                "rig lights are coplanar (condition number {:.1e}): they cannot determine a normal; move some lights to another elevation",
-                c.condition_number
-            )));
-        }
-        Ok(c)
+        self.conditioning
     }
 
     /// The rig seen in a frame whose y axis points down (image rows): negates every direction's
@@ -335,6 +386,31 @@ impl Rig {
                 p.y = -p.y;
             }
         }
+        self.conditioning = conditioning_of(&self.lights);
+    }
+}
+
+/// Condition number, noise amplification and rank of the directions of `lights` (the one place
+/// a rig's condition number is computed).
+fn conditioning_of(lights: &[Light]) -> Conditioning {
+    let l = DMatrix::from_fn(lights.len(), 3, |r, c| lights[r].direction[c] as f64);
+    if l.nrows() == 0 {
+        return Conditioning {
+            condition_number: f64::INFINITY,
+            noise_amplification: f64::INFINITY,
+            tilt_amplification: f64::INFINITY,
+            rank: 0,
+        };
+    }
+    let s = l.clone().svd(false, false).singular_values;
+    let (max, min) = (s.max(), if s.len() < 3 { 0.0 } else { s.min() });
+    let rank = s.iter().filter(|&&v| v > COPLANAR_RATIO * max).count();
+    let noise = s.iter().map(|v| 1.0 / (v * v)).sum::<f64>() + if s.len() < 3 { f64::INFINITY } else { 0.0 };
+    Conditioning {
+        condition_number: if min > 0.0 { max / min } else { f64::INFINITY },
+        noise_amplification: noise.sqrt(),
+        tilt_amplification: tilt_amplification(&l),
+        rank,
     }
 }
 
@@ -393,14 +469,10 @@ impl RigFile {
             .enumerate()
             .map(|(i, l)| l.into_light().map_err(|reason| bad(&format!("{origin}: light {}", i + 1), reason)))
             .collect::<Result<Vec<_>>>()?;
-        let rig = Rig {
-            name: self.name,
-            description: self.description,
-            lights,
-            ambient: self.ambient.map(PathBuf::from),
-            mm_per_pixel: self.mm_per_pixel.map(|v| v as f32),
-        };
-        rig.validate(origin)?;
+        let mut rig = Rig::new(lights, origin)?
+            .with_ambient(self.ambient.map(PathBuf::from))
+            .with_mm_per_pixel(self.mm_per_pixel.map(|v| v as f32), origin)?;
+        (rig.name, rig.description) = (self.name, self.description);
         Ok(rig)
     }
 }

@@ -210,7 +210,7 @@ pub fn mirror_and_matte(
     let mut lights = Vec::with_capacity(matte_photos.len());
     let mut reports = from_mirror.lights;
     for (i, photo) in matte_photos.iter().enumerate() {
-        let direction = from_mirror.rig.lights[i].direction.as_dvec3();
+        let direction = from_mirror.rig.lights()[i].direction().as_dvec3();
         let fit = fit_lambert(&lum[i], &pixels, i)?;
         let report = &mut reports[i];
         report.lambert_rms = Some(fit.rms);
@@ -236,9 +236,9 @@ fn finish(
             Light::new(d.as_vec3(), e, None).map_err(|r| Error::Calibration(format!("photo {}: {r}", i + 1)))
         })
         .collect::<Result<Vec<_>>>()?;
-    let mut rig = Rig::new(lights, what)?;
-    rig.name = Some("sphere-calibration".into());
-    rig.description = Some(format!("light directions from a {what}"));
+    let rig = Rig::new(lights, what)?
+        .with_name("sphere-calibration")
+        .with_description(format!("light directions from a {what}"));
     Ok(Calibration { rig, mirror_circle, matte_circle, lights: reports })
 }
 

@@ -16,9 +16,7 @@ fn near_rig(mm_per_pixel: f32) -> Rig {
             Light::new(dir, Vec3::ONE, Some(dir * DISTANCE_MM)).unwrap()
         })
         .collect();
-    let mut rig = Rig::new(lights, "test rig").unwrap();
-    rig.mm_per_pixel = Some(mm_per_pixel);
-    rig
+    Rig::new(lights, "test rig").unwrap().with_mm_per_pixel(Some(mm_per_pixel), "test rig").unwrap()
 }
 
 #[test]
@@ -26,7 +24,7 @@ fn near_solve_removes_the_bias_of_a_close_lamp() {
     let field = hf::generate(&SkinParams::cheek(256, 256, 7)).unwrap();
     let rig = near_rig(field.mm_per_texel as f32);
     let lights: Vec<hf::RenderLight> =
-        rig.lights.iter().map(|l| hf::RenderLight::point(l.position.unwrap(), l.intensity)).collect();
+        rig.lights().iter().map(|l| hf::RenderLight::point(l.position().unwrap(), l.intensity())).collect();
     let photos = hf::render(&field, &lights, &hf::RenderConfig::default()).unwrap();
     let names = (1..=8).map(|i| format!("{i:02}.png")).collect();
     let stack = PhotoStack::new(photos, names).unwrap();
@@ -57,10 +55,10 @@ fn near_solve_needs_positions_and_pixel_size() {
     let field = hf::generate(&SkinParams::flat(8, 8, 0.05, 1)).unwrap();
     let mut rig = near_rig(0.05);
     let lights: Vec<hf::RenderLight> =
-        rig.lights.iter().map(|l| hf::RenderLight::point(l.position.unwrap(), l.intensity)).collect();
+        rig.lights().iter().map(|l| hf::RenderLight::point(l.position().unwrap(), l.intensity())).collect();
     let photos = hf::render(&field, &lights, &hf::RenderConfig::default()).unwrap();
     let stack = PhotoStack::new(photos, (0..8).map(|i| i.to_string()).collect()).unwrap();
-    rig.mm_per_pixel = None;
+    rig = rig.with_mm_per_pixel(None, "test rig").unwrap();
     assert!(!near::applies(&rig));
     let e = near::solve(&stack, &rig, &SolveConfig::default()).unwrap_err().to_string();
     assert!(e.contains("mm_per_pixel"), "{e}");

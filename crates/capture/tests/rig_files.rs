@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use skinkit_capture::{Error, Rig};
+use skinkit_capture::{Error, Light, Rig};
 
 fn calibration(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../calibration").join(name)
@@ -25,33 +25,34 @@ fn parse_err(text: &str) -> String {
 #[test]
 fn shipped_turntable_matches_generator() {
     let file = Rig::load(&calibration("turntable-8.toml")).unwrap();
-    let generated = Rig::turntable(8, 45.0, 1.0);
-    assert_eq!(file.name.as_deref(), Some("turntable-8"));
-    assert_eq!(file.lights.len(), 8);
-    for (i, (a, b)) in file.lights.iter().zip(&generated.lights).enumerate() {
+    let generated = Rig::turntable(8, 45.0, 1.0).unwrap();
+    assert_eq!(file.name(), Some("turntable-8"));
+    assert_eq!(file.lights().len(), 8);
+    for (i, (a, b)) in file.lights().iter().zip(generated.lights()).enumerate() {
         assert!(
-            (a.direction - b.direction).abs().max_element() < 1e-6,
+            (a.direction() - b.direction()).abs().max_element() < 1e-6,
             "light {i}: {} vs {}",
-            a.direction,
-            b.direction
+            a.direction(),
+            b.direction()
         );
-        assert!((a.intensity - b.intensity).abs().max_element() < 1e-6);
-        assert_eq!(a.position, None);
+        assert!((a.intensity() - b.intensity()).abs().max_element() < 1e-6);
+        assert_eq!(a.position(), None);
     }
-    assert!(file.check().unwrap().warning().is_none());
+    assert!(file.conditioning().warning().is_none());
 }
 
 #[test]
 fn turntable_geometry() {
-    let rig = Rig::turntable(4, 30.0, 2.0);
+    let rig = Rig::turntable(4, 30.0, 2.0).unwrap();
     let (c, s) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
     // azimuth 0 is +x; counter-clockwise seen from the camera puts azimuth 90 at +y (up).
     let want = [Vec3::new(c, 0.0, s), Vec3::new(0.0, c, s), Vec3::new(-c, 0.0, s), Vec3::new(0.0, -c, s)];
-    for (l, w) in rig.lights.iter().zip(want) {
-        assert!((l.direction - w).length() < 1e-6, "{} vs {w}", l.direction);
-        assert_eq!(l.intensity, Vec3::splat(2.0));
+    for (l, w) in rig.lights().iter().zip(want) {
+        assert!((l.direction() - w).length() < 1e-6, "{} vs {w}", l.direction());
+        assert_eq!(l.intensity(), Vec3::splat(2.0));
     }
-    assert!((Rig::turntable(8, 90.0, 1.0).lights[3].direction - Vec3::Z).length() < 1e-6);
+    // At 90 degrees every light is on the camera axis: rank 1, refused.
+    assert!(matches!(Rig::turntable(8, 90.0, 1.0), Err(Error::BadRig(_))));
 }
 
 #[test]
@@ -119,10 +120,17 @@ fn save_and_load_round_trip_with_relative_ambient() {
     let text = format!("name = \"bench\"\nambient = \"dark.png\"\nmm_per_pixel = 0.0125\n{}", three_lights(""));
     std::fs::write(&path, text).unwrap();
     let mut rig = Rig::load(&path).unwrap();
-    assert_eq!(rig.ambient, Some(dir.path().join("dark.png")));
-    rig.lights[1].intensity = Vec3::new(0.9, 1.1, 1.3);
-    rig.lights[2].position = Some(Vec3::new(-100.0, 20.5, 800.0));
-    rig.description = Some("with \"quotes\" and\nnewline".into());
+    assert_eq!(rig.ambient(), Some(dir.path().join("dark.png").as_path()));
+    let mut lights = rig.lights().to_vec();
+    lights[1] = Light::new(lights[1].direction(), Vec3::new(0.9, 1.1, 1.3), None).unwrap();
+    lights[2] = Light::new(lights[2].direction(), Vec3::ONE, Some(Vec3::new(-100.0, 20.5, 800.0))).unwrap();
+    rig = Rig::new(lights, "edited")
+        .unwrap()
+        .with_name("bench")
+        .with_description("with \"quotes\" and\nnewline")
+        .with_ambient(rig.ambient().map(Into::into))
+        .with_mm_per_pixel(rig.mm_per_pixel(), "edited")
+        .unwrap();
 
     let out = dir.path().join("saved.toml");
     rig.save(&out).unwrap();

@@ -75,12 +75,12 @@ fn mirror_sphere_with_known_circle_recovers_directions() {
     let lights = lights();
     let photos: Vec<Photo> = lights.iter().map(|(d, _)| mirror_photo(*d, &CIRCLE)).collect();
     let cal = sphere::mirror(&photos, &Locate::Circle(CIRCLE)).unwrap();
-    assert_eq!(cal.rig.lights.len(), 4);
-    for (i, ((want, _), got)) in lights.iter().zip(&cal.rig.lights).enumerate() {
+    assert_eq!(cal.rig.lights().len(), 4);
+    for (i, ((want, _), got)) in lights.iter().zip(cal.rig.lights()).enumerate() {
         // A 0.05 px highlight error on a 36 px sphere moves the direction by about 0.16 deg.
-        let err = angle_deg(got.direction, *want);
+        let err = angle_deg(got.direction(), *want);
         assert!(err < 0.2, "light {i}: {err} deg");
-        assert_eq!(got.intensity, Vec3::ONE);
+        assert_eq!(got.intensity(), Vec3::ONE);
         let [hx, hy] = cal.lights[i].highlight.unwrap();
         let [ex, ey] = CIRCLE.pixel_of((*want + DVec3::Z).normalize());
         assert!((hx - ex).abs() < 0.05 && (hy - ey).abs() < 0.05, "light {i}: ({hx}, {hy}) vs ({ex}, {ey})");
@@ -100,8 +100,8 @@ fn mirror_sphere_found_automatically() {
         (c.cx - CIRCLE.cx).abs() < 0.2 && (c.cy - CIRCLE.cy).abs() < 0.2 && (c.radius - CIRCLE.radius).abs() < 0.3,
         "{c:?}"
     );
-    for ((want, _), got) in lights.iter().zip(&cal.rig.lights) {
-        let err = angle_deg(got.direction, *want);
+    for ((want, _), got) in lights.iter().zip(cal.rig.lights()) {
+        let err = angle_deg(got.direction(), *want);
         assert!(err < 0.6, "{err} deg");
     }
     // the same through a mask
@@ -116,12 +116,16 @@ fn matte_sphere_recovers_directions_and_intensities() {
     let photos: Vec<Photo> = lights.iter().map(|(d, e)| matte_photo(*d, *e)).collect();
     let cal = sphere::matte(&photos, &Locate::Auto).unwrap();
     let mean = mean_intensity(&lights);
-    for (i, ((d, e), got)) in lights.iter().zip(&cal.rig.lights).enumerate() {
+    for (i, ((d, e), got)) in lights.iter().zip(cal.rig.lights()).enumerate() {
         // exact Lambert at pixel centres; the error is the found circle's (about 0.1 deg)
-        let err = angle_deg(got.direction, *d);
+        let err = angle_deg(got.direction(), *d);
         assert!(err < 0.2, "light {i}: {err} deg");
         let want = *e / mean;
-        assert!(((got.intensity - want) / want).abs().max_element() < 0.01, "light {i}: {} vs {want}", got.intensity);
+        assert!(
+            ((got.intensity() - want) / want).abs().max_element() < 0.01,
+            "light {i}: {} vs {want}",
+            got.intensity()
+        );
         assert!(cal.lights[i].lambert_rms.unwrap() < 0.01);
         assert!(cal.lights[i].lit_pixels.unwrap() > 1000);
     }
@@ -140,10 +144,14 @@ fn mirror_directions_with_matte_intensities() {
     let matte: Vec<Photo> = lights.iter().map(|(d, e)| matte_photo(*d, *e)).collect();
     let cal = sphere::mirror_and_matte(&mirror, &Locate::Circle(mirror_circle), &matte, &Locate::Auto).unwrap();
     let mean = mean_intensity(&lights);
-    for (i, ((d, e), got)) in lights.iter().zip(&cal.rig.lights).enumerate() {
-        assert!(angle_deg(got.direction, *d) < 0.25);
+    for (i, ((d, e), got)) in lights.iter().zip(cal.rig.lights()).enumerate() {
+        assert!(angle_deg(got.direction(), *d) < 0.25);
         let want = *e / mean;
-        assert!(((got.intensity - want) / want).abs().max_element() < 0.02, "light {i}: {} vs {want}", got.intensity);
+        assert!(
+            ((got.intensity() - want) / want).abs().max_element() < 0.02,
+            "light {i}: {} vs {want}",
+            got.intensity()
+        );
         assert!(cal.lights[i].mirror_matte_angle_deg.unwrap() < 0.3);
     }
     assert!(sphere::mirror_and_matte(&mirror[..3], &Locate::Auto, &matte, &Locate::Auto).is_err());
@@ -187,8 +195,8 @@ fn matte_sphere_with_known_circle_is_exact() {
     let photos: Vec<Photo> = lights.iter().map(|(d, e)| matte_photo(*d, *e)).collect();
     let cal = sphere::matte(&photos, &Locate::Circle(CIRCLE)).unwrap();
     let mean = mean_intensity(&lights);
-    for ((d, e), got) in lights.iter().zip(&cal.rig.lights) {
-        assert!(angle_deg(got.direction, *d) < 0.01);
-        assert!(((got.intensity - *e / mean) / (*e / mean)).abs().max_element() < 1e-3);
+    for ((d, e), got) in lights.iter().zip(cal.rig.lights()) {
+        assert!(angle_deg(got.direction(), *d) < 0.01);
+        assert!(((got.intensity() - *e / mean) / (*e / mean)).abs().max_element() < 1e-3);
     }
 }

@@ -17,10 +17,10 @@ fn ring() -> Rig {
         .map(|i| {
             let a = std::f64::consts::TAU * i as f64 / K as f64 + 0.2;
             let d = DVec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()).as_vec3();
-            Light { direction: d, intensity: Vec3::ONE, position: None }
+            Light::new(d, Vec3::ONE, None).unwrap()
         })
         .collect();
-    Rig { lights, ..Rig::default() }
+    Rig::new(lights, "test rig").unwrap()
 }
 
 /// Stored 16-bit value of light `i` at `(x, y)`: a gently tilted surface with a 1% non-Lambertian
@@ -35,7 +35,7 @@ fn sample(rig: &Rig, x: usize, y: usize, i: usize) -> u16 {
     }
     let n = Vec3::new(0.2 * (x as f32 * 0.11).sin(), 0.15 * (y as f32 * 0.23).cos(), 1.0).normalize();
     let ripple = 1.0 + 0.01 * ((x * 7 + y * 13 + i * 5) as f32 * 0.37).sin();
-    (0.6 * n.dot(rig.lights[i].direction).max(0.0) * ripple * 65535.0).round() as u16
+    (0.6 * n.dot(rig.lights()[i].direction()).max(0.0) * ripple * 65535.0).round() as u16
 }
 
 /// Oracle for one pixel: `(normal, albedo, confidence, lights used)` from the readings that pass
@@ -48,8 +48,9 @@ fn naive(rig: &Rig, raw: &[u16]) -> (Option<(DVec3, f64, f64)>, usize) {
     if used.len() < 3 {
         return (None, used.len());
     }
-    let rows =
-        |set: &[usize]| DMatrix::from_fn(set.len(), 3, |a, c| rig.lights[set[a]].direction.normalize().as_dvec3()[c]);
+    let rows = |set: &[usize]| {
+        DMatrix::from_fn(set.len(), 3, |a, c| rig.lights()[set[a]].direction().normalize().as_dvec3()[c])
+    };
     let condition = |m: &DMatrix<f64>| {
         let s = m.clone().svd(false, false).singular_values;
         s.max() / s.min()

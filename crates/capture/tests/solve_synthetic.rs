@@ -17,10 +17,10 @@ fn ring(k: usize, theta: f64) -> Rig {
         .map(|i| {
             let a = std::f64::consts::TAU * i as f64 / k as f64 + 0.3;
             let d = DVec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()).as_vec3();
-            Light { direction: d, intensity: Vec3::ONE, position: None }
+            Light::new(d, Vec3::ONE, None).unwrap()
         })
         .collect();
-    Rig { lights, ..Rig::default() }
+    Rig::new(lights, "test rig").unwrap()
 }
 
 /// Normals of a sum of Gaussian bumps, tilts up to ~35 deg (row index grows against y).
@@ -41,9 +41,9 @@ fn bumps(w: usize, h: usize) -> Grid<Vec3> {
 
 /// Linear readings (full scale 1) of `albedo * E_i * max(0, n . L_i)` per light, grey.
 fn render(normals: &Grid<Vec3>, albedo: f32, rig: &Rig) -> Vec<Vec<f32>> {
-    rig.lights
+    rig.lights()
         .iter()
-        .map(|l| normals.as_slice().iter().map(|n| albedo * l.intensity.x * n.dot(l.direction).max(0.0)).collect())
+        .map(|l| normals.as_slice().iter().map(|n| albedo * l.intensity().x * n.dot(l.direction()).max(0.0)).collect())
         .collect()
 }
 
@@ -84,7 +84,7 @@ fn mean_error(sol: &Solution, truth: &Grid<Vec3>, keep: impl Fn(usize) -> bool) 
 
 fn lit_by_all(truth: &Grid<Vec3>, rig: &Rig) -> impl Fn(usize) -> bool {
     let t = truth.clone();
-    let lights: Vec<Vec3> = rig.lights.iter().map(|l| l.direction).collect();
+    let lights: Vec<Vec3> = rig.lights().iter().map(|l| l.direction()).collect();
     move |i| lights.iter().all(|l| t.as_slice()[i].dot(*l) > 0.1)
 }
 
@@ -140,20 +140,20 @@ fn least_squares_matches_naive_solve_on_random_inputs() {
         .map(|_| {
             let d = Vec3::new(rng.random_range(-0.7..0.7), rng.random_range(-0.7..0.7), rng.random_range(0.4..1.0))
                 .normalize();
-            Light { direction: d, intensity: Vec3::splat(rng.random_range(0.5..2.0)), position: None }
+            Light::new(d, Vec3::splat(rng.random_range(0.5..2.0)), None).unwrap()
         })
         .collect();
-    let rig = Rig { lights, ..Rig::default() };
+    let rig = Rig::new(lights, "test rig").unwrap();
     let (w, h) = (23, 17);
     let values: Vec<Vec<f32>> = (0..k).map(|_| (0..w * h).map(|_| rng.random_range(0.05..1.0)).collect()).collect();
     // The solver's problem: least squares on the intensity-divided readings, `L g = I / E`.
-    let l = DMatrix::from_fn(k, 3, |i, j| rig.lights[i].direction[j] as f64);
+    let l = DMatrix::from_fn(k, 3, |i, j| rig.lights()[i].direction()[j] as f64);
     for photos in [float_photos(w, h, values.clone()), u16_photos(w, h, values.clone())] {
         let scale = if photos[0].bit_depth() == 16 { 65535.0 } else { 1.0 };
         let sol = solve(&stack(photos.clone()), &rig, &config(Method::LeastSquares), &no_progress).unwrap();
         for p in 0..w * h {
             let r = DVector::from_fn(k, |i, _| {
-                photos[i].samples().get(p) as f64 / scale / rig.lights[i].intensity.x as f64
+                photos[i].samples().get(p) as f64 / scale / rig.lights()[i].intensity().x as f64
             });
             let g = naive_g(&l, &r);
             let ours = sol.normals.as_slice()[p].as_dvec3() * sol.albedo.as_gray().unwrap().as_slice()[p] as f64;
@@ -253,9 +253,8 @@ fn results_do_not_depend_on_thread_count() {
 #[test]
 fn ninety_six_lights_with_a_tiny_cache() {
     let (w, h) = (48, 40);
-    let mut rig = ring(32, 30.0);
-    rig.lights.extend(ring(32, 50.0).lights);
-    rig.lights.extend(ring(32, 70.0).lights);
+    let lights = [30.0, 50.0, 70.0].iter().flat_map(|&t| ring(32, t).lights().to_vec()).collect();
+    let rig = Rig::new(lights, "96 lights").unwrap();
     let (truth, values) = shadowed(w, h, &rig, 0.1, 21);
     let keep = |i: usize| truth.as_slice()[i].z > 0.95;
     let st = stack(u16_photos(w, h, values));
@@ -274,20 +273,20 @@ fn ninety_six_lights_with_a_tiny_cache() {
 #[test]
 fn rgb_photos_give_rgb_albedo() {
     let (w, h) = (40, 30);
-    let mut rig = ring(6, 50.0);
-    for (i, l) in rig.lights.iter_mut().enumerate() {
-        l.intensity = Vec3::new(1.0, 0.8 + 0.05 * i as f32, 1.2);
-    }
+    let lights = (ring(6, 50.0).lights().iter().enumerate())
+        .map(|(i, l)| Light::new(l.direction(), Vec3::new(1.0, 0.8 + 0.05 * i as f32, 1.2), None).unwrap())
+        .collect();
+    let rig = Rig::new(lights, "rgb").unwrap();
     let truth = bumps(w, h);
     let albedo = Vec3::new(0.6, 0.4, 0.25);
     let photos: Vec<Photo> = rig
-        .lights
+        .lights()
         .iter()
         .map(|l| {
             let samples = truth
                 .as_slice()
                 .iter()
-                .flat_map(|n| (albedo * l.intensity * n.dot(l.direction).max(0.0)).to_array())
+                .flat_map(|n| (albedo * l.intensity() * n.dot(l.direction()).max(0.0)).to_array())
                 .map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)
                 .collect();
             Photo::new(w, h, Channels::Rgb, Samples::U16(samples)).unwrap()
@@ -401,10 +400,10 @@ fn mask_excludes_texels() {
 fn hard_pixels_are_invalid_never_nan() {
     let rig = ring(8, 45.0);
     let n = Vec3::new(0.2, 0.1, 1.0).normalize();
-    let reading = |l: &Light| 0.5 * n.dot(l.direction).max(0.0);
+    let reading = |l: &Light| 0.5 * n.dot(l.direction()).max(0.0);
     // Pixels: 0 normal, 1 all black, 2 only two lit, 3 six saturated, 4 one saturated, 5 zero albedo.
     let values: Vec<Vec<f32>> = rig
-        .lights
+        .lights()
         .iter()
         .enumerate()
         .map(|(i, l)| {
@@ -437,7 +436,7 @@ fn hard_pixels_are_invalid_never_nan() {
         }
     }
     // A 1x1 image.
-    let one = run(u16_photos(1, 1, rig.lights.iter().map(|l| vec![reading(l)]).collect()), &rig, Method::Robust);
+    let one = run(u16_photos(1, 1, rig.lights().iter().map(|l| vec![reading(l)]).collect()), &rig, Method::Robust);
     assert!(angle_degrees(one.normals.get(0, 0), n) < 0.05);
 }
 
@@ -446,15 +445,17 @@ fn bad_rigs_and_stacks_are_refused() {
     let (w, h) = (4, 3);
     let photos = |k| float_photos(w, h, vec![vec![0.5; w * h]; k]);
     // Coplanar: every light on the great circle through x and z.
-    let mut coplanar = ring(8, 45.0);
-    for (i, l) in coplanar.lights.iter_mut().enumerate() {
-        let a = 0.3 + 0.3 * i as f32;
-        l.direction = Vec3::new(a.cos(), 0.0, a.sin());
-    }
-    let err = solve(&stack(photos(8)), &coplanar, &SolveConfig::default(), &no_progress).unwrap_err();
+    // (A rig is valid by construction: coplanar lights and two lights are refused by `Rig::new`.)
+    let coplanar =
+        (0..8).map(|i| 0.3 + 0.3 * i as f32).map(|a| Light::new(Vec3::new(a.cos(), 0.0, a.sin()), Vec3::ONE, None));
+    let err = Rig::new(coplanar.map(Result::unwrap).collect(), "coplanar").unwrap_err();
     assert!(matches!(err, Error::BadRig(_)), "{err}");
-    let two = Rig { lights: ring(8, 45.0).lights[..2].to_vec(), ..Rig::default() };
-    assert!(matches!(solve(&stack(photos(2)), &two, &SolveConfig::default(), &no_progress), Err(Error::BadRig(_))));
+    let two = ring(8, 45.0).lights()[..2].to_vec();
+    assert!(matches!(Rig::new(two, "two"), Err(Error::BadFile { .. })));
+    // A condition number above the solver's bound is refused by the solve.
+    let narrow = SolveConfig { max_condition: 1.5, ..SolveConfig::default() };
+    let err = solve(&stack(photos(8)), &ring(8, 20.0), &narrow, &no_progress).unwrap_err();
+    assert!(matches!(err, Error::BadRig(_)), "{err}");
     let err = solve(&stack(photos(7)), &ring(8, 45.0), &SolveConfig::default(), &no_progress).unwrap_err();
     assert_eq!(err.to_string(), "rig has 8 lights but 7 photos were given");
     let mut mixed = photos(3);

@@ -12,14 +12,11 @@ pub fn ring(k: usize, theta: f32) -> Rig {
     let lights = (0..k)
         .map(|i| {
             let a = std::f32::consts::TAU * i as f32 / k as f32;
-            Light {
-                direction: Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()),
-                intensity: Vec3::ONE,
-                position: None,
-            }
+            Light::new(Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos()), Vec3::ONE, None)
+                .expect("a ring light is valid")
         })
         .collect();
-    Rig { lights, ..Rig::default() }
+    Rig::new(lights, "ring").expect("a ring of 3 or more lights is a valid rig")
 }
 
 /// A bumpy surface lit by `rig`; with `shadows`, about 6% of readings are zeroed in patches.
@@ -30,7 +27,7 @@ pub fn photos(size: usize, rig: &Rig, shadows: bool) -> PhotoStack {
     };
     let normals: Vec<Vec3> = (0..size * size).map(|p| normal(p % size, p / size)).collect();
     let photos = rig
-        .lights
+        .lights()
         .iter()
         .enumerate()
         .map(|(i, l)| {
@@ -38,12 +35,12 @@ pub fn photos(size: usize, rig: &Rig, shadows: bool) -> PhotoStack {
                 .map(|p| {
                     let (x, y) = (p % size, p / size);
                     let occluded = shadows && ((x / 16 + 3 * (y / 16) + 5 * i) % 16 == 0);
-                    let v = if occluded { 0.0 } else { 0.7 * normals[p].dot(l.direction).max(0.0) };
+                    let v = if occluded { 0.0 } else { 0.7 * normals[p].dot(l.direction()).max(0.0) };
                     (v * 65535.0) as u16
                 })
                 .collect();
             Photo::new(size, size, Channels::Gray, Samples::U16(samples)).unwrap()
         })
         .collect();
-    PhotoStack::new(photos, (0..rig.lights.len()).map(|i| format!("{i}.png")).collect()).unwrap()
+    PhotoStack::new(photos, (0..rig.lights().len()).map(|i| format!("{i}.png")).collect()).unwrap()
 }

@@ -8,7 +8,8 @@ use super::chunk::residual_factor;
 use super::plan::{Out, Plan, Scratch};
 use super::solution::AlbedoTexel;
 use super::subsets::{SubsetSolve, Subsets};
-use super::{CHUNK, MIN_ALBEDO, SolveStats};
+use super::{CHUNK, SolveStats};
+use crate::readings;
 
 impl Plan<'_> {
     /// Counts, per pixel, the readings that are shadowed or saturated (`s.dropped`).
@@ -20,9 +21,9 @@ impl Plan<'_> {
                 *t = t.max(v);
             }
         }
-        let (abs, rel) = (self.config.shadow_abs, self.config.shadow_rel);
         for t in &mut s.top[..n] {
-            *t = abs.max(rel * *t);
+            // In f32 bit for bit (see `shadow_floor`).
+            *t = readings::shadow_floor(self.config, *t as f64) as f32;
         }
         s.dropped[..n].fill(0);
         for i in 0..self.k {
@@ -74,7 +75,7 @@ impl Plan<'_> {
         }
         let (g, rr) = self.solve_subset(j, bits, subset, s);
         let len = Vec3::from(g).length();
-        if !(len > MIN_ALBEDO && len < f32::INFINITY) {
+        if !readings::defines_normal(len) {
             return invalid(used);
         }
         let normal = Vec3::from(g) / len;
@@ -165,7 +166,7 @@ impl Plan<'_> {
             let j = group[t] as usize;
             let g = [gx[t], gy[t], gz[t]];
             let len = Vec3::from(g).length();
-            let (normal, albedo, confidence) = if len > MIN_ALBEDO && len < f32::INFINITY {
+            let (normal, albedo, confidence) = if readings::defines_normal(len) {
                 let normal = Vec3::from(g) / len;
                 let confidence = weight * residual_factor(rr[t], subset.fitted_sq(g));
                 let albedo = if self.rgb { self.rgb_albedo(j, bits as u128, normal, s) } else { Vec3::splat(len) };

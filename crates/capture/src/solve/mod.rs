@@ -80,10 +80,12 @@ mod tests;
 use glam::Vec3;
 use skinkit_maps::{Grid, NormalMap, Transfer};
 
+pub use crate::readings::SolveStats;
+use crate::readings::{LUMA, MIN_ALBEDO};
 pub(crate) use chunk::fresh_zeroed_vec3;
 pub use config::{Method, Progress, SolveConfig, no_progress};
 use plan::Plan;
-pub use solution::{AlbedoMap, Solution, SolveStats};
+pub use solution::{AlbedoMap, Solution};
 pub use stack::PhotoStack;
 
 use crate::{Error, Result, Rig};
@@ -96,20 +98,15 @@ pub const MAX_LIGHTS: usize = 128;
 pub const DENSE_MAX_LIGHTS: usize = 12;
 /// Rows per parallel work item.
 pub(super) const BAND_ROWS: usize = 8;
-/// Smallest `|g|` (albedo as a fraction of full scale) that still defines a normal.
-pub(super) const MIN_ALBEDO: f32 = 1e-6;
 /// Relative residual at which the residual factor of the confidence is 1/2.
 pub(super) const RESIDUAL_SCALE: f32 = 0.1;
-/// Rec. 709 luminance weights.
-pub(super) const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
 /// Solves for normals, albedo and confidence from `stack` lit by `rig`.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] when the photo count differs from the rig's light count, the rig has
-/// more than [`MAX_LIGHTS`] lights, or `config` is out of range; [`Error::BadRig`] when a light has
-/// a zero direction or a non-positive intensity, or the lights cannot determine a normal (fewer
-/// than 3, coplanar, or a condition number above `config.max_condition`).
+/// more than [`MAX_LIGHTS`] lights, or `config` is out of range; [`Error::BadRig`] when the rig's
+/// condition number exceeds `config.max_condition`.
 pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig, progress: &dyn Progress) -> Result<Solution> {
     // Empty maps: `solve_into` allocates fresh ones of the right size and kind, untouched until
     // the parallel bands write them.
@@ -143,40 +140,17 @@ pub fn solve_into(
     Ok(())
 }
 
-/// Unit light directions of `rig`, after checking it against the stack and the config.
+/// Unit light directions of `rig`, after checking it against the stack (a [`Rig`] is valid by
+/// construction, so only the photo count and the solver's own light limit are left to check).
 fn check_rig(stack: &PhotoStack, rig: &Rig) -> Result<Vec<Vec3>> {
-    let k = rig.lights.len();
-    if k != stack.len() {
-        return Err(Error::InvalidInput(format!("rig has {k} lights but {} photos were given", stack.len())));
-    }
+    rig.expect_photos(stack.len())?;
+    let k = rig.light_count();
     if k > MAX_LIGHTS {
         return Err(Error::InvalidInput(format!("rig has {k} lights; at most {MAX_LIGHTS} are supported")));
     }
-    if k < 3 {
-        return Err(Error::BadRig(format!("rig has {k} lights; a normal needs at least 3")));
-    }
-    rig.lights
-        .iter()
-        .enumerate()
-        .map(|(i, light)| {
-            let d = light.direction.normalize_or_zero();
-            if d == Vec3::ZERO || !d.is_finite() {
-                return Err(Error::BadRig(format!(
-                    "rig light {}: direction {} has zero length",
-                    i + 1,
-                    light.direction
-                )));
-            }
-            if !(light.intensity.min_element() > 0.0 && light.intensity.is_finite()) {
-                return Err(Error::BadRig(format!(
-                    "rig light {}: intensity {} must be positive",
-                    i + 1,
-                    light.intensity
-                )));
-            }
-            Ok(d)
-        })
-        .collect()
+    // `normalize` of the stored unit directions (not a check: `Light::new` made them unit) keeps
+    // the f32 directions, and so every output bit, the solver has always used.
+    Ok(rig.directions().into_iter().map(Vec3::normalize).collect())
 }
 
 /// A stored-value to linear table for 8- and 16-bit sRGB photos.

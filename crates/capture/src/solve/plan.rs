@@ -16,10 +16,9 @@ use super::solution::AlbedoTexel;
 use super::sources::{Linearise, Raw, Source, as_f32, as_u8, as_u16};
 use super::subsets::{SubsetSolve, Subsets, gram_form};
 use super::{
-    AlbedoMap, BAND_ROWS, CHUNK, DENSE_MAX_LIGHTS, MIN_ALBEDO, Method, PhotoStack, Progress, Solution, SolveConfig,
-    SolveStats,
+    AlbedoMap, BAND_ROWS, CHUNK, DENSE_MAX_LIGHTS, Method, PhotoStack, Progress, Solution, SolveConfig, SolveStats,
 };
-use crate::{Error, Result, Rig};
+use crate::{Error, Result, Rig, readings};
 
 /// Everything a worker needs, built once per solve.
 pub(super) struct Plan<'a> {
@@ -138,8 +137,8 @@ impl<'a> Plan<'a> {
         let sources: Vec<Source> = stack
             .photos()
             .iter()
-            .zip(&rig.lights)
-            .map(|(p, l)| Source::new(p, stack.ambient(), l.intensity, config))
+            .zip(rig.lights())
+            .map(|(p, l)| Source::new(p, stack.ambient(), l.intensity(), config))
             .collect();
         let k = lights.len();
         let sources_scales: Vec<f32> = sources.iter().map(|s| s.gray_scale).collect();
@@ -480,7 +479,7 @@ impl<'a> Plan<'a> {
         for (((((x, y), z), &rr), len), conf) in it {
             let g = [*x, *y, *z];
             let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-            let ok = l > MIN_ALBEDO && l < f32::INFINITY;
+            let ok = readings::defines_normal(l);
             invalid += !ok as u32;
             // Selects, not products with zero: a NaN reading must not leak into the normal.
             let inv = if ok { 1.0 / l } else { 0.0 };

@@ -1,37 +1,10 @@
-//! What a solve returns: [`Solution`], [`AlbedoMap`], [`SolveStats`], and the albedo texel types.
+//! What a solve returns: [`Solution`], [`AlbedoMap`] and the albedo texel types.
 
 use glam::Vec3;
 use skinkit_maps::{ColorMap, NormalMap, ScalarMap};
 
+use super::SolveStats;
 use super::chunk::{fresh_zeroed, fresh_zeroed_vec3};
-
-/// Counts gathered during a solve.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct SolveStats {
-    /// Texels in the map.
-    pub pixels: usize,
-    /// Texels with no normal (masked out, too few lights, ill-conditioned, black).
-    pub invalid_count: usize,
-    /// Texels outside the mask.
-    pub masked_count: usize,
-    /// `lights_used[m]`: unmasked texels with `m` usable readings (`len = k + 1`).
-    pub lights_used: Vec<usize>,
-}
-
-impl SolveStats {
-    pub(super) fn empty(k: usize) -> Self {
-        SolveStats { lights_used: vec![0; k + 1], ..SolveStats::default() }
-    }
-    pub(super) fn merge(mut self, other: SolveStats) -> Self {
-        self.pixels += other.pixels;
-        self.invalid_count += other.invalid_count;
-        self.masked_count += other.masked_count;
-        for (a, b) in self.lights_used.iter_mut().zip(other.lights_used) {
-            *a += b;
-        }
-        self
-    }
-}
 
 /// The result of [`solve`].
 #[derive(Clone, Debug)]

@@ -5,6 +5,7 @@ use skinkit_maps::{Photo, Samples, Transfer};
 
 use super::chunk::raw_values;
 use super::{LUMA, SolveConfig};
+use crate::readings;
 
 /// A photo's samples as a typed slice.
 #[derive(Clone, Copy)]
@@ -89,7 +90,7 @@ impl<'a> Source<'a> {
             ambient: ambient.map(Raw::of),
             scale: (Vec3::splat(unit) / intensity).into(),
             gray_scale: unit / luma,
-            saturated_at: config.saturation * full,
+            saturated_at: readings::saturation_level(config, full),
         }
     }
 

@@ -7,6 +7,7 @@ use glam::Vec3;
 use nalgebra::{Matrix3, Vector3};
 
 use super::DENSE_MAX_LIGHTS;
+use crate::readings::condition_of;
 
 /// The pseudo-inverse of one subset of lights, with what the confidence needs.
 #[derive(Clone, Debug)]
@@ -55,13 +56,6 @@ impl SubsetSolve {
 pub(super) fn gram_form(m: &[f32; 6], g: [f32; 3]) -> f32 {
     let [x, y, z] = g;
     m[0] * x * x + m[3] * y * y + m[5] * z * z + 2.0 * (m[1] * x * y + m[2] * x * z + m[4] * y * z)
-}
-
-/// `sigma_max / sigma_min` of a direction matrix `L` from its Gram matrix `L^T L`.
-pub(super) fn condition_of(gram: &Matrix3<f64>) -> f64 {
-    let eig = gram.symmetric_eigenvalues();
-    let (lo, hi) = (eig.min(), eig.max());
-    if lo > hi * 1e-15 && lo > 0.0 { (hi / lo).sqrt() } else { f64::INFINITY }
 }
 
 /// Subset pseudo-inverses shared by all workers (dense table) or kept per worker (bounded map).

@@ -15,16 +15,12 @@ fn inputs_with(samples: impl Fn(usize, usize) -> Samples, intensity: impl Fn(usi
     let lights: Vec<crate::Light> = (0..8)
         .map(|i| {
             let a = i as f32 * 0.785 + 0.2;
-            crate::Light {
-                direction: Vec3::new(0.7 * a.cos(), 0.7 * a.sin(), 0.714),
-                intensity: Vec3::splat(intensity(i)),
-                position: None,
-            }
+            crate::Light::new(Vec3::new(0.7 * a.cos(), 0.7 * a.sin(), 0.714), Vec3::splat(intensity(i)), None).unwrap()
         })
         .collect();
     let photos = (0..8).map(|i| Photo::new(37, 11, Channels::Gray, samples(i, 37 * 11)).unwrap()).collect();
     let stack = PhotoStack::new(photos, (0..8).map(|i| i.to_string()).collect()).unwrap();
-    (stack, Rig { lights, ..Rig::default() })
+    (stack, Rig::new(lights, "test rig").unwrap())
 }
 
 fn pseudo_random(i: usize, p: usize) -> u32 {

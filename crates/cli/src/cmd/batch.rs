@@ -1,8 +1,9 @@
 //! `skinkit batch`: every sub-folder of a folder is a capture session, processed in parallel; a
 //! bad session is reported and skipped, the others go on.
 //!
-//! A session folder holds `rig.toml`, the photos (sorted by name), and optionally `mask.png`,
-//! `ambient.png` and `truth.png` (a ground-truth normal map).
+//! A session folder is read by `skinkit_capture::session::Session::from_dir`: `rig.toml`, the
+//! photos (sorted by name), and optionally `mask.png`, `ambient.png` and `truth.png` (a
+//! ground-truth normal map).
 
 use std::path::{Path, PathBuf};
 
@@ -10,9 +11,11 @@ use anyhow::{Context, Result};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::capture::{SolveArgs, photos_in};
+use skinkit_capture::session::{self, CaptureOptions, CaptureReport, Session};
+
+use super::capture::SolveArgs;
 use crate::output::Output;
-use crate::pipeline::{self, CaptureOptions, Session};
+use crate::pipeline;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -58,25 +61,9 @@ fn session_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
-/// The session's files, found by the folder convention.
-pub fn session_in(dir: &Path) -> Result<Session> {
-    let optional = |name: &str| Some(dir.join(name)).filter(|p| p.is_file());
-    let rig = dir.join("rig.toml");
-    if !rig.is_file() {
-        anyhow::bail!("{}: no rig.toml in the session folder", dir.display());
-    }
-    Ok(Session {
-        rig,
-        photos: photos_in(dir)?,
-        mask: optional("mask.png"),
-        ambient: optional("ambient.png"),
-        truth: optional("truth.png"),
-    })
-}
-
-fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions) -> Result<pipeline::CaptureReport> {
-    let session = session_in(dir)?;
-    let mut captured = pipeline::capture(&session, options, &|_| {})?;
+fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions) -> Result<CaptureReport> {
+    let files = Session::from_dir(dir)?;
+    let mut captured = session::capture(&files, options, &|_| {})?;
     pipeline::write_outputs(out_dir, &mut captured, options)?;
     Ok(captured.report)
 }

@@ -1,16 +1,14 @@
 //! `skinkit capture`: photos of a mold under a known rig -> normal, albedo and confidence maps.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
+use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::{Method, SolveConfig};
 use skinkit_maps::{GreenAxis, Limits, NormalEncoding, Transfer};
 
 use crate::output::Output;
-use crate::pipeline::{self, CaptureOptions, Session};
-
-/// Photo file extensions `--photos-from` picks up.
-pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
+use crate::pipeline;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -112,65 +110,16 @@ fn fraction(text: &str) -> Result<f32, String> {
     }
 }
 
-/// Photo files of a folder in light order: the order `filenames.txt` gives when the folder has
-/// one (the DiLiGenT layout), else sorted by name (only image extensions skinkit reads).
-///
-/// # Errors
-/// When the folder cannot be listed, `filenames.txt` names a missing file, or there is no photo.
-pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
-    let listing = dir.join("filenames.txt");
-    if listing.is_file() {
-        return photos_listed(&listing);
-    }
-    let mut photos: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("cannot list photos in {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file() && is_photo(p))
-        .collect();
-    photos.sort();
-    if photos.is_empty() {
-        bail!("{}: no photos (.png, .tif, .tiff, .exr) found", dir.display());
-    }
-    Ok(photos)
-}
-
-/// The photos a `filenames.txt` lists, one per line, relative to its folder.
-fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
-    let text = std::fs::read_to_string(listing).with_context(|| format!("cannot read {}", listing.display()))?;
-    let dir = listing.parent().unwrap_or(Path::new("."));
-    let mut photos = Vec::new();
-    for (line, name) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let path = dir.join(name.trim());
-        if !path.is_file() {
-            bail!("{}: line {}: photo `{}` does not exist", listing.display(), line + 1, name.trim());
-        }
-        photos.push(path);
-    }
-    if photos.is_empty() {
-        bail!("{}: lists no photos", listing.display());
-    }
-    Ok(photos)
-}
-
-/// File stems a session folder reserves for other inputs: never taken as photos.
-pub const RESERVED_STEMS: &[&str] = &["mask", "ambient", "truth"];
-
-fn is_photo(path: &Path) -> bool {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let stem = path.file_stem().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    PHOTO_EXTENSIONS.contains(&ext.as_str()) && !RESERVED_STEMS.contains(&stem.as_str())
-}
-
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     let options = args.solve.options()?;
     let photos = match &args.photos_from {
-        Some(dir) => photos_in(dir)?,
+        Some(dir) => session::photos_in(dir)?,
         None => args.photos.clone(),
     };
-    let session = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth };
+    let files = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth };
     let bar = out.progress(4, "capture");
-    let mut captured = pipeline::capture(&session, &options, &|stage| {
-        bar.set_message(stage.to_owned());
+    let mut captured = session::capture(&files, &options, &|stage| {
+        bar.set_message(stage.name());
         bar.inc(1);
     })?;
     bar.set_message("write");

@@ -15,13 +15,14 @@ use skinkit_maps::NormalEncoding;
 use skinkit_maps::io;
 use skinkit_synth::SynthConfig;
 
-use super::batch::session_in;
+use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
+
 use super::capture::SolveArgs;
 use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
 use super::synth::{Map, QualityReport, parse_size, quality, write_coords};
 use crate::output::Output;
-use crate::pipeline::{self, CaptureOptions, Captured};
+use crate::pipeline;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -102,10 +103,10 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let mut cache = CaptureCache::new();
     for dir in &regions {
         let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let session = session_in(dir)?;
+        let files = Session::from_dir(dir)?;
         for solver in ["robust", "ls"] {
             let options = options(solver)?;
-            let mut captured = pipeline::capture(&session, &options, &|_| {})?;
+            let mut captured = session::capture(&files, &options, &|_| {})?;
             let target = args.out.join("capture").join(&region).join(solver);
             pipeline::write_outputs(&target, &mut captured, &options)?;
             let r = &captured.report;

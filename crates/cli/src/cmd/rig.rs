@@ -124,16 +124,15 @@ fn parse_circle(text: &str) -> Result<sphere::Circle> {
 }
 
 fn save(rig: &Rig, path: &std::path::Path, out: &Output) -> Result<i32> {
-    rig.check().with_context(|| format!("the rig for {} is unusable", path.display()))?;
     rig.save(path)?;
     summarise(rig, path, out)
 }
 
 fn summarise(rig: &Rig, path: &std::path::Path, out: &Output) -> Result<i32> {
-    let c = rig.check()?;
+    let c = rig.conditioning();
     let summary = RigSummary {
         rig: path.display().to_string(),
-        lights: rig.lights.len(),
+        lights: rig.light_count(),
         condition_number: c.condition_number,
         noise_amplification: c.noise_amplification,
         warning: c.warning(),

@@ -83,9 +83,9 @@ fn render_config(seed: u64) -> hf::RenderConfig {
 
 /// Lights of a rig as the renderer wants them.
 pub fn render_lights(rig: &Rig) -> Vec<hf::RenderLight> {
-    rig.lights
+    rig.lights()
         .iter()
-        .map(|l| hf::RenderLight { direction: l.direction, intensity: l.intensity, position: l.position })
+        .map(|l| hf::RenderLight { direction: l.direction(), intensity: l.intensity(), position: l.position() })
         .collect()
 }
 
@@ -113,7 +113,7 @@ fn write_region(region: &str, dir: &Path, args: &Args, rig: &Rig) -> Result<()> 
 
 /// The paper's rig as the samples use it.
 pub fn turntable() -> Rig {
-    Rig::turntable(8, TURNTABLE_ELEVATION_DEG, 1.0)
+    Rig::turntable(8, TURNTABLE_ELEVATION_DEG, 1.0).expect("8 lights at 45 degrees are a valid rig")
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {

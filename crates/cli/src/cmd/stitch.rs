@@ -21,7 +21,8 @@ use skinkit_stitch::seam::SeamReport;
 use skinkit_stitch::{ComposeOptions, compose};
 use skinkit_synth::SynthConfig;
 
-use super::batch::session_in;
+use skinkit_capture::session::{self, Session};
+
 use super::capture::SolveArgs;
 use super::synth::parse_size;
 use crate::output::Output;
@@ -241,8 +242,8 @@ fn exemplars(layout: &Layout, cache: &mut CaptureCache, out: &Output) -> Result<
                             dir.display()
                         )
                     };
-                    let session = session_in(dir).with_context(context)?;
-                    let captured = pipeline::capture(&session, &options, &|_| {}).with_context(context)?;
+                    let files = Session::from_dir(dir).with_context(context)?;
+                    let captured = session::capture(&files, &options, &|_| {}).with_context(context)?;
                     let map = captured.solution.normals;
                     cache.insert(key, map.clone());
                     map

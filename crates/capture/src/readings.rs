@@ -1,0 +1,84 @@
+//! The rules both solvers, distant ([`crate::solve`]) and near ([`crate::near`]), apply to a
+//! pixel's readings, kept in one place: which readings are dropped (shadowed or saturated), how
+//! RGB readings combine into the one the normal comes from ([`LUMA`]), which `|g|` still defines
+//! a normal ([`MIN_ALBEDO`]), how the condition number of a set of lights is measured
+//! ([`condition_of`]) and how per-band counts are merged ([`SolveStats`]).
+//!
+//! The distant solver's vectorised kernels (`solve/fused.rs`) apply the same rules with the
+//! same operations, lane by lane; its unit tests compare them bitwise with the scalar paths
+//! that call these functions.
+
+use nalgebra::Matrix3;
+
+use crate::solve::SolveConfig;
+
+/// Rec. 709 luminance weights: how RGB readings combine into the one used for the normal (and
+/// how a grey photo is divided by an RGB light intensity).
+pub const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// Smallest `|g|` (albedo as a fraction of full scale per unit light) that still defines a normal.
+pub const MIN_ALBEDO: f32 = 1e-6;
+
+/// Whether a solved `|g|` defines a normal: above [`MIN_ALBEDO`] and finite (NaN does not).
+#[inline(always)]
+pub(crate) fn defines_normal<F: Into<f64>>(len: F) -> bool {
+    let len = len.into();
+    len > MIN_ALBEDO as f64 && len < f64::INFINITY
+}
+
+/// The shadow threshold of a pixel whose brightest reading is `brightest`: a reading below
+/// `max(shadow_abs, shadow_rel * brightest)` is shadowed (below the absolute floor and also far
+/// below the pixel's own brightest reading). In f64; for f32 readings the result cast back to f32
+/// is bit for bit `shadow_abs.max(shadow_rel * brightest)` in f32 (the product of two f32 values
+/// is exact in f64, so it is rounded once either way), and a NaN `brightest` gives `shadow_abs`.
+#[inline(always)]
+pub(crate) fn shadow_floor(config: &SolveConfig, brightest: f64) -> f64 {
+    (config.shadow_abs as f64).max(config.shadow_rel as f64 * brightest)
+}
+
+/// The raw stored value at or above which a reading is saturated, for samples of `full_scale`
+/// (any channel, before ambient subtraction).
+#[inline(always)]
+pub(crate) fn saturation_level(config: &SolveConfig, full_scale: f32) -> f32 {
+    config.saturation * full_scale
+}
+
+/// `sigma_max / sigma_min` of a direction matrix `L` from its Gram matrix `L^T L` (infinite when
+/// singular): the condition number [`SolveConfig::max_condition`] bounds, for a subset of a rig's
+/// lights (distant) or a pixel's own light directions (near).
+pub(crate) fn condition_of(gram: &Matrix3<f64>) -> f64 {
+    let eig = gram.symmetric_eigenvalues();
+    let (lo, hi) = (eig.min(), eig.max());
+    if lo > hi * 1e-15 && lo > 0.0 { (hi / lo).sqrt() } else { f64::INFINITY }
+}
+
+/// Counts gathered during a solve.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SolveStats {
+    /// Texels in the map.
+    pub pixels: usize,
+    /// Texels with no normal (masked out, too few lights, ill-conditioned, black).
+    pub invalid_count: usize,
+    /// Texels outside the mask.
+    pub masked_count: usize,
+    /// `lights_used[m]`: unmasked texels with `m` usable readings (`len = k + 1`).
+    pub lights_used: Vec<usize>,
+}
+
+impl SolveStats {
+    /// No texels yet, for a rig of `k` lights.
+    pub(crate) fn empty(k: usize) -> Self {
+        SolveStats { lights_used: vec![0; k + 1], ..SolveStats::default() }
+    }
+
+    /// The counts of two disjoint sets of texels together.
+    pub(crate) fn merge(mut self, other: SolveStats) -> Self {
+        self.pixels += other.pixels;
+        self.invalid_count += other.invalid_count;
+        self.masked_count += other.masked_count;
+        for (a, b) in self.lights_used.iter_mut().zip(other.lights_used) {
+            *a += b;
+        }
+        self
+    }
+}

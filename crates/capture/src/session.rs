@@ -1,0 +1,377 @@
+//! A capture session as one library call: the files of a session ([`Session`], or
+//! [`Session::from_dir`] for the folder layout `skinkit batch` reads), and [`capture`], which
+//! reads and checks every input, picks near or distant lights from the rig, solves, detrends and
+//! measures the result ([`CaptureReport`]). Writing the maps is left to the caller.
+//!
+//! # Session folders
+//! A session folder holds `rig.toml`, the photos, and optionally `mask.png` (nonzero pixels are
+//! the object), `ambient.png` (all lights off) and `truth.png` (a ground-truth normal map). The
+//! photos are the files `filenames.txt` lists, one per line, when the folder has one (the DiLiGenT
+//! layout), else every `.png`, `.tif`, `.tiff` and `.exr` file sorted by name except those whose
+//! stem is `mask`, `ambient` or `truth` ([`photos_in`]).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+use skinkit_maps::io::{self, Limits};
+use skinkit_maps::normal::AngularStats;
+use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
+
+use crate::solve::{self, PhotoStack, SolveConfig};
+use crate::{Error, Result, Rig, detrend, near};
+
+/// Photo file extensions a session folder's photos may have.
+pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
+/// File stems a session folder reserves for other inputs: never taken as photos.
+pub const RESERVED_STEMS: &[&str] = &["mask", "ambient", "truth"];
+
+/// The files of one capture session.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Session {
+    pub rig: PathBuf,
+    /// Photos in rig order.
+    pub photos: Vec<PathBuf>,
+    pub mask: Option<PathBuf>,
+    /// Ambient frame; overrides the rig's own.
+    pub ambient: Option<PathBuf>,
+    /// Ground-truth normal map to compare against (samples and tests).
+    pub truth: Option<PathBuf>,
+}
+
+impl Session {
+    /// The session a folder holds (see the module docs for the layout).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the folder has no `rig.toml` or no photo; [`Error::Io`] when
+    /// it cannot be listed or `filenames.txt` cannot be read.
+    pub fn from_dir(dir: &Path) -> Result<Session> {
+        let optional = |name: &str| Some(dir.join(name)).filter(|p| p.is_file());
+        let rig = dir.join("rig.toml");
+        if !rig.is_file() {
+            return Err(Error::InvalidInput(format!("{}: no rig.toml in the session folder", dir.display())));
+        }
+        Ok(Session {
+            rig,
+            photos: photos_in(dir)?,
+            mask: optional("mask.png"),
+            ambient: optional("ambient.png"),
+            truth: optional("truth.png"),
+        })
+    }
+}
+
+/// Photo files of a folder in light order: the order `filenames.txt` gives when the folder has
+/// one (the DiLiGenT layout), else sorted by name (only [`PHOTO_EXTENSIONS`], never
+/// [`RESERVED_STEMS`]).
+///
+/// # Errors
+/// [`Error::Io`] when the folder cannot be listed or `filenames.txt` read;
+/// [`Error::InvalidInput`] when `filenames.txt` names a missing file or there is no photo.
+pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
+    let listing = dir.join("filenames.txt");
+    if listing.is_file() {
+        return photos_listed(&listing);
+    }
+    let entries = std::fs::read_dir(dir).map_err(|source| Error::Io { path: dir.to_owned(), source })?;
+    let mut photos: Vec<PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_photo(p)).collect();
+    photos.sort();
+    if photos.is_empty() {
+        return Err(Error::InvalidInput(format!("{}: no photos (.png, .tif, .tiff, .exr) found", dir.display())));
+    }
+    Ok(photos)
+}
+
+/// The photos a `filenames.txt` lists, one per line, relative to its folder.
+fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
+    let text = std::fs::read_to_string(listing).map_err(|source| Error::Io { path: listing.to_owned(), source })?;
+    let dir = listing.parent().unwrap_or(Path::new("."));
+    let mut photos = Vec::new();
+    for (line, name) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let path = dir.join(name.trim());
+        if !path.is_file() {
+            return Err(Error::InvalidInput(format!(
+                "{}: line {}: photo `{}` does not exist",
+                listing.display(),
+                line + 1,
+                name.trim()
+            )));
+        }
+        photos.push(path);
+    }
+    if photos.is_empty() {
+        return Err(Error::InvalidInput(format!("{}: lists no photos", listing.display())));
+    }
+    Ok(photos)
+}
+
+fn is_photo(path: &Path) -> bool {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let stem = path.file_stem().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    PHOTO_EXTENSIONS.contains(&ext.as_str()) && !RESERVED_STEMS.contains(&stem.as_str())
+}
+
+/// Everything that shapes a capture besides its files.
+#[derive(Clone, Debug)]
+pub struct CaptureOptions {
+    pub solve: SolveConfig,
+    /// Side of the detrend block in pixels; 0 turns detrending off.
+    pub detrend_block: usize,
+    /// How 8- and 16-bit photo values relate to light (float photos are always linear).
+    pub transfer: Transfer,
+    /// Green convention of the truth map.
+    pub encoding: NormalEncoding,
+    pub limits: Limits,
+}
+
+impl Default for CaptureOptions {
+    /// The robust solve, the paper's 50-pixel detrend, linear photos, green-up truth.
+    fn default() -> Self {
+        CaptureOptions {
+            solve: SolveConfig::default(),
+            detrend_block: 50,
+            transfer: Transfer::Linear,
+            encoding: NormalEncoding::default(),
+            limits: Limits::default(),
+        }
+    }
+}
+
+/// The stage [`capture`] is starting, for progress displays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Decode,
+    Solve,
+    Detrend,
+    Statistics,
+}
+
+impl Stage {
+    /// Lowercase name: `decode`, `solve`, `detrend`, `statistics`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Decode => "decode",
+            Stage::Solve => "solve",
+            Stage::Detrend => "detrend",
+            Stage::Statistics => "statistics",
+        }
+    }
+}
+
+/// Seconds spent in each stage.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    pub decode: f64,
+    pub solve: f64,
+    pub detrend: f64,
+    /// Report statistics (normal tilt, error against the truth).
+    pub stats: f64,
+    /// Writing the outputs: 0 from [`capture`], filled in by whoever writes them.
+    pub write: f64,
+    /// Seconds per output file (written concurrently, so these overlap); empty from [`capture`].
+    pub write_files: std::collections::BTreeMap<String, f64>,
+    pub total: f64,
+}
+
+/// What a capture found: its inputs, the rig's conditioning, the solve's counts, the normals'
+/// statistics and the stage timings (serialised as the CLI's `report.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct CaptureReport {
+    pub rig: String,
+    pub photos: Vec<String>,
+    pub width: usize,
+    pub height: usize,
+    pub light_count: usize,
+    /// `leastsquares` or `robust`, with ` (near lights)` when the rig's lamps are near.
+    pub solver: String,
+    pub condition_number: f64,
+    pub noise_amplification: f64,
+    pub detrend_block: usize,
+    pub valid_pixels: usize,
+    pub invalid_pixels: usize,
+    /// Angle of the output normals from +Z, in degrees (how rough the captured surface is).
+    pub tilt_degrees: AngularStats,
+    /// Angular error against the ground truth, when one was given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_vs_truth_degrees: Option<AngularStats>,
+    pub warnings: Vec<String>,
+    pub timings_s: Timings,
+    /// Peak resident memory of the process, in MiB: `None` from [`capture`], filled in by a
+    /// caller that measures it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_memory_mib: Option<f64>,
+}
+
+/// A finished capture in memory.
+#[derive(Clone, Debug)]
+pub struct Captured {
+    /// Normals (detrended), albedo and confidence.
+    pub solution: solve::Solution,
+    pub report: CaptureReport,
+}
+
+/// The decoded inputs of a session.
+struct Inputs {
+    photos: Vec<Photo>,
+    ambient: Option<Photo>,
+    mask: Option<Grid<bool>>,
+    truth: Option<NormalMap>,
+}
+
+/// Reads every input of `session` and checks they fit together, solves (near point lights when
+/// the rig gives every lamp's position and the pixel size, else distant lights), detrends, and
+/// measures the result. Writes nothing. `progress` is told each stage as it starts.
+///
+/// # Errors
+/// When a file is unreadable or the inputs do not fit together (rig and photo count, sizes,
+/// formats); the message names the file.
+pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(Stage) + Sync)) -> Result<Captured> {
+    let start = Instant::now();
+    let mut timings = Timings::default();
+    let rig = Rig::load(&session.rig).map_err(|e| context(format!("cannot use rig {}", session.rig.display()), e))?;
+    rig.expect_photos(session.photos.len()).map_err(|e| context(format!("rig {}", session.rig.display()), e))?;
+    let conditioning = rig.conditioning();
+    let mut warnings: Vec<String> = conditioning.warning().into_iter().collect();
+
+    progress(Stage::Decode);
+    let t = Instant::now();
+    let ambient_path = session.ambient.clone().or_else(|| rig.ambient().map(Path::to_path_buf));
+    let inputs = decode(session, ambient_path.as_deref(), options)?;
+    timings.decode = t.elapsed().as_secs_f64();
+
+    let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
+    let mut stack = PhotoStack::new(inputs.photos, names.clone())?;
+    if let (Some(ambient), Some(path)) = (inputs.ambient, &ambient_path) {
+        stack = stack.with_ambient(ambient, &path.display().to_string())?;
+    }
+    if let Some(mask) = inputs.mask {
+        stack = stack.with_mask(mask)?;
+    }
+    let (width, height) = (stack.width(), stack.height());
+
+    progress(Stage::Solve);
+    let t = Instant::now();
+    let near_lights = near::applies(&rig);
+    let mut solution = if near_lights {
+        near::solve(&stack, &rig, &options.solve)?
+    } else {
+        solve::solve(&stack, &rig, &options.solve, &solve::no_progress)?
+    };
+    drop(stack);
+    timings.solve = t.elapsed().as_secs_f64();
+
+    progress(Stage::Detrend);
+    let t = Instant::now();
+    detrend::detrend(&mut solution.normals, options.detrend_block);
+    timings.detrend = t.elapsed().as_secs_f64();
+
+    progress(Stage::Statistics);
+    let t = Instant::now();
+    let tilt = tilt_stats(&solution.normals);
+    let error_vs_truth =
+        inputs.truth.map(|truth| compare_with_truth(&solution.normals, truth, options.detrend_block)).transpose()?;
+    let invalid = solution.stats.invalid_count;
+    if invalid * 10 > width * height {
+        warnings.push(format!(
+            "{invalid} of {} pixels ({:.1}%) could not be solved (shadowed, saturated or too few usable lights)",
+            width * height,
+            100.0 * invalid as f64 / (width * height) as f64
+        ));
+    }
+    timings.stats = t.elapsed().as_secs_f64();
+    timings.total = start.elapsed().as_secs_f64();
+    let solver = format!("{:?}{}", options.solve.method, if near_lights { " (near lights)" } else { "" });
+    let report = CaptureReport {
+        rig: session.rig.display().to_string(),
+        photos: names,
+        width,
+        height,
+        light_count: rig.light_count(),
+        solver: solver.to_lowercase(),
+        condition_number: conditioning.condition_number,
+        noise_amplification: conditioning.noise_amplification,
+        detrend_block: options.detrend_block,
+        valid_pixels: width * height - invalid,
+        invalid_pixels: invalid,
+        tilt_degrees: tilt,
+        error_vs_truth_degrees: error_vs_truth,
+        warnings,
+        timings_s: timings,
+        peak_memory_mib: None,
+    };
+    Ok(Captured { solution, report })
+}
+
+/// `cause` with what was being done when it happened.
+fn context(what: String, cause: Error) -> Error {
+    Error::Context { context: what, cause: Box::new(cause) }
+}
+
+/// Decodes the photos, the ambient frame, the mask and the truth map, all in parallel.
+fn decode(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<Inputs> {
+    let (photos, (ambient, (mask, truth))) = rayon::join(
+        || session.photos.par_iter().map(|p| read_photo(p, options)).collect::<Result<Vec<_>>>(),
+        || {
+            rayon::join(
+                || ambient.map(|p| read_photo(p, options)).transpose(),
+                || {
+                    rayon::join(
+                        || session.mask.as_deref().map(|p| read_mask(p, &options.limits)).transpose(),
+                        || session.truth.as_deref().map(|p| read_truth(p, options)).transpose(),
+                    )
+                },
+            )
+        },
+    );
+    Ok(Inputs { photos: photos?, ambient: ambient?, mask: mask?, truth: truth? })
+}
+
+fn read_photo(path: &Path, options: &CaptureOptions) -> Result<Photo> {
+    let photo = io::read_photo(path, &options.limits)
+        .map_err(|e| context(format!("cannot read photo {}", path.display()), e.into()))?;
+    // The transfer applies to integer photos only: float photos are linear by definition.
+    Ok(if photo.bit_depth() == 32 { photo } else { photo.with_transfer(options.transfer) })
+}
+
+/// A mask image: nonzero pixels are the object.
+fn read_mask(path: &Path, limits: &Limits) -> Result<Grid<bool>> {
+    let map = io::read_scalar_map(path, limits)
+        .map_err(|e| context(format!("cannot read mask {}", path.display()), e.into()))?;
+    Ok(map.map(|&v| v > 0.0))
+}
+
+fn read_truth(path: &Path, options: &CaptureOptions) -> Result<NormalMap> {
+    io::read_normal_map(path, options.encoding, &options.limits)
+        .map_err(|e| context(format!("ground truth {}", path.display()), e.into()))
+}
+
+/// Angular error of `normals` against a ground-truth map, the truth detrended with the same
+/// `block` as the capture so the two describe the same (fine-scale) surface.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the sizes differ.
+pub fn compare_with_truth(normals: &NormalMap, mut truth: NormalMap, block: usize) -> Result<AngularStats> {
+    if truth.size() != normals.size() {
+        return Err(Error::InvalidInput(format!(
+            "ground truth is {}x{} but the photos are {}x{}",
+            truth.width(),
+            truth.height(),
+            normals.width(),
+            normals.height()
+        )));
+    }
+    detrend::detrend(&mut truth, block);
+    Ok(normals.angular_error(&truth, None)?)
+}
+
+/// Angles of the valid normals from +Z.
+fn tilt_stats(normals: &NormalMap) -> AngularStats {
+    AngularStats::from_par_iter(normals.as_slice().par_iter().filter(|n| **n != Vec3::ZERO).map(|&n| tilt_degrees(n)))
+}
+
+/// Angle of a unit vector from +Z in degrees (atan2 form: exact near zero, unlike acos).
+fn tilt_degrees(n: Vec3) -> f32 {
+    n.truncate().length().atan2(n.z).to_degrees()
+}
