@@ -5,6 +5,7 @@
 //! * [`import`]: rigs from public formats (DiLiGenT, UW/Seitz `lights.txt`).
 //! * [`sphere`]: light directions (and intensities) from photos of a mirror or matte sphere.
 //! * [`solve`]: the least-squares and robust per-pixel solves.
+//! * [`robust`]: the robust per-pixel fit (rank-trimmed start, reweighting, inlier refit).
 //! * [`detrend`]: removal of the mold's low-frequency tilt (mean normal of a block rotated to +Z).
 
 pub mod detrend;
@@ -12,6 +13,7 @@ pub mod error;
 pub mod import;
 pub mod near;
 pub mod rig;
+pub mod robust;
 pub mod solve;
 pub mod sphere;
 
