@@ -44,11 +44,27 @@ fn main() -> Result<(), Failure> {
     for (name, estimator) in
         [("trimmed", Estimator::Trimmed), ("trimmed + Cauchy IRLS", Estimator::Cauchy), ("L1 IRLS", Estimator::L1)]
     {
-        let config = RobustConfig { estimator, ..RobustConfig::default() };
+        let config = tuned(RobustConfig { estimator, ..RobustConfig::default() }, &args[2.min(args.len())..])?;
         let (error, secs) = object.fit(&picked, &config)?;
         println!("{name:>24}: {error:6.2} deg  {secs:6.3} s");
     }
     Ok(())
+}
+
+/// `config` with the `field=value` overrides of `args` (shadow_rel, trim_dark, trim_bright).
+fn tuned(mut config: RobustConfig, args: &[String]) -> Result<RobustConfig, Failure> {
+    for arg in args {
+        let (field, value) = arg.split_once('=').ok_or("overrides are field=value")?;
+        let value: f32 = value.parse()?;
+        match field {
+            "shadow_rel" => config.shadow_rel = value,
+            "trim_dark" => config.trim_dark = value,
+            "trim_bright" => config.trim_bright = value,
+            other => return Err(format!("unknown field {other}").into()),
+        }
+    }
+    config.validate()?;
+    Ok(config)
 }
 
 /// A DiLiGenT object: photos in light order, the rig, the mask and the true normals.

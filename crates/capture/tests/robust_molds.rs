@@ -11,9 +11,9 @@ use skinkit_maps::normal::angle_degrees;
 const SIZE: usize = 96;
 const ALBEDO: f32 = 0.55;
 
-/// Height in pixels: furrows along y (period 24 px, 3 px deep) and two broad bumps.
+/// Height in pixels: furrows along y (period 24 px, 8 px deep, walls up to 46 deg) and two bumps.
 fn height(x: f32, y: f32) -> f32 {
-    let furrow = 1.5 * (std::f32::consts::TAU * x / 24.0).cos();
+    let furrow = 4.0 * (std::f32::consts::TAU * x / 24.0).cos();
     let bump = |cx: f32, cy: f32, s: f32, a: f32| a * (-((x - cx).powi(2) + (y - cy).powi(2)) / (2.0 * s * s)).exp();
     furrow + bump(30.0, 40.0, 14.0, 8.0) + bump(70.0, 65.0, 10.0, 6.0)
 }
@@ -140,7 +140,7 @@ const LAMBERT: Effects = Effects { specular: false, cast_shadows: false, interre
 fn attached_shadows_only_is_exact() {
     for lights in [ring(8, 45.0), spiral(96, 55.0)] {
         let (_, robust) = errors(&lights, LAMBERT);
-        assert!(robust[1] < 0.05 && robust[2] < 0.05, "{robust:?}");
+        assert!(robust.iter().all(|&e| e < 0.05), "{robust:?}");
     }
 }
 
@@ -149,7 +149,7 @@ fn cast_shadows_robust_far_below_least_squares() {
     let fx = Effects { cast_shadows: true, ..LAMBERT };
     for lights in [ring(8, 45.0), ring(10, 50.0), spiral(96, 55.0)] {
         let (ls, robust) = errors(&lights, fx);
-        assert!(robust[1] < 0.25 * ls, "least squares {ls}, Cauchy {}", robust[1]);
+        assert!(robust[0] < 0.25 * ls, "least squares {ls}, trimmed {}", robust[0]);
     }
 }
 
@@ -158,7 +158,7 @@ fn specular_lobe_is_rejected() {
     let fx = Effects { specular: true, ..LAMBERT };
     for lights in [ring(10, 50.0), spiral(96, 55.0)] {
         let (ls, robust) = errors(&lights, fx);
-        assert!(robust[1] < 0.5 * ls, "least squares {ls}, Cauchy {}", robust[1]);
+        assert!(robust[0] < 0.5 * ls, "least squares {ls}, trimmed {}", robust[0]);
     }
 }
 
@@ -167,6 +167,6 @@ fn all_effects_together_robust_below_least_squares() {
     let fx = Effects { specular: true, cast_shadows: true, interreflection: true };
     for lights in [ring(8, 45.0), ring(10, 50.0), spiral(96, 55.0)] {
         let (ls, robust) = errors(&lights, fx);
-        assert!(robust[1] < ls, "least squares {ls}, Cauchy {}", robust[1]);
+        assert!(robust[0] < ls, "least squares {ls}, trimmed {}", robust[0]);
     }
 }

@@ -42,7 +42,7 @@ const CAUCHY_C: f32 = 2.385;
 /// MAD to standard deviation at the Gaussian.
 const MAD_TO_SIGMA: f32 = 1.4826;
 /// Residuals beyond this many scales are outliers in the final refit.
-const REJECT_SCALES: f32 = 3.0;
+const REJECT_SCALES: f32 = 2.0;
 /// Smallest `|g|` that still defines a normal (as in the least-squares solve).
 const MIN_ALBEDO: f32 = 1e-6;
 /// Relative residual at which the residual factor of the confidence is 1/2 (as in the solve).
@@ -87,11 +87,11 @@ pub struct RobustConfig {
 impl Default for RobustConfig {
     fn default() -> Self {
         RobustConfig {
-            estimator: Estimator::Cauchy,
+            estimator: Estimator::Trimmed,
             shadow_abs: 0.005,
             shadow_rel: 0.1,
-            trim_dark: 0.25,
-            trim_bright: 0.1,
+            trim_dark: 0.1,
+            trim_bright: 0.4,
             iterations: 12,
             scale_floor: 1e-3,
             min_lights: 3,
