@@ -1,0 +1,91 @@
+//! What a solve is asked to do: [`Method`], [`SolveConfig`] and progress reports.
+
+use crate::{Error, Result};
+
+/// Which per-pixel solve to run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    /// One least-squares solve over all lights (the paper).
+    LeastSquares,
+    /// Drop shadowed and saturated readings per pixel, solve from the rest.
+    #[default]
+    Robust,
+}
+
+/// Parameters of [`solve`]; see the module docs for how the thresholds are applied.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolveConfig {
+    pub method: Method,
+    /// Absolute shadow floor, as a fraction of full scale after ambient subtraction and division
+    /// by the light's intensity.
+    pub shadow_abs: f32,
+    /// Shadow threshold relative to the pixel's own brightest (intensity-divided) reading.
+    pub shadow_rel: f32,
+    /// Fraction of full scale at or above which a raw reading is saturated.
+    pub saturation: f32,
+    /// Fewest usable lights for a valid pixel (at least 3).
+    pub min_lights: usize,
+    /// Largest condition number `sigma_max / sigma_min` of the used lights' direction matrix.
+    pub max_condition: f64,
+    /// Subset pseudo-inverses kept per worker for rigs of more than [`DENSE_MAX_LIGHTS`](super::DENSE_MAX_LIGHTS) lights.
+    pub cache_capacity: usize,
+}
+
+impl Default for SolveConfig {
+    fn default() -> Self {
+        SolveConfig {
+            method: Method::Robust,
+            shadow_abs: 0.005,
+            shadow_rel: 0.05,
+            saturation: 0.995,
+            min_lights: 3,
+            max_condition: 50.0,
+            cache_capacity: 4096,
+        }
+    }
+}
+
+impl SolveConfig {
+    /// Checks every field's range.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the field and its value.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |field: &str, value: String, want: &str| {
+            Err(Error::InvalidInput(format!("solve config: {field} = {value} must be {want}")))
+        };
+        if !(0.0..1.0).contains(&self.shadow_abs) {
+            return bad("shadow_abs", self.shadow_abs.to_string(), "in [0, 1)");
+        }
+        if !(0.0..1.0).contains(&self.shadow_rel) {
+            return bad("shadow_rel", self.shadow_rel.to_string(), "in [0, 1)");
+        }
+        if !(self.saturation > 0.0 && self.saturation <= 1.0) {
+            return bad("saturation", self.saturation.to_string(), "in (0, 1]");
+        }
+        if self.min_lights < 3 {
+            return bad("min_lights", self.min_lights.to_string(), "at least 3");
+        }
+        if self.max_condition.is_nan() || self.max_condition < 1.0 {
+            return bad("max_condition", self.max_condition.to_string(), "at least 1");
+        }
+        if self.cache_capacity == 0 {
+            return bad("cache_capacity", "0".into(), "at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// Receives the fraction of the solve done, in [0, 1], from worker threads.
+pub trait Progress: Sync {
+    fn report(&self, done: f32);
+}
+
+impl<F: Fn(f32) + Sync> Progress for F {
+    fn report(&self, done: f32) {
+        self(done)
+    }
+}
+
+/// A progress sink that ignores reports.
+pub fn no_progress(_done: f32) {}

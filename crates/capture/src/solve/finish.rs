@@ -1,0 +1,214 @@
+//! The robust paths of pixels that drop readings: one pixel at a time, or grouped by subset.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+use super::chunk::residual_factor;
+use super::plan::{Out, Plan, Scratch};
+use super::solution::AlbedoTexel;
+use super::subsets::{SubsetSolve, Subsets};
+use super::{CHUNK, MIN_ALBEDO, SolveStats};
+
+impl Plan<'_> {
+    /// Counts, per pixel, the readings that are shadowed or saturated (`s.dropped`).
+    #[inline(always)]
+    pub(super) fn count_dropped(&self, n: usize, s: &mut Scratch) {
+        s.top[..n].fill(f32::NEG_INFINITY);
+        for i in 0..self.k {
+            for (t, &v) in s.top[..n].iter_mut().zip(&s.r[i * CHUNK..i * CHUNK + n]) {
+                *t = t.max(v);
+            }
+        }
+        let (abs, rel) = (self.config.shadow_abs, self.config.shadow_rel);
+        for t in &mut s.top[..n] {
+            *t = abs.max(rel * *t);
+        }
+        s.dropped[..n].fill(0);
+        for i in 0..self.k {
+            let r = &s.r[i * CHUNK..i * CHUNK + n];
+            let sat = &s.sat[i * CHUNK..i * CHUNK + n];
+            for (((d, &t), &v), &q) in s.dropped[..n].iter_mut().zip(&s.top[..n]).zip(r).zip(sat) {
+                *d += ((v < t) as u32) | q as u32;
+            }
+        }
+        if self.batch_subsets {
+            // The same test as `usable_bits` (a NaN reading is neither dropped nor usable).
+            s.bits[..n].fill(0);
+            for i in 0..self.k {
+                let r = &s.r[i * CHUNK..i * CHUNK + n];
+                let sat = &s.sat[i * CHUNK..i * CHUNK + n];
+                for (((b, &t), &v), &q) in s.bits[..n].iter_mut().zip(&s.top[..n]).zip(r).zip(sat) {
+                    *b |= (((v >= t) & (q == 0)) as u32) << i;
+                }
+            }
+        }
+    }
+
+    /// The bitmask of usable lights of pixel `j` (robust mode, after [`Self::count_dropped`]).
+    pub(super) fn usable_bits(&self, j: usize, s: &Scratch) -> u128 {
+        let threshold = s.top[j];
+        (0..self.k).fold(0u128, |bits, i| {
+            let ok = s.r[i * CHUNK + j] >= threshold && s.sat[i * CHUNK + j] == 0;
+            bits | ((ok as u128) << i)
+        })
+    }
+
+    /// Normal, albedo, confidence and lights used for pixel `j`, solved from its usable lights.
+    pub(super) fn finish_subset(
+        &self,
+        j: usize,
+        s: &Scratch,
+        subsets: &Subsets,
+        local: &mut HashMap<u128, SubsetSolve>,
+    ) -> (Vec3, Vec3, f32, usize) {
+        let invalid = |used| (Vec3::ZERO, Vec3::ZERO, 0.0, used);
+        let bits = self.usable_bits(j, s);
+        let used = bits.count_ones() as usize;
+        if used < self.config.min_lights {
+            return invalid(used);
+        }
+        let subset = subsets.get(bits, local);
+        if !subset.usable {
+            return invalid(used);
+        }
+        let (g, rr) = self.solve_subset(j, bits, subset, s);
+        let len = Vec3::from(g).length();
+        if !(len > MIN_ALBEDO && len < f32::INFINITY) {
+            return invalid(used);
+        }
+        let normal = Vec3::from(g) / len;
+        let confidence = self.subset_weight(used, subset) * residual_factor(rr, subset.fitted_sq(g));
+        let albedo = if self.rgb { self.rgb_albedo(j, bits, normal, s) } else { Vec3::splat(len) };
+        (normal, albedo, confidence, used)
+    }
+
+    /// [`Self::finish_subset`] for the `count` pixels listed in `s.pending` (robust, at most
+    /// [`DENSE_MAX_LIGHTS`](super::DENSE_MAX_LIGHTS) lights, `s.bits` filled), written to `out`: the pixels are grouped by
+    /// their subset (usually one or two per chunk, as shadows are coherent) and each group is
+    /// solved with that subset's columns in registers, in the same operations and order as
+    /// [`Self::solve_subset`], so the bits match the per-pixel path.
+    pub(super) fn finish_subsets<A: AlbedoTexel>(
+        &self,
+        mut count: usize,
+        s: &mut Scratch,
+        subsets: &Subsets,
+        local: &mut HashMap<u128, SubsetSolve>,
+        out: &mut Out<A>,
+        stats: &mut SolveStats,
+    ) {
+        while count > 0 {
+            let bits = s.bits[s.pending[0] as usize];
+            // Split the pending pixels into this subset's group and the rest (kept in place:
+            // the rest's write index never passes the read index).
+            let (mut grouped, mut rest) = (0, 0);
+            for t in 0..count {
+                let j = s.pending[t];
+                if s.bits[j as usize] == bits {
+                    s.group[grouped] = j;
+                    grouped += 1;
+                } else {
+                    s.pending[rest] = j;
+                    rest += 1;
+                }
+            }
+            self.solve_group(bits, grouped, s, subsets, local, out);
+            stats.lights_used[bits.count_ones() as usize] += grouped;
+            count = rest;
+        }
+    }
+
+    /// Solves the `m` pixels of `s.group`, whose usable lights are `bits`, into `out`.
+    pub(super) fn solve_group<A: AlbedoTexel>(
+        &self,
+        bits: u32,
+        m: usize,
+        s: &mut Scratch,
+        subsets: &Subsets,
+        local: &mut HashMap<u128, SubsetSolve>,
+        out: &mut Out<A>,
+    ) {
+        let used = bits.count_ones() as usize;
+        let subset = if used < self.config.min_lights { None } else { Some(subsets.get(bits as u128, local)) };
+        let Some(subset) = subset.filter(|s| s.usable) else {
+            for &j in &s.group[..m] {
+                let j = j as usize;
+                (out.normals[j], out.albedo[j], out.confidence[j]) = (Vec3::ZERO, A::ZERO, 0.0);
+            }
+            return;
+        };
+        {
+            let Scratch { r, group, bx, by, bz, brr, .. } = &mut *s;
+            let group = &group[..m];
+            let (gx, gy, gz, rr) = (&mut bx[..m], &mut by[..m], &mut bz[..m], &mut brr[..m]);
+            gx.fill(0.0);
+            gy.fill(0.0);
+            gz.fill(0.0);
+            rr.fill(0.0);
+            let lights = (0..self.k).filter(|i| bits >> i & 1 == 1);
+            for (i, c) in lights.zip(&subset.cols) {
+                let row: &[f32; CHUNK] = r[i * CHUNK..(i + 1) * CHUNK].try_into().expect("CHUNK readings per light");
+                for t in 0..m {
+                    // `& (CHUNK - 1)`: a no-op (pixels index a chunk) that drops the bounds check.
+                    let v = row[group[t] as usize & (CHUNK - 1)];
+                    gx[t] = gx[t] + c[0] * v;
+                    gy[t] = gy[t] + c[1] * v;
+                    gz[t] = gz[t] + c[2] * v;
+                    rr[t] = rr[t] + v * v;
+                }
+            }
+        }
+        let s: &Scratch = s;
+        let (group, gx, gy, gz, rr) = (&s.group[..m], &s.bx[..m], &s.by[..m], &s.bz[..m], &s.brr[..m]);
+        let weight = self.subset_weight(used, subset);
+        for t in 0..m {
+            let j = group[t] as usize;
+            let g = [gx[t], gy[t], gz[t]];
+            let len = Vec3::from(g).length();
+            let (normal, albedo, confidence) = if len > MIN_ALBEDO && len < f32::INFINITY {
+                let normal = Vec3::from(g) / len;
+                let confidence = weight * residual_factor(rr[t], subset.fitted_sq(g));
+                let albedo = if self.rgb { self.rgb_albedo(j, bits as u128, normal, s) } else { Vec3::splat(len) };
+                (normal, albedo, confidence)
+            } else {
+                (Vec3::ZERO, Vec3::ZERO, 0.0)
+            };
+            out.normals[j] = normal;
+            out.albedo[j] = A::rgb(albedo);
+            out.confidence[j] = confidence;
+        }
+    }
+
+    /// The confidence factors of a pixel solved from `used` lights forming `subset`: the
+    /// fraction of lights used times `min(1, cond(L_all) / cond(L_used))`.
+    pub(super) fn subset_weight(&self, used: usize, subset: &SubsetSolve) -> f32 {
+        used as f32 / self.k as f32 * (self.full.condition / subset.condition).min(1.0) as f32
+    }
+
+    pub(super) fn full_bits(&self) -> u128 {
+        if self.k == 128 { u128::MAX } else { (1u128 << self.k) - 1 }
+    }
+
+    /// `g = P_S r_S` and `sum r_S^2` for pixel `j` over the lights in `bits`.
+    pub(super) fn solve_subset(&self, j: usize, bits: u128, subset: &SubsetSolve, s: &Scratch) -> ([f32; 3], f32) {
+        let (mut g, mut rr) = ([0.0f32; 3], 0.0f32);
+        let used = (0..self.k).filter(|i| bits >> i & 1 == 1);
+        for (i, c) in used.zip(&subset.cols) {
+            let v = s.r[i * CHUNK + j];
+            g = [g[0] + c[0] * v, g[1] + c[1] * v, g[2] + c[2] * v];
+            rr += v * v;
+        }
+        (g, rr)
+    }
+
+    /// Per-channel least-squares albedo `sum r_ci d_i / sum d_i^2`, `d_i = n . L_i`, over `bits`.
+    pub(super) fn rgb_albedo(&self, j: usize, bits: u128, normal: Vec3, s: &Scratch) -> Vec3 {
+        let (mut num, mut den) = (Vec3::ZERO, 0.0f32);
+        for (i, l) in self.lights.iter().enumerate().filter(|(i, _)| bits >> i & 1 == 1) {
+            let d = normal.dot(*l);
+            num += Vec3::from(s.rgb[i * CHUNK + j]) * d;
+            den += d * d;
+        }
+        if den > 0.0 { (num / den).max(Vec3::ZERO) } else { Vec3::ZERO }
+    }
+}

@@ -1,0 +1,190 @@
+//! Per-pixel photometric-stereo solves (Haro et al. 2001, section 3, equation 1).
+//!
+//! Each pixel seen under k >= 3 lights gives `albedo * E_i * (n . L_i) = I_i`. Writing
+//! `g = albedo * n` and `r_i = I_i / E_i` (the reading divided by the light's intensity, after
+//! ambient subtraction, as a fraction of full scale), the readings are linear in `g`: `L g = r`.
+//!
+//! * [`Method::LeastSquares`] is the paper's solve: one 3 x k pseudo-inverse `P = (L^T L)^-1 L^T`
+//!   serves every pixel. It is computed once in f64 and applied in f32, with the per-light
+//!   intensity division and the integer-to-linear scale folded into it
+//!   (`P'_ji = P_ji / (full_scale E_i)`), so the kernel is a 3 x k matrix-vector product on the
+//!   raw samples. Pixels are processed in bands of rows in parallel and, within a row, in chunks
+//!   of [`CHUNK`] pixels laid out structure-of-arrays so the loops vectorise (compiled twice:
+//!   portable and, chosen at run time, AVX2 + FMA; both use `mul_add`, so both give the same
+//!   bits). 8-bit and 16-bit sRGB photos go through a lookup table instead of the folded scale.
+//!   With AVX2 + FMA, linear grey photos without an ambient frame (the common case) take a fused
+//!   kernel instead (`fused::step`): 16 pixels at a time from the samples to the interleaved
+//!   output in registers, the same operations in the same order as the chunk path, so the bits
+//!   still match the portable build. When all lights have the same intensity, the per-light
+//!   scale is taken out of `sum r^2` (one multiplication per reading fewer, in both builds).
+//! * [`Method::Robust`] (the default) drops, per pixel, the readings that are shadowed or
+//!   saturated and solves from the remaining lights with the pseudo-inverse of that subset.
+//!   A reading is *shadowed* when `r_i < max(shadow_abs, shadow_rel * max_j r_j)`: below an
+//!   absolute floor and also below a fraction of the pixel's own brightest reading (a cast shadow
+//!   on a bright pixel is far above the noise floor but far below its neighbours in the stack). A
+//!   reading is *saturated* when its raw stored value is at or above `saturation * full_scale`
+//!   (any channel, before ambient subtraction). Subset pseudo-inverses are cached per bitmask:
+//!   a dense lazily filled table for k <= [`DENSE_MAX_LIGHTS`], a per-worker map capped at
+//!   [`SolveConfig::cache_capacity`] entries (cleared when full) above that. Entries are pure
+//!   functions of the bitmask, so results never depend on the cache or the thread count.
+//!   Pixels with all readings usable take the vectorised least-squares result unchanged; in the
+//!   fused kernel a step of 16 pixels is solved in registers unless one of its readings is
+//!   dropped (a reading is below the threshold iff the pixel's dimmest one is). Shadows are
+//!   spatially coherent, so a step whose 16 pixels all drop the same readings is solved in
+//!   registers too, with that subset's columns (`fused::subset_step`); other such steps go
+//!   through the chunk path. There, with k <= [`DENSE_MAX_LIGHTS`], the pixels that drop
+//!   readings are grouped by subset and each group is solved with its subset's columns
+//!   (`Plan::finish_subsets`); with more lights, one pixel at a time. All three subset paths
+//!   use the same operations in the same order (`g = g + c_i r_i` over the used lights, no
+//!   fused multiply-add; `n = g / |g|`), so they give the same bits.
+//!
+//! RGB photos: the normal comes from the luminance-weighted (Rec. 709) sum of the
+//! intensity-divided channels; then each channel's albedo is the least-squares fit
+//! `sum_i r_ci (n . L_i) / sum_i (n . L_i)^2` over the lights used. Grey photos give `|g|` as the
+//! albedo, one value per texel ([`AlbedoMap::Gray`]; a grey photo is divided by the luminance of
+//! each light's intensity).
+//!
+//! Confidence, in [0, 1], is 0 for invalid pixels and otherwise the product of
+//! * the fraction of the rig's lights used,
+//! * `min(1, cond(L_all) / cond(L_used))`, how much worse the used subset is conditioned, and
+//! * `1 / (1 + (rho / 0.1)^2)` with `rho` the relative residual `|r - L g| / |r|` over the lights
+//!   used (a Lambertian, noise-free pixel has `rho = 0`; 10% residual halves the confidence).
+//!
+//! With least squares the first two factors are 1.
+//!
+//! Every pixel is computed by the same arithmetic whatever the thread count or cache state, so
+//! results are bitwise deterministic. Non-finite or all-black readings give invalid pixels
+//! (`(0, 0, 0)` normal, zero albedo and confidence), never NaN. [`solve_into`] reuses the maps of
+//! an earlier solution (large fresh maps cost a page fault per 4 KiB, which dominates the solve).
+
+//!
+//! The module's files follow its seams: [`PhotoStack`] (`stack.rs`), the parameters and
+//! results (`config.rs`, `solution.rs`), subset pseudo-inverses (`subsets.rs`), stored samples
+//! to readings (`sources.rs`), the per-solve plan and its all-lights chunk path (`plan.rs`), the
+//! paths of pixels that drop readings (`finish.rs`), the chunk kernels (`chunk.rs`), the fused
+//! AVX2 kernel (`fused.rs`) and the unit tests (`tests.rs`).
+
+mod chunk;
+mod config;
+mod finish;
+#[cfg(target_arch = "x86_64")]
+mod fused;
+mod plan;
+mod solution;
+mod sources;
+mod stack;
+mod subsets;
+#[cfg(test)]
+mod tests;
+
+use glam::Vec3;
+use skinkit_maps::{Grid, NormalMap, Transfer};
+
+pub(crate) use chunk::fresh_zeroed_vec3;
+pub use config::{Method, Progress, SolveConfig, no_progress};
+use plan::Plan;
+pub use solution::{AlbedoMap, Solution, SolveStats};
+pub use stack::PhotoStack;
+
+use crate::{Error, Result, Rig};
+
+/// Pixels per structure-of-arrays chunk in the kernels.
+pub const CHUNK: usize = 64;
+/// Most lights a rig may have (subsets are `u128` bitmasks).
+pub const MAX_LIGHTS: usize = 128;
+/// Rigs with at most this many lights cache every subset in a dense `2^k` table.
+pub const DENSE_MAX_LIGHTS: usize = 12;
+/// Rows per parallel work item.
+pub(super) const BAND_ROWS: usize = 8;
+/// Smallest `|g|` (albedo as a fraction of full scale) that still defines a normal.
+pub(super) const MIN_ALBEDO: f32 = 1e-6;
+/// Relative residual at which the residual factor of the confidence is 1/2.
+pub(super) const RESIDUAL_SCALE: f32 = 0.1;
+/// Rec. 709 luminance weights.
+pub(super) const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// Solves for normals, albedo and confidence from `stack` lit by `rig`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the photo count differs from the rig's light count, the rig has
+/// more than [`MAX_LIGHTS`] lights, or `config` is out of range; [`Error::BadRig`] when a light has
+/// a zero direction or a non-positive intensity, or the lights cannot determine a normal (fewer
+/// than 3, coplanar, or a condition number above `config.max_condition`).
+pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig, progress: &dyn Progress) -> Result<Solution> {
+    // Empty maps: `solve_into` allocates fresh ones of the right size and kind, untouched until
+    // the parallel bands write them.
+    let mut solution = Solution {
+        normals: NormalMap::flat(0, 0),
+        albedo: AlbedoMap::Gray(Grid::filled(0, 0, 0.0)),
+        confidence: Grid::filled(0, 0, 0.0),
+        stats: SolveStats::default(),
+    };
+    solve_into(stack, rig, config, progress, &mut solution)?;
+    Ok(solution)
+}
+
+/// [`solve`] into an existing solution, reusing its maps when they have the stack's size (for
+/// repeated solves of large stacks: fresh maps cost a page fault per 4 KiB written).
+///
+/// # Errors
+/// As [`solve`]; `out` is unchanged on error.
+pub fn solve_into(
+    stack: &PhotoStack,
+    rig: &Rig,
+    config: &SolveConfig,
+    progress: &dyn Progress,
+    out: &mut Solution,
+) -> Result<()> {
+    config.validate()?;
+    let lights = check_rig(stack, rig)?;
+    let table = srgb_table(stack);
+    let plan = Plan::new(stack, rig, config, lights, table.as_deref())?;
+    plan.run(stack, progress, out);
+    Ok(())
+}
+
+/// Unit light directions of `rig`, after checking it against the stack and the config.
+fn check_rig(stack: &PhotoStack, rig: &Rig) -> Result<Vec<Vec3>> {
+    let k = rig.lights.len();
+    if k != stack.len() {
+        return Err(Error::InvalidInput(format!("rig has {k} lights but {} photos were given", stack.len())));
+    }
+    if k > MAX_LIGHTS {
+        return Err(Error::InvalidInput(format!("rig has {k} lights; at most {MAX_LIGHTS} are supported")));
+    }
+    if k < 3 {
+        return Err(Error::BadRig(format!("rig has {k} lights; a normal needs at least 3")));
+    }
+    rig.lights
+        .iter()
+        .enumerate()
+        .map(|(i, light)| {
+            let d = light.direction.normalize_or_zero();
+            if d == Vec3::ZERO || !d.is_finite() {
+                return Err(Error::BadRig(format!(
+                    "rig light {}: direction {} has zero length",
+                    i + 1,
+                    light.direction
+                )));
+            }
+            if !(light.intensity.min_element() > 0.0 && light.intensity.is_finite()) {
+                return Err(Error::BadRig(format!(
+                    "rig light {}: intensity {} must be positive",
+                    i + 1,
+                    light.intensity
+                )));
+            }
+            Ok(d)
+        })
+        .collect()
+}
+
+/// A stored-value to linear table for 8- and 16-bit sRGB photos.
+fn srgb_table(stack: &PhotoStack) -> Option<Vec<f32>> {
+    let first = &stack.photos()[0];
+    if first.transfer() != Transfer::Srgb || first.bit_depth() == 32 {
+        return None;
+    }
+    let full = first.samples().full_scale();
+    Some((0..=full as usize).map(|v| skinkit_maps::encoding::srgb_to_linear(v as f32 / full)).collect())
+}

@@ -1,0 +1,148 @@
+//! What a solve returns: [`Solution`], [`AlbedoMap`], [`SolveStats`], and the albedo texel types.
+
+use glam::Vec3;
+use skinkit_maps::{ColorMap, NormalMap, ScalarMap};
+
+use super::chunk::{fresh_zeroed, fresh_zeroed_vec3};
+
+/// Counts gathered during a solve.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SolveStats {
+    /// Texels in the map.
+    pub pixels: usize,
+    /// Texels with no normal (masked out, too few lights, ill-conditioned, black).
+    pub invalid_count: usize,
+    /// Texels outside the mask.
+    pub masked_count: usize,
+    /// `lights_used[m]`: unmasked texels with `m` usable readings (`len = k + 1`).
+    pub lights_used: Vec<usize>,
+}
+
+impl SolveStats {
+    pub(super) fn empty(k: usize) -> Self {
+        SolveStats { lights_used: vec![0; k + 1], ..SolveStats::default() }
+    }
+    pub(super) fn merge(mut self, other: SolveStats) -> Self {
+        self.pixels += other.pixels;
+        self.invalid_count += other.invalid_count;
+        self.masked_count += other.masked_count;
+        for (a, b) in self.lights_used.iter_mut().zip(other.lights_used) {
+            *a += b;
+        }
+        self
+    }
+}
+
+/// The result of [`solve`].
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// Unit normals, `(0, 0, 0)` where invalid.
+    pub normals: NormalMap,
+    /// Linear albedo as a fraction of full scale per unit light intensity; zero where invalid.
+    /// One value per texel for grey photos, RGB for colour photos.
+    pub albedo: AlbedoMap,
+    /// Confidence in [0, 1] (see the module docs); 0 where invalid.
+    pub confidence: ScalarMap,
+    pub stats: SolveStats,
+}
+
+/// A solution's albedo: one value per texel for grey photos (a third of the memory of RGB), or
+/// one linear RGB triple per texel for colour photos.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AlbedoMap {
+    Gray(ScalarMap),
+    Rgb(ColorMap),
+}
+
+impl AlbedoMap {
+    /// `(width, height)`.
+    pub fn size(&self) -> (usize, usize) {
+        match self {
+            AlbedoMap::Gray(m) => m.size(),
+            AlbedoMap::Rgb(m) => m.size(),
+        }
+    }
+    pub fn width(&self) -> usize {
+        self.size().0
+    }
+    pub fn height(&self) -> usize {
+        self.size().1
+    }
+    /// The albedo at `(x, y)` as RGB (a grey value splatted to all three channels).
+    pub fn get(&self, x: usize, y: usize) -> Vec3 {
+        match self {
+            AlbedoMap::Gray(m) => Vec3::splat(*m.get(x, y)),
+            AlbedoMap::Rgb(m) => *m.get(x, y),
+        }
+    }
+    /// The map as RGB (grey values splatted); a copy.
+    pub fn to_color_map(&self) -> ColorMap {
+        match self {
+            AlbedoMap::Gray(m) => m.map(|&v| Vec3::splat(v)),
+            AlbedoMap::Rgb(m) => m.clone(),
+        }
+    }
+    /// The grey map, when the photos were grey.
+    pub fn as_gray(&self) -> Option<&ScalarMap> {
+        match self {
+            AlbedoMap::Gray(m) => Some(m),
+            AlbedoMap::Rgb(_) => None,
+        }
+    }
+    /// The RGB map, when the photos were RGB.
+    pub fn as_rgb(&self) -> Option<&ColorMap> {
+        match self {
+            AlbedoMap::Gray(_) => None,
+            AlbedoMap::Rgb(m) => Some(m),
+        }
+    }
+}
+
+/// An albedo texel as stored in the output: `f32` for grey stacks, `Vec3` for RGB stacks.
+pub(super) trait AlbedoTexel: Copy + Send + Sync {
+    const ZERO: Self;
+    /// A grey albedo.
+    fn gray(v: f32) -> Self;
+    /// An RGB albedo (grey stacks only ever pass splatted values; `f32` keeps `x`).
+    fn rgb(c: Vec3) -> Self;
+    /// A zero-filled vector of `n` texels, fresh from the allocator (see [`fresh_zeroed`]).
+    fn fresh(n: usize) -> Vec<Self>;
+    /// The texels as grey values, when they are grey (the fused kernel writes only those).
+    fn gray_slice(texels: &mut [Self]) -> Option<&mut [f32]>;
+}
+
+impl AlbedoTexel for f32 {
+    const ZERO: Self = 0.0;
+    #[inline(always)]
+    fn gray(v: f32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn rgb(c: Vec3) -> Self {
+        c.x
+    }
+    fn fresh(n: usize) -> Vec<Self> {
+        fresh_zeroed(n)
+    }
+    fn gray_slice(texels: &mut [Self]) -> Option<&mut [f32]> {
+        Some(texels)
+    }
+}
+
+impl AlbedoTexel for Vec3 {
+    const ZERO: Self = Vec3::ZERO;
+    #[inline(always)]
+    fn gray(v: f32) -> Self {
+        Vec3::splat(v)
+    }
+    #[inline(always)]
+    fn rgb(c: Vec3) -> Self {
+        c
+    }
+    fn fresh(n: usize) -> Vec<Self> {
+        fresh_zeroed_vec3(n)
+    }
+    fn gray_slice(_: &mut [Self]) -> Option<&mut [f32]> {
+        None
+    }
+}
