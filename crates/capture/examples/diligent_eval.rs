@@ -7,9 +7,9 @@
 //! ```
 //!
 //! `8` and `10` pick well-spread lights: the one nearest the camera axis, then repeatedly the
-//! light farthest in angle from those picked (the indices are printed). The least-squares and
-//! threshold solvers run through `solve::solve`; the per-pixel robust fits through
-//! `robust::fit_pixel` on the same readings (channels divided by the light's intensity, Rec. 709
+//! light farthest in angle from those picked (the indices are printed). The methods of
+//! `solve::solve` run on the photos; the per-pixel robust estimators (the default, trimmed, and
+//! the Cauchy and L1 reweightings) through `robust::fit_pixel` on the same readings (channels divided by the light's intensity, Rec. 709
 //! luma; a pixel is saturated when a channel reaches 99.5 % of full scale). Times are wall
 //! clock for the whole image, a rough guide: the criterion bench `solve` measures throughput.
 
@@ -37,7 +37,12 @@ fn main() -> Result<(), Failure> {
     let picked = pick(&object.rig, args.get(1).map_or("all", |s| s.as_str()))?;
     let names: Vec<String> = picked.iter().map(|i| (i + 1).to_string()).collect();
     println!("{}: {} lights ({})", dir.display(), picked.len(), names.join(","));
-    for (name, method) in [("least squares", Method::LeastSquares), ("threshold (old robust)", Method::Robust)] {
+    let methods = [
+        ("least squares", Method::LeastSquares),
+        ("threshold (old robust)", Method::Threshold),
+        ("robust (solve)", Method::Robust),
+    ];
+    for (name, method) in methods {
         let (error, secs) = object.solve(&picked, method)?;
         println!("{name:>24}: {error:6.2} deg  {secs:6.3} s");
     }

@@ -67,6 +67,7 @@
 mod chunk;
 mod config;
 mod finish;
+mod fit;
 #[cfg(target_arch = "x86_64")]
 mod fused;
 mod plan;
