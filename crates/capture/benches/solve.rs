@@ -18,7 +18,14 @@ fn bench_solve(c: &mut Criterion) {
         .measurement_time(std::time::Duration::from_secs(4))
         .warm_up_time(std::time::Duration::from_secs(1));
     group.throughput(Throughput::Elements((size * size) as u64));
-    for (method, shadows) in [(Method::LeastSquares, false), (Method::Robust, false), (Method::Robust, true)] {
+    let cases = [
+        (Method::LeastSquares, false),
+        (Method::Robust, false),
+        (Method::Robust, true),
+        (Method::Threshold, false),
+        (Method::Threshold, true),
+    ];
+    for (method, shadows) in cases {
         let stack = photos(size, &rig, shadows);
         let config = SolveConfig { method, ..SolveConfig::default() };
         let name = format!("{method:?}{}", if shadows { "_shadows" } else { "" });

@@ -7,6 +7,7 @@
 //! * [`solve`]: the least-squares and robust per-pixel solves (distant lights); [`near`]: near
 //!   point lights; [`readings`]: the rules on readings both share.
 //! * [`session`]: a whole capture session as one call (decode, solve, detrend, statistics).
+//! * [`robust`]: the robust per-pixel fit (rank-trimmed start, reweighting, inlier refit).
 //! * [`detrend`]: removal of the mold's low-frequency tilt (mean normal of a block rotated to +Z).
 
 pub mod detrend;
@@ -16,6 +17,7 @@ pub mod near;
 pub mod readings;
 pub mod rig;
 pub mod session;
+pub mod robust;
 pub mod solve;
 pub mod sphere;
 

@@ -12,10 +12,12 @@
 //! light i at `P_i` gives the unit direction `L_i(x) = (P_i - x) / |P_i - x|` and the irradiance
 //! `E_i * |P_i|^2 / |P_i - x|^2` (the rig's intensity is the irradiance at the centre). Each pixel
 //! then has its own light matrix, so instead of a cached pseudo-inverse it solves the 3x3 normal
-//! equations `(sum L_i L_i^T) g = sum r_i L_i` over its usable lights, in f64. Readings are dropped
-//! by the rules of [`crate::readings`], the same as [`crate::solve`]'s robust method (shadow
-//! thresholds absolute and relative to the pixel's brightest reading, saturation on the raw
-//! value); with [`Method::LeastSquares`] every reading is used.
+//! equations `(sum L_i L_i^T) g = sum r_i L_i` over its usable lights, in f64. Readings are used
+//! as [`crate::solve`] uses them for each method: [`Method::Threshold`] drops those under the
+//! shadow thresholds of [`crate::readings`] (absolute and relative to the pixel's brightest reading) or saturated;
+//! [`Method::Robust`] keeps least squares where it explains every reading and otherwise runs
+//! [`crate::robust::fit_directions`] with the pixel's own directions; with
+//! [`Method::LeastSquares`] every reading is used.
 
 use glam::{DMat3, DVec3, Vec3};
 use nalgebra::Matrix3;
@@ -23,6 +25,7 @@ use rayon::prelude::*;
 use skinkit_maps::{Channels, ColorMap, Grid, NormalMap, ScalarMap};
 
 use crate::readings::{self, LUMA};
+use crate::robust::{self, RobustConfig};
 use crate::solve::{AlbedoMap, Method, PhotoStack, Solution, SolveConfig, SolveStats};
 use crate::{Error, Result, Rig};
 
@@ -153,8 +156,51 @@ impl Pixel {
     ) -> Option<(Vec3, Vec3, f32, usize)> {
         self.read(stack, lights, config, i, x, rgb);
         if config.method == Method::Robust {
+            return self.robust(config, rgb);
+        }
+        if config.method == Method::Threshold {
             self.drop_shadows(config);
         }
+        self.least_squares(config, rgb)
+    }
+
+    /// [`Method::Robust`], the rules of the directional solve: least squares when no reading is
+    /// dropped and its relative residual is within [`robust::AGREEMENT`], else the robust fit
+    /// (its confidence without the conditioning factor, which near lights never had).
+    fn robust(&mut self, config: &SolveConfig, rgb: bool) -> Option<(Vec3, Vec3, f32, usize)> {
+        let all = self.usable.clone();
+        self.drop_shadows(config);
+        if self.usable == all && self.usable.iter().all(|u| *u) {
+            let ls = self.least_squares(config, rgb);
+            if let Some(ls) = ls
+                && ls.2 as f64 >= 1.0 / (1.0 + (robust::AGREEMENT as f64 / 0.1).powi(2))
+            {
+                return Some(ls);
+            }
+        }
+        let value: Vec<f32> = self.value.iter().map(|&v| v as f32).collect();
+        let saturated: Vec<bool> = all.iter().map(|u| !u).collect();
+        let dirs: Vec<Vec3> = self.dirs.iter().map(|d| d.as_vec3()).collect();
+        let fit_config = RobustConfig {
+            shadow_abs: config.shadow_abs,
+            min_lights: config.min_lights,
+            max_condition: config.max_condition,
+            ..RobustConfig::default()
+        };
+        let f = robust::fit_directions(&value, &saturated, &dirs, f64::INFINITY, &fit_config);
+        if f.used() == 0 {
+            return None;
+        }
+        for (j, u) in self.usable.iter_mut().enumerate() {
+            *u = f.inliers >> j & 1 == 1;
+        }
+        let albedo = if rgb { self.rgb_albedo(f.normal.as_dvec3()).as_vec3() } else { Vec3::splat(f.albedo) };
+        Some((f.normal, albedo, f.confidence, f.used()))
+    }
+
+    /// Least squares over the usable readings.
+    fn least_squares(&self, config: &SolveConfig, rgb: bool) -> Option<(Vec3, Vec3, f32, usize)> {
+        let lights = &self.dirs;
         let used = self.usable.iter().filter(|u| **u).count();
         if used < config.min_lights {
             return None;

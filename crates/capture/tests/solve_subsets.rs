@@ -1,4 +1,4 @@
-//! The robust solver on photos whose shadows and saturated readings come in runs of 16 pixels
+//! The threshold solver on photos whose shadows and saturated readings come in runs of 16 pixels
 //! (as cast shadows do), which the solver handles a run or a group of pixels at a time, against
 //! a naive per-pixel solve in f64 (nalgebra SVD) from the readings it should keep.
 
@@ -80,7 +80,7 @@ fn runs_of_dropped_readings_match_a_naive_subset_solve() {
             })
             .collect();
         let stack = PhotoStack::new(photos, (0..K).map(|i| format!("{i}.png")).collect()).unwrap();
-        let config = SolveConfig { method: Method::Robust, ..SolveConfig::default() };
+        let config = SolveConfig { method: Method::Threshold, ..SolveConfig::default() };
         let sol = solve(&stack, &rig, &config, &no_progress).unwrap();
         let AlbedoMap::Gray(albedo) = &sol.albedo else { panic!("grey photos give grey albedo") };
         let mut counts = vec![0; K + 1];

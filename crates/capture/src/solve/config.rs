@@ -7,9 +7,22 @@ use crate::{Error, Result};
 pub enum Method {
     /// One least-squares solve over all lights (the paper).
     LeastSquares,
-    /// Drop shadowed and saturated readings per pixel, solve from the rest.
+    /// Least squares where it explains the readings; elsewhere the rank-trimmed fit of
+    /// [`crate::robust`] (shadow threshold from the pixel's own readings, the brightest 40 % and
+    /// darkest 10 % of the lit readings left out of the start, every light that agrees refitted).
     #[default]
     Robust,
+    /// The earlier robust solve: drop readings under the shadow thresholds (`shadow_abs`,
+    /// `shadow_rel` of the brightest) or saturated, least squares on the rest. Less accurate than
+    /// [`Method::Robust`] on every case measured, kept for speed on shadowed photos.
+    Threshold,
+}
+
+impl Method {
+    /// Whether the method drops shadowed and saturated readings (all but least squares).
+    pub(crate) fn drops_readings(self) -> bool {
+        self != Method::LeastSquares
+    }
 }
 
 /// Parameters of [`solve`]; see the module docs for how the thresholds are applied.

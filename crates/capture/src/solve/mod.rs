@@ -17,7 +17,11 @@
 //!   output in registers, the same operations in the same order as the chunk path, so the bits
 //!   still match the portable build. When all lights have the same intensity, the per-light
 //!   scale is taken out of `sum r^2` (one multiplication per reading fewer, in both builds).
-//! * [`Method::Robust`] (the default) drops, per pixel, the readings that are shadowed or
+//! * [`Method::Robust`] (the default) runs the detection of [`Method::Threshold`] below and the
+//!   all-lights solve; a pixel that drops a reading or whose relative residual exceeds
+//!   [`crate::robust::AGREEMENT`] is then fitted by [`crate::robust::fit_pixel`] from its loaded
+//!   readings (`fit.rs`; the fused kernel hands such steps to the chunk path).
+//! * [`Method::Threshold`] drops, per pixel, the readings that are shadowed or
 //!   saturated and solves from the remaining lights with the pseudo-inverse of that subset.
 //!   A reading is *shadowed* when `r_i < max(shadow_abs, shadow_rel * max_j r_j)`: below an
 //!   absolute floor and also below a fraction of the pixel's own brightest reading (a cast shadow
@@ -67,6 +71,7 @@
 mod chunk;
 mod config;
 mod finish;
+mod fit;
 #[cfg(target_arch = "x86_64")]
 mod fused;
 mod plan;

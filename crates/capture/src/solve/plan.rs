@@ -11,6 +11,7 @@ use super::chunk::{
     accumulate_all, accumulate_rows, fresh_zeroed_vec3, raw_values, residual_factor, take_sized, write_all_lights,
 };
 #[cfg(target_arch = "x86_64")]
+use super::fit::Fit;
 use super::fused;
 use super::solution::AlbedoTexel;
 use super::sources::{Linearise, Raw, Source, as_f32, as_u8, as_u16};
@@ -26,6 +27,9 @@ pub(super) struct Plan<'a> {
     pub(super) k: usize,
     pub(super) rgb: bool,
     pub(super) robust: bool,
+    /// [`Method::Robust`]: pixels that drop a reading or whose all-lights residual exceeds
+    /// [`robust::AGREEMENT`] are fitted by [`robust::fit_pixel`] ([`Self::finish_fit`]).
+    pub(super) fit: Option<Fit>,
     pub(super) config: &'a SolveConfig,
     pub(super) lights: Vec<Vec3>,
     pub(super) sources: Vec<Source<'a>>,
@@ -145,12 +149,14 @@ impl<'a> Plan<'a> {
         let uniform = sources_scales.iter().all(|s| s.to_bits() == sources_scales[0].to_bits());
         let folded = full.cols.iter().zip(&sources).map(|(c, s)| c.map(|v| v * s.gray_scale)).collect();
         let rgb = first.channels() == Channels::Rgb;
-        let robust = config.method == Method::Robust;
+        let robust = config.method.drops_readings();
+        let fit = (config.method == Method::Robust).then(|| Fit::new(&lights, config)).transpose()?;
         Ok(Plan {
             width: stack.width(),
             k: lights.len(),
             rgb,
             robust,
+            fit,
             config,
             lights,
             sources,
@@ -163,7 +169,7 @@ impl<'a> Plan<'a> {
             ones: vec![1.0; k],
             fast_ls: !robust && !rgb && first.transfer() == Transfer::Linear,
             fused: !rgb && first.transfer() == Transfer::Linear && stack.ambient().is_none(),
-            batch_subsets: robust && k <= DENSE_MAX_LIGHTS,
+            batch_subsets: config.method == Method::Threshold && k <= DENSE_MAX_LIGHTS,
             mask: stack.mask().map(|m| m.as_slice()),
         })
     }
@@ -325,6 +331,12 @@ impl<'a> Plan<'a> {
                 fused::Step::Declined
             };
             match solved {
+                // The robust fit takes over pixels the all-lights solve does not explain.
+                fused::Step::Solved(_)
+                    if self.fit.as_ref().is_some_and(|f| chunk.confidence.iter().any(|&c| f.needed(c, 0))) =>
+                {
+                    self.solve_chunk(p, chunk, scratch, subsets, &mut stats)
+                }
                 fused::Step::Solved(invalid) => {
                     stats.lights_used[self.k] += STEP;
                     stats.invalid_count += invalid as usize;
@@ -421,7 +433,10 @@ impl<'a> Plan<'a> {
             }
         }
         let invalid = self.normalise_all(n, scratch);
-        let any_dropped = self.robust && scratch.dropped[..n].iter().any(|&d| d > 0);
+        let any_dropped = match &self.fit {
+            Some(fit) => (0..n).any(|j| fit.needed(scratch.conf[j], scratch.dropped[j])),
+            None => self.robust && scratch.dropped[..n].iter().any(|&d| d > 0),
+        };
         if !self.rgb && inside.is_none() && !any_dropped {
             write_all_lights(n, scratch, out);
             stats.lights_used[self.k] += n;
@@ -440,7 +455,10 @@ impl<'a> Plan<'a> {
                 pending += 1;
                 continue;
             }
-            let (normal, albedo, confidence, used) = if self.robust && scratch.dropped[j] > 0 {
+            let fitted = self.fit.as_ref().filter(|f| f.needed(scratch.conf[j], scratch.dropped[j]));
+            let (normal, albedo, confidence, used) = if let Some(fit) = fitted {
+                self.finish_fit(fit, j, scratch)
+            } else if self.fit.is_none() && self.robust && scratch.dropped[j] > 0 {
                 self.finish_subset(j, scratch, subsets, &mut local)
             } else {
                 let normal = Vec3::new(scratch.gx[j], scratch.gy[j], scratch.gz[j]);

@@ -128,7 +128,9 @@ fn portable_and_vectorised_builds_agree_bitwise() {
             let what = format!("samples {kind}, {method:?}, masked {masked}");
             assert_eq!(a, b, "{what}");
             assert!(a.1.invalid_count < n / 2, "{what}");
-            assert!(a.1.lights_used[8] > n / 4, "{what}");
+            // The robust fit leaves out the brightest readings of the pixels least squares
+            // does not explain, which on these arbitrary samples is most of them.
+            assert!(method == Method::Robust || a.1.lights_used[8] > n / 4, "{what}");
             assert!(a.0.iter().all(|v| f32::from_bits(*v).is_finite()), "{what}");
         }
     }
@@ -150,7 +152,7 @@ fn grouped_subset_solves_match_per_pixel_ones_bitwise() {
         if masked {
             stack = stack.with_mask(Grid::from_fn(w, h, |x, y| (x * 7 + y * 3) % 29 != 0)).unwrap();
         }
-        let config = SolveConfig::default();
+        let config = SolveConfig { method: Method::Threshold, ..SolveConfig::default() };
         let lights = check_rig(&stack, &rig).unwrap();
         let mut plan = Plan::new(&stack, &rig, &config, lights, None).unwrap();
         assert!(plan.batch_subsets);

@@ -42,9 +42,11 @@ pub struct Args {
 /// Solver and output options shared by `capture`, `batch` and `demo`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SolveArgs {
-    /// `ls`: the paper's least squares over all lights; `robust`: per pixel, drop shadowed and
-    /// saturated readings and solve from the rest.
-    #[arg(long, default_value = "robust", value_parser = ["ls", "robust"])]
+    /// `ls`: the paper's least squares over all lights; `robust`: least squares where it
+    /// explains every reading, elsewhere a fit that drops shadows, saturation, the brightest
+    /// (specular) readings and every reading that disagrees; `threshold`: the earlier robust
+    /// solve (drop readings under the shadow thresholds, solve from the rest; faster).
+    #[arg(long, default_value = "robust", value_parser = ["ls", "robust", "threshold"])]
     pub solver: String,
     /// Side of the low-frequency removal block in pixels (the paper's 50); 0 turns it off.
     #[arg(long, default_value_t = 50, value_name = "PIXELS")]
@@ -84,7 +86,11 @@ impl SolveArgs {
     pub fn options(&self) -> Result<CaptureOptions> {
         let defaults = SolveConfig::default();
         let solve = SolveConfig {
-            method: if self.solver == "ls" { Method::LeastSquares } else { Method::Robust },
+            method: match self.solver.as_str() {
+                "ls" => Method::LeastSquares,
+                "threshold" => Method::Threshold,
+                _ => Method::Robust,
+            },
             shadow_abs: self.shadow_threshold.unwrap_or(defaults.shadow_abs),
             shadow_rel: self.shadow_relative.unwrap_or(defaults.shadow_rel),
             saturation: self.saturation.unwrap_or(defaults.saturation),
