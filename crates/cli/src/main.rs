@@ -54,6 +54,8 @@ enum Command {
 }
 
 fn main() {
+    // SAFETY: the first statement of `main`, before any thread is started.
+    unsafe { skinkit_render::gpu::quiet_vulkan_loader() };
     let cli = Cli::parse();
     let out = output::Output::new(&cli.global);
     let result = match cli.command {

@@ -68,7 +68,7 @@ impl Output {
 
     /// Prints an error and its causes on stderr.
     pub fn error(&self, error: &anyhow::Error) {
-        eprintln!("error: {error:#}");
+        eprintln!("error: {}", one_line(error));
     }
 
     /// Prints a result: as JSON with `--json`, else as the text `human` gives, on stdout.
@@ -79,4 +79,21 @@ impl Output {
             println!("{}", human());
         }
     }
+}
+
+/// The error and its causes on one line, each cause once: a cause whose text the line already
+/// holds (a library error that prints its own source) is not repeated.
+fn one_line(error: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in error.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }

@@ -21,6 +21,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use skinkit_render::effect::Effect;
 use skinkit_render::gpu::{Gpu, OutputFormat, Rendered};
 use skinkit_render::load;
 use skinkit_render::passes::SkinSetup;
@@ -51,21 +52,21 @@ fn main() {
     let mut scene = Scene::load(&scene_file).unwrap_or_else(|e| panic!("{e}"));
     let unshadowed = std::env::var("SKIN_METHODS_UNSHADOWED").is_ok_and(|v| v == "1");
     if unshadowed {
-        scene.effects.retain(|e| e != "shadows" && e != "shadow-scattering");
+        scene.effects.retain(|&e| e != Effect::Shadows && e != Effect::ShadowScattering);
     }
     let stem = if unshadowed { "skin-methods-unshadowed" } else { "skin-methods" };
     let (width, height) = size();
     let reference_size = std::env::var("SKIN_METHODS_REFERENCE").ok().and_then(|s| s.parse().ok()).unwrap_or(1024);
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     eprintln!("adapter: {}, {width}x{height}, reference light map {reference_size}", gpu.adapter_name());
-    let loaded = load::load(&scene, &scene_file, width, height, gpu.max_texture_side()).unwrap();
+    let loaded = load::load(&scene, width, height, gpu.max_texture_side()).unwrap();
 
     let base_ms = frame_ms(&gpu, &loaded.inputs, &SkinSetup::default(), width, height).0;
     eprintln!("base pass (Lambert, no shadows): {base_ms:.2} ms");
     let mut renders = Vec::new();
     for method in Method::table(reference_size) {
         let t = Instant::now();
-        let setup = method.setup(&scene, &scene_file, &loaded).unwrap_or_else(|e| panic!("{}: {e}", method.name()));
+        let setup = method.setup(&scene, &loaded).unwrap_or_else(|e| panic!("{}: {e}", method.name()));
         let cpu_setup_s = t.elapsed().as_secs_f64();
         let (ms, passes) = frame_ms(&gpu, &loaded.inputs, &setup, width, height);
         let images = draw(&gpu, &loaded.inputs, &setup, width, height);

@@ -13,6 +13,7 @@
 //! larger than the device's `max_texture_dimension_2d` is an error naming the limit
 //! ([`GpuError::TextureTooLarge`]): the caller decides whether to downscale.
 
+use crate::graph::PassKind;
 use crate::passes::{self, Features, SkinSetup, Table};
 use crate::shading::{
     GreenAxis, LightKind, MAX_LIGHTS, MAX_LOBES, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
@@ -112,6 +113,34 @@ pub enum GpuError {
 /// Result alias for this module.
 pub type Result<T> = std::result::Result<T, GpuError>;
 
+/// Points `XDG_RUNTIME_DIR` at a private folder (`skinkit-runtime-UID` in the temporary folder,
+/// mode 0700) when it is unset or not a folder, so that the Vulkan loader's window-system probe
+/// does not print "XDG_RUNTIME_DIR is invalid or not set" on every run of a headless render.
+/// Leaves a valid setting alone; does nothing off Unix.
+///
+/// # Safety
+/// Changes the process environment: call it before any other thread is started (the first
+/// statement of `main`), as [`std::env::set_var`] requires.
+pub unsafe fn quiet_vulkan_loader() {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+        let valid = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+        if valid {
+            return;
+        }
+        let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else { return };
+        let dir = std::env::temp_dir().join(format!("skinkit-runtime-{uid}"));
+        let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+        let private = std::fs::symlink_metadata(&dir)
+            .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0);
+        if private {
+            // SAFETY: the caller guarantees no other thread runs (this function's contract).
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        }
+    }
+}
+
 /// The offscreen colour target's format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum OutputFormat {
@@ -166,6 +195,8 @@ pub struct PreparedScene {
     index_count: u32,
     background: [f32; 4],
     features: Features,
+    /// The passes [`Gpu::draw`] runs, in order ([`SkinSetup::passes`]).
+    passes: Vec<PassKind>,
     bounds: (glam::Vec3, f32),
     shadow: Option<ShadowResources>,
     tsd: Option<TsdResources>,
@@ -211,21 +242,13 @@ impl PreparedScene {
     }
 
     /// The passes [`Gpu::draw`] runs for this scene, in order.
+    pub fn passes(&self) -> &[PassKind] {
+        &self.passes
+    }
+
+    /// Their names.
     pub fn pass_names(&self) -> Vec<String> {
-        let mut names = Vec::new();
-        if let Some(shadow) = &self.shadow {
-            names.push("shadow map".to_string());
-            if shadow.opacity.is_some() {
-                names.push("translucent shadows".to_string());
-            }
-        }
-        if let Some(tsd) = &self.tsd {
-            names.push("tsd back-face pre-pass".to_string());
-            names.push("tsd light map".to_string());
-            names.extend((0..tsd.passes).map(|i| format!("tsd blur {}", i + 1)));
-        }
-        names.push("base".to_string());
-        names
+        self.passes.iter().map(|p| p.name()).collect()
     }
 }
 
@@ -340,6 +363,62 @@ struct BlurRaw {
 /// Bytes of the base pass's uniform block (camera, lights, lobes, options).
 pub const UNIFORM_BYTES: u64 = std::mem::size_of::<Globals>() as u64;
 
+/// The layout of one uniform struct as Rust writes it, to check against the WGSL that reads it
+/// (the naga-reflection test in `tests/wgsl.rs`).
+#[derive(Debug, Clone)]
+pub struct UniformLayout {
+    /// The WGSL source declaring the struct.
+    pub source: &'static str,
+    /// The struct's name in the WGSL.
+    pub name: &'static str,
+    /// `size_of` of the Rust struct.
+    pub size: usize,
+    /// Each field's name and `offset_of`, in declaration order.
+    pub members: Vec<(&'static str, usize)>,
+}
+
+/// The layouts of every uniform struct the passes upload.
+pub fn uniform_layouts() -> Vec<UniformLayout> {
+    macro_rules! layout {
+        ($source:expr, $name:literal, $ty:ty, [$($field:ident),* $(,)?]) => {
+            UniformLayout {
+                source: $source,
+                name: $name,
+                size: std::mem::size_of::<$ty>(),
+                members: vec![$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
+            }
+        };
+    }
+    vec![
+        layout!(BASE_WGSL, "Light", LightRaw, [vector, radiance]),
+        layout!(BASE_WGSL, "Lobe", LobeRaw, [cx, cy, cz, n]),
+        layout!(
+            BASE_WGSL,
+            "Globals",
+            Globals,
+            [
+                view_proj,
+                eye,
+                diffuse,
+                counts,
+                options,
+                lights,
+                lobes,
+                skin,
+                blur,
+                shadow_view_proj,
+                shadow,
+                shadow_lut,
+                sh,
+                zonal,
+                tsd,
+                tsd_kernel
+            ]
+        ),
+        layout!(BLUR_WGSL, "Blur", BlurRaw, [params, flags]),
+    ]
+}
+
 impl Gpu {
     /// Open the first adapter on the backends named by `WGPU_BACKEND` (or the native ones).
     ///
@@ -404,6 +483,13 @@ impl Gpu {
     pub fn adapter_name(&self) -> String {
         let info = self.adapter.get_info();
         format!("{} ({:?})", info.name, info.backend)
+    }
+
+    /// How many render pipelines this device has built so far. Shader modules are compiled once,
+    /// in [`Gpu::new`], and each pipeline once per key and kept: a second render of a scene on the
+    /// same `Gpu` builds none (what a session of several renders, like `skinkit demo`, relies on).
+    pub fn pipelines_built(&self) -> usize {
+        self.pipelines.lock().unwrap_or_else(|e| e.into_inner()).len()
     }
 
     /// The largest texture side the device accepts.
@@ -487,6 +573,7 @@ impl Gpu {
             index_count: inputs.indices.len() as u32,
             background: inputs.background,
             features: skin.features,
+            passes: skin.passes(),
             bounds,
             shadow,
             tsd,
@@ -675,8 +762,8 @@ impl Gpu {
         Ok(Some(passes))
     }
 
-    /// Encodes every pass of `scene` (shadow map, TSD pre-pass, light map, blurs, base) and waits;
-    /// returns which of [`PreparedScene::pass_names`] ran (TSD culling may skip its passes).
+    /// Encodes every pass of `scene` in the order of [`PreparedScene::passes`] and waits;
+    /// returns which of them ran (TSD culling may skip its passes).
     fn encode_and_submit(
         &self,
         scene: &PreparedScene,
@@ -689,38 +776,18 @@ impl Gpu {
         self.queue.write_buffer(&scene.uniforms, 0, bytemuck::bytes_of(&globals));
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame encoder") });
-        let mut ran = Vec::new();
-        if let Some(shadow) = &scene.shadow {
-            let writes = timestamp_writes(timer, ran.len() as u32);
-            ran.push(true);
-            self.encode_shadow(&mut encoder, scene, shadow, writes);
-            if let Some(opacity) = &shadow.opacity {
-                let writes = timestamp_writes(timer, ran.len() as u32);
-                ran.push(true);
-                self.encode_translucent(&mut encoder, shadow, opacity, writes);
-            }
-        }
-        if let Some(tsd) = &scene.tsd {
-            let camera = glam::Mat4::from_cols_array_2d(&scene.globals.view_proj);
-            let eye = glam::Vec3::from_slice(&scene.globals.eye[..3]);
-            let (centre, radius) = scene.bounds;
-            let visible = passes::sphere_in_frustum(camera, centre, radius);
-            let small = passes::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;
-            let reuse = small && tsd.ready.load(Ordering::Relaxed);
-            let run = visible && !reuse;
+        let run_tsd = scene.tsd.as_ref().is_some_and(|tsd| self.tsd_runs(scene, tsd, target));
+        let mut ran = Vec::with_capacity(scene.passes.len());
+        for (slot, &kind) in scene.passes.iter().enumerate() {
+            let writes = timestamp_writes(timer, slot as u32);
+            let run = !kind.is_tsd() || run_tsd;
+            ran.push(run);
             if run {
-                self.encode_tsd(&mut encoder, scene, tsd, timer, ran.len() as u32);
-                tsd.ready.store(true, Ordering::Relaxed);
+                self.encode_pass(&mut encoder, kind, scene, target, writes);
             }
-            ran.extend(std::iter::repeat_n(run, 2 + tsd.passes as usize));
         }
-        {
-            let writes = timestamp_writes(timer, ran.len() as u32);
-            ran.push(true);
-            let pipeline = self.pipeline(PipelineKey::Base(target.format, scene.features));
-            let mut pass = begin_pass(&mut encoder, &target.color, &target.depth, scene.background, writes);
-            pass.set_pipeline(&pipeline);
-            self.draw_mesh(&mut pass, scene, &scene.bind_group);
+        if let Some(tsd) = scene.tsd.as_ref().filter(|_| run_tsd) {
+            tsd.ready.store(true, Ordering::Relaxed);
         }
         if let Some(t) = timer {
             // Passes that were culled wrote no timestamps; resolving unwritten queries is
@@ -733,6 +800,46 @@ impl Gpu {
         self.pop_scope(scope, "the frame's passes")?;
         self.wait()?;
         Ok(ran)
+    }
+
+    /// Whether texture-space diffusion runs this frame: the head is in the frustum, and it is
+    /// not so small on screen that an earlier frame's light map is reused.
+    fn tsd_runs(&self, scene: &PreparedScene, tsd: &TsdResources, target: &Target) -> bool {
+        let camera = glam::Mat4::from_cols_array_2d(&scene.globals.view_proj);
+        let eye = glam::Vec3::from_slice(&scene.globals.eye[..3]);
+        let (centre, radius) = scene.bounds;
+        let visible = passes::sphere_in_frustum(camera, centre, radius);
+        let small = passes::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;
+        visible && !(small && tsd.ready.load(Ordering::Relaxed))
+    }
+
+    /// Encodes one pass of the graph.
+    fn encode_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kind: PassKind,
+        scene: &PreparedScene,
+        target: &Target,
+        writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let shadow = || scene.shadow.as_ref().expect("a shadow pass is listed only with its shadow map");
+        let tsd = || scene.tsd.as_ref().expect("a TSD pass is listed only with its light maps");
+        match kind {
+            PassKind::ShadowMap => self.encode_shadow(encoder, scene, shadow(), writes),
+            PassKind::TranslucentShadows => {
+                let opacity = shadow().opacity.as_ref().expect("translucent shadows are listed with their map");
+                self.encode_translucent(encoder, shadow(), opacity, writes);
+            }
+            PassKind::TsdPrepass => self.encode_tsd_prepass(encoder, scene, tsd(), writes),
+            PassKind::TsdLightMap => self.encode_light_map(encoder, scene, tsd(), writes),
+            PassKind::TsdBlur(i) => self.encode_blur(encoder, tsd(), i as usize, writes),
+            PassKind::Base => {
+                let pipeline = self.pipeline(PipelineKey::Base(target.format, scene.features));
+                let mut pass = begin_pass(encoder, &target.color, &target.depth, scene.background, writes);
+                pass.set_pipeline(&pipeline);
+                self.draw_mesh(&mut pass, scene, &scene.bind_group);
+            }
+        }
     }
 
     fn encode_shadow(
@@ -792,64 +899,70 @@ impl Gpu {
         }
     }
 
-    /// The TSD passes: back-face pre-pass into the UV-space depth, the light map (depth "equal":
-    /// only texels the pre-pass kept), then the ping-pong blurs over the whole map (the first
-    /// also dilates into the texels the light map left unwritten).
-    fn encode_tsd(
+    /// TSD's back-face pre-pass into the UV-space depth.
+    fn encode_tsd_prepass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &PreparedScene,
         tsd: &TsdResources,
-        timer: Option<&PassTimer>,
-        first_slot: u32,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let writes = |slot: u32| timestamp_writes(timer, slot);
         let depth_view = tsd.depth.create_view(&Default::default());
-        let depth_attachment = |load| wgpu::RenderPassDepthStencilAttachment {
-            view: &depth_view,
-            depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
-            stencil_ops: None,
-        };
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("tsd back-face pre-pass"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(depth_attachment(wgpu::LoadOp::Clear(1.0))),
-                timestamp_writes: writes(first_slot),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline(PipelineKey::TsdPrepass(scene.features)));
-            self.draw_mesh(&mut pass, scene, &tsd.bind_group);
-        }
-        let clear_unwritten = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
-        {
-            let view = tsd.maps[0].create_view(&Default::default());
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("tsd light map"),
-                color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(clear_unwritten)))],
-                depth_stencil_attachment: Some(depth_attachment(wgpu::LoadOp::Load)),
-                timestamp_writes: writes(first_slot + 1),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline(PipelineKey::LightMap(scene.features)));
-            self.draw_mesh(&mut pass, scene, &tsd.bind_group);
-        }
-        for (i, group) in tsd.blur_groups.iter().enumerate() {
-            let view = tsd.maps[(i + 1) % 2].create_view(&Default::default());
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("tsd blur"),
-                color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(clear_unwritten)))],
-                depth_stencil_attachment: None,
-                timestamp_writes: writes(first_slot + 2 + i as u32),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline(PipelineKey::Blur));
-            pass.set_bind_group(0, group, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd back-face pre-pass"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(depth_attachment(&depth_view, wgpu::LoadOp::Clear(1.0))),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::TsdPrepass(scene.features)));
+        self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+    }
+
+    /// TSD's light map (depth "equal": only texels the pre-pass kept).
+    fn encode_light_map(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        tsd: &TsdResources,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let depth_view = tsd.depth.create_view(&Default::default());
+        let view = tsd.maps[0].create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd light map"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            depth_stencil_attachment: Some(depth_attachment(&depth_view, wgpu::LoadOp::Load)),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::LightMap(scene.features)));
+        self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+    }
+
+    /// TSD blur `i`: over the whole map, from `maps[i % 2]` into the other (the first also
+    /// dilates into the texels the light map left unwritten).
+    fn encode_blur(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        tsd: &TsdResources,
+        i: usize,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let view = tsd.maps[(i + 1) % 2].create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd blur"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::Blur));
+        pass.set_bind_group(0, &tsd.blur_groups[i], &[]);
+        pass.draw(0..3, 0..1);
     }
 
     /// Draws the scene's mesh (both vertex buffers; a pipeline reading only the first ignores
@@ -1392,6 +1505,17 @@ fn colour_attachment(view: &wgpu::TextureView, load: wgpu::LoadOp<wgpu::Color>) 
         depth_slice: None,
         resolve_target: None,
         ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
+    }
+}
+
+/// What the light maps hold where no texel was drawn (the first blur dilates into them).
+const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+
+fn depth_attachment(view: &wgpu::TextureView, load: wgpu::LoadOp<f32>) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
     }
 }
 

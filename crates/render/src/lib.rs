@@ -8,14 +8,18 @@
 //! and plans the passes and resources it needs.
 
 pub mod brdf;
+pub mod effect;
 pub mod frames;
 pub mod gpu;
+pub mod graph;
 pub mod head;
+pub mod label;
 pub mod load;
 pub mod mesh;
 pub mod passes;
 pub mod scene;
 pub mod shading;
 pub mod skin;
+pub mod view;
 #[cfg(feature = "viewer")]
 pub mod viewer;

@@ -12,15 +12,10 @@
 //! - A map larger than the device's `max_texture_dimension_2d` is halved (2x2 box, the mip
 //!   filter) until it fits, with a warning naming the limit.
 //!
-//! # Effects
-//! [`graph`] turns the scene's `effects` and lights into the pass graph: the base pass's shader
-//! features (each effect a WGSL override, compiled out when absent), which light draws the one
-//! shadow map (the first with `shadows = true`, and only when `shadows` is listed), which tables
-//! are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
-//! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse) and
-//! whether texture-space diffusion runs. [`plan`] lists it for people (`skinkit render
-//! --explain`); [`crate::skin::setup::build`] computes it. What was asked and cannot be built (a
-//! `shadows` effect with no shadow-casting light) is a note, never a silent omission.
+//! # Plans
+//! [`plan`] lists a scene's [`PassGraph`] for people (`skinkit render --explain`): each pass of
+//! the graph's ordered list with what it reads and writes, and every GPU resource with its bytes.
+//! [`crate::skin::setup::build`] computes what the same graph asks for.
 
 use std::path::Path;
 
@@ -28,14 +23,14 @@ use glam::{Mat3, Vec3};
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::{Channels, NormalEncoding};
 
-use crate::brdf::{self, Lafortune};
+use crate::brdf::Lafortune;
 use crate::frames::{self, FrameMethod};
 use crate::gpu::OutputFormat as TargetFormat;
+use crate::graph::{PassGraph, PassKind};
 use crate::mesh::{Mesh, MeshError};
 use crate::passes::{DiffuseMode, Features};
 use crate::scene::{self, Albedo, Scene};
-use crate::shading::{self, GreenAxis, MAX_LIGHTS, MAX_LOBES, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex};
-use crate::skin::options::{Analytic, CurvatureSource};
+use crate::shading::{self, GreenAxis, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex};
 
 /// Errors from turning a scene into render inputs.
 #[derive(Debug, thiserror::Error)]
@@ -51,6 +46,18 @@ pub enum LoadError {
         field: &'static str,
         #[source]
         source: skinkit_maps::Error,
+    },
+    /// A map file the scene names does not exist (yet).
+    #[error("{file}: {field}: {path} does not exist{hint}")]
+    Missing {
+        /// The scene file.
+        file: String,
+        /// `normal_map.path` or `albedo`.
+        field: &'static str,
+        /// The missing file.
+        path: String,
+        /// "; make it first: COMMAND" when the scene says what makes it, else empty.
+        hint: String,
     },
     /// A value the base pass cannot draw.
     #[error("{file}: {field}: {reason}")]
@@ -114,23 +121,8 @@ pub fn target_for(format: scene::OutputFormat) -> (TargetFormat, ToneCurve) {
 /// `max_texture_side` is the device limit (maps above it are halved until they fit).
 ///
 /// # Errors
-/// Unreadable or malformed mesh or maps, more lights or lobes than the pass shades.
-pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_texture_side: u32) -> Result<Loaded> {
-    let file = scene_file.display().to_string();
-    let unsupported =
-        |field: &str, reason: String| LoadError::Unsupported { file: file.clone(), field: field.into(), reason };
-    if scene.lights.len() > MAX_LIGHTS {
-        return Err(unsupported(
-            "light",
-            format!("{} lights given, the base pass shades at most {MAX_LIGHTS}", scene.lights.len()),
-        ));
-    }
-    if scene.brdf.lobes.len() > MAX_LOBES {
-        return Err(unsupported(
-            "brdf.lobes",
-            format!("{} lobes given, the base pass evaluates at most {MAX_LOBES}", scene.brdf.lobes.len()),
-        ));
-    }
+/// Unreadable or malformed mesh or maps.
+pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Result<Loaded> {
     let loaded = Mesh::load(&scene.mesh)?;
     let mut warnings = loaded.warnings;
     let mesh = loaded.mesh;
@@ -149,7 +141,8 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
     let normal_map = match &scene.normal_map {
         None => Texture::flat_normals(),
         Some(spec) => {
-            let encoding = NormalEncoding { green: spec.green.axis() };
+            exists(scene, "normal_map.path", &spec.path, spec.made_by.as_deref())?;
+            let encoding = NormalEncoding { green: spec.green };
             let map = io::read_normal_map(&spec.path, encoding, &limits)
                 .map_err(|source| LoadError::Map { field: "normal_map.path", source })?;
             fit(Texture::from_normal_map(&map), "normal map", max_texture_side, &mut warnings)
@@ -159,6 +152,7 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
         None => Texture::solid([1.0; 4]),
         Some(Albedo::Constant(c)) => Texture::solid([c.x, c.y, c.z, 1.0]),
         Some(Albedo::Map(path)) => {
+            exists(scene, "albedo", path, None)?;
             let texture = read_albedo(path, &limits).map_err(|source| LoadError::Map { field: "albedo", source })?;
             fit(texture, "albedo", max_texture_side, &mut warnings)
         }
@@ -168,22 +162,8 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
         Some(_) => Vec3::ONE,
         None => scene.brdf.diffuse,
     };
-    let brdf = Lafortune {
-        diffuse,
-        lobes: scene.brdf.lobes.iter().map(|l| brdf::Lobe { cx: l.cx, cy: l.cy, cz: l.cz, n: l.n }).collect(),
-    };
-    let lights = scene
-        .lights
-        .iter()
-        .map(|light| shading::Light {
-            kind: match light.kind {
-                scene::LightKind::Directional { direction } => shading::LightKind::Directional { toward: direction },
-                scene::LightKind::Point { position } => shading::LightKind::Point { position },
-            },
-            color: light.colour,
-            intensity: light.intensity,
-        })
-        .collect();
+    let brdf = Lafortune { diffuse, lobes: scene.brdf.lobes.clone() };
+    let lights = scene.lights.iter().map(|l| l.light).collect();
     let inputs = RenderInputs {
         vertices,
         indices: mesh.indices.clone(),
@@ -193,16 +173,26 @@ pub fn load(scene: &Scene, scene_file: &Path, width: u32, height: u32, max_textu
         normal_map,
         green: GreenAxis::Up,
         albedo,
-        specular: match scene.specular {
-            scene::Specular::Pixel => SpecularMode::Pixel,
-            scene::Specular::Vertex => SpecularMode::Vertex,
-        },
+        specular: scene.specular,
         exposure: 1.0,
         // The output decides the curve (`target_for`); callers set it.
         tone: ToneCurve::None,
         background: [0.0, 0.0, 0.0, 1.0],
     };
     Ok(Loaded { inputs, vertex_count: mesh.positions.len(), triangle_count: mesh.triangle_count(), warnings })
+}
+
+/// [`LoadError::Missing`] unless `path` exists.
+fn exists(scene: &Scene, field: &'static str, path: &Path, made_by: Option<&str>) -> Result<()> {
+    match path.exists() {
+        true => Ok(()),
+        false => Err(LoadError::Missing {
+            file: scene.name(),
+            field,
+            path: path.display().to_string(),
+            hint: made_by.map(|m| format!("; make it first: {m}")).unwrap_or_default(),
+        }),
+    }
 }
 
 /// Reads an albedo image as linear RGBA (8-bit as sRGB, 16-bit and float as linear).
@@ -251,7 +241,9 @@ pub struct Resource {
 /// One pass of a plan.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Pass {
-    /// Its name.
+    /// Which pass of the graph.
+    pub kind: PassKind,
+    /// Its name ([`PassKind::name`]).
     pub name: String,
     /// What it does.
     pub what: String,
@@ -259,6 +251,8 @@ pub struct Pass {
     pub reads: Vec<String>,
     /// Names of the resources it writes.
     pub writes: Vec<String>,
+    /// Device bytes of what it writes.
+    pub bytes_written: u64,
 }
 
 /// The passes and GPU resources a scene needs, in execution order.
@@ -293,110 +287,128 @@ fn mipped_bytes(width: u32, height: u32) -> (u64, u32) {
     }
 }
 
-/// What a scene's effects and lights decide: the base pass's features, which light casts the
-/// shadow map, which tables are built and which per-vertex data is computed. [`plan`] lists it
-/// for people; [`crate::skin::setup`] builds it.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Graph {
-    /// The base pass's shader features.
-    pub features: Features,
-    /// The light whose shadow map is drawn, if any.
-    pub key_light: Option<usize>,
-    /// Whether the diffuse LUT is built (read by the base pass).
-    pub diffuse_lut: bool,
-    /// Whether the shadow-scattering LUT is built.
-    pub shadow_lut: bool,
-    /// Whether the skin's zonal table is built (SH ambient with a pre-integrated diffuse).
-    pub zonal_table: bool,
-    /// Whether per-vertex curvature is computed from the mesh.
-    pub vertex_curvature: bool,
-    /// Whether texture-space diffusion runs.
-    pub tsd: bool,
-    /// Why something asked for is not built (no shadow-casting light, extra shadow lights).
-    pub notes: Vec<String>,
+/// The plan of `graph` for `scene` drawn at `width x height` into `format`: every pass of the
+/// graph's ordered list, what it reads and writes, and every resource with its bytes.
+pub fn plan(scene: &Scene, loaded: &Loaded, graph: &PassGraph, width: u32, height: u32, format: TargetFormat) -> Plan {
+    let resources = resources(scene, loaded, graph, width, height, format);
+    let passes = graph
+        .passes
+        .iter()
+        .map(|&kind| {
+            let (what, reads, writes) = describe(kind, scene, loaded, graph);
+            let bytes = resources.iter().filter(|r| writes.contains(&r.name)).map(|r| r.bytes).sum();
+            Pass { kind, name: kind.name(), what, reads, writes, bytes_written: bytes }
+        })
+        .collect();
+    Plan { passes, resources, notes: graph.notes.clone() }
 }
 
-/// The pass graph of `scene`: only what its effects and lights ask for.
-pub fn graph(scene: &Scene) -> Graph {
-    let mut notes = Vec::new();
-    let pre = &scene.skin.preintegrated;
-    let diffuse = if scene.has_effect("preintegrated") {
-        DiffuseMode::Lut
-    } else if scene.has_effect("preintegrated-analytic") {
-        match pre.analytic {
-            Analytic::Own => DiffuseMode::OwnFit,
-            Analytic::Blog => DiffuseMode::Blog,
-        }
-    } else if scene.has_effect("tsd") {
-        DiffuseMode::LightMap
-    } else {
-        DiffuseMode::Lambert
-    };
-    let casters: Vec<usize> = scene.lights.iter().enumerate().filter(|(_, l)| l.shadows).map(|(i, _)| i).collect();
-    let key_light = match (scene.has_effect("shadows"), casters.first()) {
-        (true, Some(&key)) => {
-            for &other in &casters[1..] {
-                notes.push(format!("light[{other}] asks for shadows: one shadow map is drawn, for light[{key}]"));
+fn names(list: &[&str]) -> Vec<String> {
+    list.iter().map(|s| s.to_string()).collect()
+}
+
+/// The light map a TSD graph's base pass reads (the blurs ping-pong between A and B).
+fn last_light_map(blurs: u32) -> &'static str {
+    if blurs % 2 == 0 { "light map A" } else { "light map B" }
+}
+
+/// What pass `kind` does, reads and writes.
+fn describe(kind: PassKind, scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> (String, Vec<String>, Vec<String>) {
+    let key = graph.shadow.map_or(0, |s| s.light);
+    match kind {
+        PassKind::ShadowMap => (
+            format!("depth of the mesh seen from light[{key}], bounding its sphere tightly"),
+            names(&["vertices", "indices", "uniforms"]),
+            names(&["shadow map"]),
+        ),
+        PassKind::TranslucentShadows => (
+            "translucent casters seen from the key light, their opacity added where no opaque surface is in front"
+                .into(),
+            names(&["uniforms", "shadow map"]),
+            names(&["shadow opacity"]),
+        ),
+        PassKind::TsdPrepass => (
+            format!(
+                "mesh at its UVs; keeps texels with N.V > -{} (frustum culling skips every TSD pass when the head is \
+                 off screen)",
+                scene.skin.tsd.backface_bias
+            ),
+            names(&["vertices", "indices", "uniforms"]),
+            names(&["tsd depth"]),
+        ),
+        PassKind::TsdLightMap => {
+            let mut reads =
+                names(&["vertices", "indices", "uniforms", "normal map", "per-vertex curvature", "tsd depth"]);
+            if graph.shadow.is_some() {
+                reads.push("shadow map".into());
             }
-            Some(key)
-        }
-        (true, None) => {
-            notes.push("effect `shadows`: no light has `shadows = true`, so no shadow map is drawn".into());
-            None
-        }
-        (false, Some(_)) => {
-            for &i in &casters {
-                notes.push(format!(
-                    "light[{i}] asks for shadows but `effects` does not list `shadows`: drawn unshadowed"
-                ));
+            if scene.skin.tsd.kernel_map.is_some() {
+                reads.push("kernel map".into());
             }
-            None
+            let what = "diffuse irradiance of every light into texture space (key light through the shadow map), \
+                        kernel size in alpha";
+            (what.into(), reads, names(&["light map A"]))
         }
-        (false, None) => None,
-    };
-    let shadows = key_light.is_some();
-    let shadow_scattering = shadows && scene.has_effect("shadow-scattering");
-    let translucent_shadows = shadows && !scene.translucent.is_empty();
-    if !shadows && !scene.translucent.is_empty() {
-        notes.push("[[translucent]] casters tint only the key light's shadow map, and none is drawn".into());
-    }
-    let sh_ambient = scene.has_effect("sh-ambient");
-    let derivative = diffuse.reads_curvature() && pre.curvature == CurvatureSource::Derivative;
-    let zonal_table = sh_ambient && diffuse.reads_curvature();
-    let tsd = diffuse == DiffuseMode::LightMap;
-    let vertex_curvature = (diffuse.reads_curvature() && !derivative) || zonal_table || tsd;
-    Graph {
-        features: Features {
-            diffuse,
-            derivative_curvature: derivative,
-            sh_ambient,
-            shadows,
-            shadow_scattering,
-            translucent_shadows,
-        },
-        key_light,
-        diffuse_lut: diffuse == DiffuseMode::Lut,
-        shadow_lut: shadow_scattering,
-        zonal_table,
-        vertex_curvature,
-        tsd,
-        notes,
+        PassKind::TsdBlur(i) => {
+            let (from, to) = if i % 2 == 0 { ("light map A", "light map B") } else { ("light map B", "light map A") };
+            let what = if i == 0 { "12-tap Poisson blur, dilating the UV borders" } else { "12-tap Poisson blur" };
+            (what.into(), names(&[from]), names(&[to]))
+        }
+        PassKind::Base => (describe_base(loaded, graph), base_reads(graph), names(&["colour target", "depth"])),
     }
 }
 
-/// The plan for `scene` drawn at `width x height` into `format`, from the loaded inputs.
-///
-/// # Errors
-/// None today; kept fallible for effects a device cannot build.
-pub fn plan(
+fn base_reads(graph: &PassGraph) -> Vec<String> {
+    let mut reads = names(&["vertices", "indices", "uniforms", "normal map", "albedo"]);
+    let optional = [
+        (graph.vertex_curvature, "per-vertex curvature"),
+        (graph.diffuse_lut, "diffuse LUT"),
+        (graph.zonal_table, "zonal table"),
+        (graph.shadow.is_some(), "shadow map"),
+        (graph.features.translucent_shadows, "shadow opacity"),
+        (graph.shadow_lut, "shadow LUT"),
+    ];
+    reads.extend(optional.into_iter().filter(|(on, _)| *on).map(|(_, name)| name.to_string()));
+    if let Some(tsd) = graph.tsd {
+        reads.push(last_light_map(tsd.blurs).into());
+    }
+    reads
+}
+
+fn describe_base(loaded: &Loaded, graph: &PassGraph) -> String {
+    let specular = match loaded.inputs.specular {
+        SpecularMode::Pixel => "per pixel",
+        SpecularMode::Vertex => "per vertex (the paper's look)",
+    };
+    format!(
+        "texture-space bump mapping and the Lafortune BRDF, lobes {specular}; diffuse: {}{}{}{}",
+        describe_diffuse(&graph.features),
+        if graph.features.shadows { "; key light shadowed" } else { "" },
+        if graph.features.shadow_scattering { " with shadow scattering" } else { "" },
+        if graph.features.sh_ambient { "; order-2 SH ambient" } else { "" },
+    )
+}
+
+fn describe_diffuse(features: &Features) -> &'static str {
+    match (features.diffuse, features.derivative_curvature) {
+        (DiffuseMode::Lambert, _) => "Lambert",
+        (DiffuseMode::Lut, false) => "pre-integrated LUT, per-vertex curvature, per-channel normals",
+        (DiffuseMode::Lut, true) => "pre-integrated LUT, derivative curvature, per-channel normals",
+        (DiffuseMode::Blog, _) => "the blog's closed-form pre-integrated curves",
+        (DiffuseMode::OwnFit, _) => "our closed-form fit of the pre-integrated LUT",
+        (DiffuseMode::LightMap, _) => "the blurred texture-space light map x albedo",
+    }
+}
+
+/// Every GPU resource of `graph`, once.
+fn resources(
     scene: &Scene,
-    _scene_file: &Path,
     loaded: &Loaded,
+    graph: &PassGraph,
     width: u32,
     height: u32,
     format: TargetFormat,
-) -> Result<Plan> {
-    let graph = graph(scene);
+) -> Vec<Resource> {
     let inputs = &loaded.inputs;
     let texture = |name: &str, t: &Texture| {
         let (bytes, levels) = mipped_bytes(t.width, t.height);
@@ -411,45 +423,25 @@ pub fn plan(
         detail: format!("{w}x{h} Rgba32Float, {what}; built on the CPU, cached by its parameters"),
         bytes: 16 * w as u64 * h as u64,
     };
-    let (target_name, bytes_per_pixel) = match format {
-        TargetFormat::Hdr16 => ("Rgba16Float", 8),
-        TargetFormat::Hdr32 => ("Rgba32Float", 16),
-        TargetFormat::Srgb8 => ("Rgba8UnormSrgb", 4),
-    };
-    let pixels = width as u64 * height as u64;
-    let mut resources = vec![
-        Resource {
-            name: "vertices".into(),
-            detail: format!("{} vertices x 48 B (position, normal, tangent, uv)", inputs.vertices.len()),
-            bytes: 48 * inputs.vertices.len() as u64,
-        },
-        Resource {
-            name: "indices".into(),
-            detail: format!("{} triangles, u32", inputs.indices.len() / 3),
-            bytes: 4 * inputs.indices.len() as u64,
-        },
-        Resource {
-            name: "uniforms".into(),
-            detail: format!("camera, {} lights, {} Lafortune lobes", inputs.lights.len(), inputs.brdf.lobes.len()),
-            bytes: crate::gpu::UNIFORM_BYTES,
-        },
+    let resource = |name: &str, detail: String, bytes: u64| Resource { name: name.into(), detail, bytes };
+    let n_vertices = inputs.vertices.len() as u64;
+    let mut out = vec![
+        resource("vertices", format!("{n_vertices} vertices x 48 B (position, normal, tangent, uv)"), 48 * n_vertices),
+        resource("indices", format!("{} triangles, u32", inputs.indices.len() / 3), 4 * inputs.indices.len() as u64),
+        resource(
+            "uniforms",
+            format!("camera, {} lights, {} Lafortune lobes", inputs.lights.len(), inputs.brdf.lobes.len()),
+            crate::gpu::UNIFORM_BYTES,
+        ),
         texture("normal map", &inputs.normal_map),
         texture("albedo", &inputs.albedo),
     ];
-    let mut base_reads: Vec<String> =
-        ["vertices", "indices", "uniforms", "normal map", "albedo"].map(String::from).to_vec();
-    let mut passes = Vec::new();
     let skin = &scene.skin;
     if graph.vertex_curvature {
-        resources.push(Resource {
-            name: "per-vertex curvature".into(),
-            detail: format!(
-                "{} vertices x 8 B (1/r in 1/mm from the mesh's mean curvature, mm per UV unit); computed on the CPU",
-                inputs.vertices.len()
-            ),
-            bytes: 8 * inputs.vertices.len() as u64,
-        });
-        base_reads.push("per-vertex curvature".into());
+        let detail = format!(
+            "{n_vertices} vertices x 8 B (1/r in 1/mm from the mesh's mean curvature, mm per UV unit); computed on the CPU"
+        );
+        out.push(resource("per-vertex curvature", detail, 8 * n_vertices));
     }
     if graph.diffuse_lut {
         let [w, h] = skin.preintegrated.lut_size;
@@ -458,161 +450,47 @@ pub fn plan(
             skin.preintegrated.normalisation.name(),
             skin.preintegrated.domain.name()
         );
-        resources.push(table("diffuse LUT", w, h, &what));
-        base_reads.push("diffuse LUT".into());
+        out.push(table("diffuse LUT", w, h, &what));
     }
     if graph.zonal_table {
         let n = crate::skin::setup::ZONAL_SAMPLES as u32;
-        resources.push(table("zonal table", n, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
-        base_reads.push("zonal table".into());
+        out.push(table("zonal table", n, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
     }
-    if let Some(key) = graph.key_light {
-        let shadow = &skin.shadow;
-        let (n, filter) = if graph.shadow_lut {
-            let (_, radius) = crate::passes::bounding_sphere(&inputs.vertices);
-            let size = crate::skin::setup::scattering_map_size(
-                shadow.map_size,
-                shadow.scatter_filter,
-                shadow.scatter_width_mm,
-                radius * scene.mm_per_unit,
-            );
-            (size, shadow.scatter_filter)
-        } else {
-            (shadow.map_size, shadow.filter)
-        };
-        resources.push(Resource {
-            name: "shadow map".into(),
-            detail: format!("{n}x{n} Depth32Float, light[{key}], {filter}x{filter} box filter"),
-            bytes: 4 * n as u64 * n as u64,
-        });
-        passes.push(Pass {
-            name: "shadow map".into(),
-            what: format!("depth of the mesh seen from light[{key}], bounding its sphere tightly"),
-            reads: ["vertices", "indices", "uniforms"].map(String::from).to_vec(),
-            writes: vec!["shadow map".into()],
-        });
-        base_reads.push("shadow map".into());
+    if let Some(shadow) = graph.shadow {
+        let (n, key, filter) = (shadow.size as u64, shadow.light, shadow.filter);
+        let detail = format!("{n}x{n} Depth32Float, light[{key}], {filter}x{filter} box filter");
+        out.push(resource("shadow map", detail, 4 * n * n));
         if graph.features.translucent_shadows {
-            resources.push(Resource {
-                name: "shadow opacity".into(),
-                detail: format!(
-                    "{n}x{n} Rgba16Float: opacity of {} translucent caster(s), summed",
-                    scene.translucent.len()
-                ),
-                bytes: 8 * n as u64 * n as u64,
-            });
-            passes.push(Pass {
-                name: "translucent shadows".into(),
-                what: "translucent casters seen from the key light, their opacity added where no opaque surface is in front"
-                    .into(),
-                reads: ["uniforms", "shadow map"].map(String::from).to_vec(),
-                writes: vec!["shadow opacity".into()],
-            });
-            base_reads.push("shadow opacity".into());
+            let casters = scene.translucent.len();
+            let detail = format!("{n}x{n} Rgba16Float: opacity of {casters} translucent caster(s), summed");
+            out.push(resource("shadow opacity", detail, 8 * n * n));
         }
     }
     if graph.shadow_lut {
         let n = crate::skin::setup::SHADOW_LUT_SIDE;
-        resources.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), box-filter penumbra"));
-        base_reads.push("shadow LUT".into());
+        out.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), box-filter penumbra"));
     }
-    if graph.tsd {
-        let n = skin.tsd.size;
-        let map_bytes = 8 * n as u64 * n as u64;
-        resources.push(Resource {
-            name: "tsd depth".into(),
-            detail: format!("{n}x{n} Depth32Float in texture space (culling pre-pass)"),
-            bytes: 4 * n as u64 * n as u64,
-        });
+    if let Some(tsd) = graph.tsd {
+        let n = tsd.size as u64;
+        out.push(resource("tsd depth", format!("{n}x{n} Depth32Float in texture space (culling pre-pass)"), 4 * n * n));
         for name in ["light map A", "light map B"] {
-            resources.push(Resource {
-                name: name.into(),
-                detail: format!("{n}x{n} Rgba16Float: diffuse irradiance, kernel size in alpha"),
-                bytes: map_bytes,
-            });
-        }
-        let mut light_reads: Vec<String> =
-            ["vertices", "indices", "uniforms", "normal map", "per-vertex curvature", "tsd depth"]
-                .map(String::from)
-                .to_vec();
-        if graph.key_light.is_some() {
-            light_reads.push("shadow map".into());
+            out.push(resource(
+                name,
+                format!("{n}x{n} Rgba16Float: diffuse irradiance, kernel size in alpha"),
+                8 * n * n,
+            ));
         }
         if let Some(path) = &skin.tsd.kernel_map {
-            resources.push(Resource {
-                name: "kernel map".into(),
-                detail: format!("{} (per-texel blur kernel size)", path.display()),
-                bytes: 0,
-            });
-            light_reads.push("kernel map".into());
+            out.push(resource("kernel map", format!("{} (per-texel blur kernel size)", path.display()), 0));
         }
-        passes.push(Pass {
-            name: "tsd back-face pre-pass".into(),
-            what: format!(
-                "mesh at its UVs; keeps texels with N.V > -{} (frustum culling skips every TSD pass when the head is \
-                 off screen)",
-                skin.tsd.backface_bias
-            ),
-            reads: ["vertices", "indices", "uniforms"].map(String::from).to_vec(),
-            writes: vec!["tsd depth".into()],
-        });
-        passes.push(Pass {
-            name: "tsd light map".into(),
-            what: "diffuse irradiance of every light into texture space (key light through the shadow map), \
-                   kernel size in alpha"
-                .into(),
-            reads: light_reads,
-            writes: vec!["light map A".into()],
-        });
-        for i in 0..skin.tsd.passes {
-            let (from, to) = if i % 2 == 0 { ("light map A", "light map B") } else { ("light map B", "light map A") };
-            let what = if i == 0 { "12-tap Poisson blur, dilating the UV borders" } else { "12-tap Poisson blur" };
-            passes.push(Pass {
-                name: format!("tsd blur {}", i + 1),
-                what: what.into(),
-                reads: vec![from.into()],
-                writes: vec![to.into()],
-            });
-        }
-        let last = if skin.tsd.passes % 2 == 0 { "light map A" } else { "light map B" };
-        base_reads.push(last.into());
     }
-    resources.push(Resource {
-        name: "colour target".into(),
-        detail: format!("{width}x{height} {target_name}"),
-        bytes: bytes_per_pixel * pixels,
-    });
-    resources.push(Resource {
-        name: "depth".into(),
-        detail: format!("{width}x{height} Depth32Float"),
-        bytes: 4 * pixels,
-    });
-    let specular = match inputs.specular {
-        SpecularMode::Pixel => "per pixel",
-        SpecularMode::Vertex => "per vertex (the paper's look)",
+    let (target_name, bytes_per_pixel) = match format {
+        TargetFormat::Hdr16 => ("Rgba16Float", 8),
+        TargetFormat::Hdr32 => ("Rgba32Float", 16),
+        TargetFormat::Srgb8 => ("Rgba8UnormSrgb", 4),
     };
-    passes.push(Pass {
-        name: "base".into(),
-        what: format!(
-            "texture-space bump mapping and the Lafortune BRDF, lobes {specular}; diffuse: {}{}{}{}",
-            describe_diffuse(&graph.features),
-            if graph.features.shadows { "; key light shadowed" } else { "" },
-            if graph.features.shadow_scattering { " with shadow scattering" } else { "" },
-            if graph.features.sh_ambient { "; order-2 SH ambient" } else { "" },
-        ),
-        reads: base_reads,
-        writes: ["colour target", "depth"].map(String::from).to_vec(),
-    });
-    Ok(Plan { passes, resources, notes: graph.notes })
-}
-
-fn describe_diffuse(features: &Features) -> &'static str {
-    match (features.diffuse, features.derivative_curvature) {
-        (DiffuseMode::Lambert, _) => "Lambert",
-        (DiffuseMode::Lut, false) => "pre-integrated LUT, per-vertex curvature, per-channel normals",
-        (DiffuseMode::Lut, true) => "pre-integrated LUT, derivative curvature, per-channel normals",
-        (DiffuseMode::Blog, _) => "the blog's closed-form pre-integrated curves",
-        (DiffuseMode::OwnFit, _) => "our closed-form fit of the pre-integrated LUT",
-        (DiffuseMode::LightMap, _) => "the blurred texture-space light map x albedo",
-    }
+    let pixels = width as u64 * height as u64;
+    out.push(resource("colour target", format!("{width}x{height} {target_name}"), bytes_per_pixel * pixels));
+    out.push(resource("depth", format!("{width}x{height} Depth32Float"), 4 * pixels));
+    out
 }

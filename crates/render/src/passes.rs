@@ -223,6 +223,15 @@ pub struct SkinSetup {
     pub light_map: Option<Texture>,
 }
 
+impl SkinSetup {
+    /// The passes the GPU runs for this setup, in order (the one order,
+    /// [`crate::graph::ordered_passes`]; for a scene's setup the same list as its graph's).
+    pub fn passes(&self) -> Vec<crate::graph::PassKind> {
+        let translucent = self.shadow.as_ref().is_some_and(|s| !s.translucent.is_empty());
+        crate::graph::ordered_passes(self.shadow.is_some(), translucent, self.tsd.as_ref().map(|t| t.passes))
+    }
+}
+
 impl Default for SkinSetup {
     fn default() -> Self {
         Self {

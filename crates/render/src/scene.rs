@@ -4,20 +4,23 @@
 //! Unknown keys are errors everywhere (a misspelt `intesity` must not silently become the
 //! default). Relative paths are taken against the scene file's folder. Validation happens once,
 //! here: a [`Scene`] holds only values the renderer can use (finite, unit directions, exponents
-//! above zero, a field of view inside (0, 180) degrees). Every error names the file and the field
-//! (`light[1].direction`).
+//! above zero, a field of view inside (0, 180) degrees, at most [`MAX_LIGHTS`] lights and
+//! [`MAX_LOBES`] lobes, effects the rules of [`crate::effect`] allow). Every error names the file
+//! and the field (`light[1].direction`). The scene deserialises into the shading types
+//! ([`Light`], [`Lafortune`], [`SpecularMode`]); it keeps its file for later messages.
 //!
 //! ```toml
 //! mesh = "head.obj"
 //! mm_per_unit = 1.0             # how long one mesh unit is, in millimetres (curvature needs it)
 //! albedo = "albedo.png"         # or a constant linear RGB: [0.6, 0.45, 0.4]; absent: brdf.diffuse
 //! specular = "pixel"            # or "vertex" (the paper's per-vertex specular look)
-//! effects = ["shadows"]         # names from KNOWN_EFFECTS; their settings: skin::options
+//! effects = ["shadows"]         # crate::effect::Effect names; their settings: skin::options
 //!
 //! [normal_map]
 //! path = "face-normals.png"
 //! green = "up"                  # "up" (OpenGL, glTF, Blender) or "down" (DirectX, Unreal)
 //! frames = "paper"              # or "mikktspace"
+//! made_by = "scripts/demo"      # optional: what makes the file, named when it is missing
 //!
 //! [brdf]                        # both keys optional: default_diffuse(), default_lobes()
 //! diffuse = [0.43, 0.30, 0.33]
@@ -50,16 +53,13 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::Deserialize;
 
-use crate::frames::FrameMethod;
-use crate::skin::options::{RawEnvironment, RawPreintegrated, RawShadow, RawSkin, RawTsd, SkinOptions};
+use skinkit_maps::GreenAxis;
 
-/// Effect names a scene may list (see [`crate::load::graph`] for what each builds and
-/// [`crate::skin::options`] for their settings): `preintegrated` (the LUT), `preintegrated-analytic`
-/// (a closed form), `sh-ambient` (order-2 SH environment light), `shadows` (the key light's shadow
-/// map), `shadow-scattering` (the penumbra LUT), `tsd` (texture-space diffusion). One of
-/// `preintegrated`, `preintegrated-analytic` and `tsd` at most.
-pub const KNOWN_EFFECTS: &[&str] =
-    &["preintegrated", "preintegrated-analytic", "sh-ambient", "shadows", "shadow-scattering", "tsd"];
+use crate::brdf::{Lafortune, Lobe};
+use crate::effect::{self, Effect};
+use crate::frames::FrameMethod;
+use crate::shading::{Light, LightKind, MAX_LIGHTS, MAX_LOBES, SpecularMode};
+use crate::skin::options::{RawEnvironment, RawPreintegrated, RawShadow, RawSkin, RawTsd, SkinOptions};
 
 /// Largest output side accepted, in pixels.
 pub const MAX_OUTPUT_SIDE: u32 = 16384;
@@ -90,6 +90,8 @@ pub type Result<T, E = SceneError> = std::result::Result<T, E>;
 /// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
+    /// The scene file itself (named in later messages).
+    pub file: PathBuf,
     /// The mesh file (OBJ, glTF, GLB), resolved against the scene's folder.
     pub mesh: PathBuf,
     /// Millimetres per mesh unit.
@@ -98,18 +100,18 @@ pub struct Scene {
     pub albedo: Option<Albedo>,
     /// The fine-scale normal map, if any.
     pub normal_map: Option<NormalMapSpec>,
-    /// The Lafortune skin BRDF.
-    pub brdf: Brdf,
+    /// The Lafortune skin BRDF (`rho_d` and lobes; default [`Lafortune::skin`]).
+    pub brdf: Lafortune,
     /// Where the specular lobes are evaluated.
-    pub specular: Specular,
-    /// Lights, at least one.
-    pub lights: Vec<Light>,
+    pub specular: SpecularMode,
+    /// Lights, one to [`MAX_LIGHTS`].
+    pub lights: Vec<SceneLight>,
     /// Cameras, at least one (a render makes one image per camera).
     pub cameras: Vec<Camera>,
     /// Output size and optional path.
     pub output: Output,
-    /// Effect names, each from [`KNOWN_EFFECTS`], in file order, without repeats.
-    pub effects: Vec<String>,
+    /// The effects, in file order, without repeats, allowed by [`effect::check_rules`].
+    pub effects: Vec<Effect>,
     /// The scattering tables (`[preintegrated]`, `[environment]`, `[shadow]`, `[tsd]`).
     pub skin: SkinOptions,
     /// Translucent shadow casters (`[[translucent]]`): they tint the key light's shadow map
@@ -128,9 +130,23 @@ pub struct Translucent {
 
 impl Scene {
     /// Whether the scene lists `effect`.
-    pub fn has_effect(&self, effect: &str) -> bool {
-        self.effects.iter().any(|e| e == effect)
+    pub fn has(&self, effect: Effect) -> bool {
+        self.effects.contains(&effect)
     }
+
+    /// The scene file, for messages.
+    pub fn name(&self) -> String {
+        self.file.display().to_string()
+    }
+}
+
+/// A light of the scene: what the shaders light with, and whether it asks for the shadow map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneLight {
+    /// Where, which colour, how bright.
+    pub light: Light,
+    /// `shadows = true`: the light may draw the key shadow map.
+    pub shadows: bool,
 }
 
 /// Albedo: a map (linear after decoding) or a constant linear RGB.
@@ -142,119 +158,17 @@ pub enum Albedo {
     Constant(Vec3),
 }
 
-/// Which way a normal map's green channel points.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Green {
-    /// Green grows toward the top of the image (OpenGL, glTF, Blender).
-    #[default]
-    Up,
-    /// Green grows toward the bottom (DirectX, Unreal).
-    Down,
-}
-
-impl Green {
-    /// The `maps` crate's name for it (what its readers take).
-    pub fn axis(self) -> skinkit_maps::GreenAxis {
-        match self {
-            Green::Up => skinkit_maps::GreenAxis::Up,
-            Green::Down => skinkit_maps::GreenAxis::Down,
-        }
-    }
-}
-
 /// The normal map and how to read it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NormalMapSpec {
     /// The image, resolved against the scene's folder.
     pub path: PathBuf,
     /// Green-channel convention of the file.
-    pub green: Green,
+    pub green: GreenAxis,
     /// Tangent basis the map was made against.
     pub frames: FrameMethod,
-}
-
-/// One Lafortune lobe: `[Cx ux vx + Cy uy vy + Cz uz vz]^n` per RGB channel.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Lobe {
-    /// `Cx` per channel.
-    pub cx: Vec3,
-    /// `Cy` per channel.
-    pub cy: Vec3,
-    /// `Cz` per channel.
-    pub cz: Vec3,
-    /// Exponent per channel, above zero.
-    pub n: Vec3,
-}
-
-/// Diffuse albedo and Lafortune lobes.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Brdf {
-    /// `rho_d` per channel, in [0, 1].
-    pub diffuse: Vec3,
-    /// The lobes (may be empty: diffuse only).
-    pub lobes: Vec<Lobe>,
-}
-
-impl Default for Brdf {
-    fn default() -> Self {
-        Brdf { diffuse: default_diffuse(), lobes: default_lobes() }
-    }
-}
-
-/// The skin `rho_d` of the pbrt-v1 skin material (REFERENCE.md, "Rendering").
-pub fn default_diffuse() -> Vec3 {
-    Vec3::new(0.428425, 0.301341, 0.331054)
-}
-
-/// The 3-lobe Lafortune skin set of the pbrt-v1 skin material (REFERENCE.md, "Rendering"),
-/// `Cx = Cy = Cxy`. Lobe 0 has a negative `Cz`: a grazing lobe relying on the clamp at zero.
-#[allow(clippy::excessive_precision)] // The table's digits, as published.
-pub fn default_lobes() -> Vec<Lobe> {
-    let lobe = |cxy: [f32; 3], cz: [f32; 3], n: [f32; 3]| Lobe {
-        cx: Vec3::from(cxy),
-        cy: Vec3::from(cxy),
-        cz: Vec3::from(cz),
-        n: Vec3::from(n),
-    };
-    vec![
-        lobe([-1.131747, -1.016939, -0.966018], [-1.209182, -1.462488, -1.222419], [6.421658, 3.699932, 3.524889]),
-        lobe([-0.546570, -0.643533, -0.638934], [0.380123, 0.410559, 0.437367], [3.685044, 4.266495, 4.539742]),
-        lobe([-0.998888, -1.020153, -1.027479], [0.857998, 0.703913, 0.573625], [64.208486, 63.919687, 43.809866]),
-    ]
-}
-
-/// Where the specular lobes are evaluated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Specular {
-    /// Per pixel against the normal map (the default).
-    #[default]
-    Pixel,
-    /// Per vertex, interpolated (the look the paper's hardware forced).
-    Vertex,
-}
-
-/// A light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Light {
-    /// Directional or point, with its direction or position.
-    pub kind: LightKind,
-    /// Linear RGB colour, non-negative.
-    pub colour: Vec3,
-    /// Scale on the colour, non-negative.
-    pub intensity: f32,
-    /// Whether the light casts shadows.
-    pub shadows: bool,
-}
-
-/// Light geometry.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightKind {
-    /// At infinity; the unit direction from the surface toward the light.
-    Directional { direction: Vec3 },
-    /// At a point, in mesh units.
-    Point { position: Vec3 },
+    /// The command that makes the file (named when the file is missing, e.g. on a fresh clone).
+    pub made_by: Option<String>,
 }
 
 /// A pinhole camera.
@@ -320,7 +234,7 @@ impl Scene {
         let raw: RawScene =
             toml::from_str(text).map_err(|e| SceneError::Syntax { file: file.clone(), message: e.to_string() })?;
         let base = origin.parent().unwrap_or(Path::new(""));
-        Checker { file, base }.scene(raw)
+        Checker { file, base }.scene(raw, origin)
     }
 }
 
@@ -333,7 +247,7 @@ struct RawScene {
     normal_map: Option<RawNormalMap>,
     brdf: Option<RawBrdf>,
     #[serde(default)]
-    specular: Specular,
+    specular: SpecularMode,
     #[serde(default)]
     light: Vec<RawLight>,
     #[serde(default)]
@@ -367,10 +281,10 @@ enum RawAlbedo {
 #[serde(deny_unknown_fields)]
 struct RawNormalMap {
     path: PathBuf,
-    #[serde(default)]
-    green: Green,
+    green: Option<String>,
     #[serde(default)]
     frames: FrameMethod,
+    made_by: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -432,7 +346,7 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    fn scene(&self, raw: RawScene) -> Result<Scene> {
+    fn scene(&self, raw: RawScene, origin: &Path) -> Result<Scene> {
         let mm_per_unit = self.positive("mm_per_unit", raw.mm_per_unit)?;
         let effects = self.effects(&raw.effects)?;
         let skin = RawSkin {
@@ -443,16 +357,14 @@ impl Checker<'_> {
         }
         .check(self.base)
         .map_err(|(field, reason)| self.invalid(field, reason))?;
-        self.effect_rules(&effects, &skin)?;
+        effect::check_rules(&effects, skin.environment.is_some())
+            .map_err(|(field, reason)| self.invalid(field, reason))?;
         Ok(Scene {
+            file: origin.to_owned(),
             mesh: self.base.join(&raw.mesh),
             mm_per_unit,
             albedo: raw.albedo.map(|a| self.albedo(a)).transpose()?,
-            normal_map: raw.normal_map.map(|n| NormalMapSpec {
-                path: self.base.join(n.path),
-                green: n.green,
-                frames: n.frames,
-            }),
+            normal_map: raw.normal_map.map(|n| self.normal_map(n)).transpose()?,
             brdf: self.brdf(raw.brdf)?,
             specular: raw.specular,
             lights: self.lights(&raw.light)?,
@@ -470,24 +382,6 @@ impl Checker<'_> {
                 })
                 .collect::<Result<_>>()?,
         })
-    }
-
-    /// Effects that contradict each other or lack what they read.
-    fn effect_rules(&self, effects: &[String], skin: &SkinOptions) -> Result<()> {
-        let has = |e: &str| effects.iter().any(|x| x == e);
-        let diffuse: Vec<&str> =
-            ["preintegrated", "preintegrated-analytic", "tsd"].into_iter().filter(|e| has(e)).collect();
-        if diffuse.len() > 1 {
-            let reason = format!("`{}` each decide the diffuse term: list one", diffuse.join("` and `"));
-            return Err(self.invalid("effects", reason));
-        }
-        if has("shadow-scattering") && !has("shadows") {
-            return Err(self.invalid("effects", "`shadow-scattering` filters the shadow map: list `shadows` too"));
-        }
-        if has("sh-ambient") && skin.environment.is_none() {
-            return Err(self.invalid("environment", "`sh-ambient` needs an [environment] table"));
-        }
-        Ok(())
     }
 
     fn invalid(&self, field: impl Into<String>, reason: impl Into<String>) -> SceneError {
@@ -529,17 +423,30 @@ impl Checker<'_> {
         })
     }
 
-    fn brdf(&self, raw: Option<RawBrdf>) -> Result<Brdf> {
-        let Some(raw) = raw else { return Ok(Brdf::default()) };
+    fn normal_map(&self, raw: RawNormalMap) -> Result<NormalMapSpec> {
+        let green = match raw.green {
+            None => GreenAxis::Up,
+            Some(g) => g.parse().map_err(|reason: String| self.invalid("normal_map.green", reason))?,
+        };
+        Ok(NormalMapSpec { path: self.base.join(raw.path), green, frames: raw.frames, made_by: raw.made_by })
+    }
+
+    fn brdf(&self, raw: Option<RawBrdf>) -> Result<Lafortune> {
+        let skin = Lafortune::skin();
+        let Some(raw) = raw else { return Ok(skin) };
         let diffuse = match raw.diffuse {
             Some(d) => self.in_range3("brdf.diffuse", d, 0.0, 1.0)?,
-            None => default_diffuse(),
+            None => skin.diffuse,
         };
-        let lobes = match raw.lobes {
+        let lobes: Vec<Lobe> = match raw.lobes {
             Some(lobes) => lobes.iter().enumerate().map(|(i, l)| self.lobe(i, l)).collect::<Result<_>>()?,
-            None => default_lobes(),
+            None => skin.lobes,
         };
-        Ok(Brdf { diffuse, lobes })
+        if lobes.len() > MAX_LOBES {
+            let reason = format!("{} lobes given, the base pass evaluates at most {MAX_LOBES}", lobes.len());
+            return Err(self.invalid("brdf.lobes", reason));
+        }
+        Ok(Lafortune { diffuse, lobes })
     }
 
     fn lobe(&self, i: usize, raw: &RawLobe) -> Result<Lobe> {
@@ -561,18 +468,22 @@ impl Checker<'_> {
         })
     }
 
-    fn lights(&self, raw: &[RawLight]) -> Result<Vec<Light>> {
+    fn lights(&self, raw: &[RawLight]) -> Result<Vec<SceneLight>> {
         if raw.is_empty() {
             return Err(self.invalid("light", "the scene has no [[light]]"));
+        }
+        if raw.len() > MAX_LIGHTS {
+            let reason = format!("{} lights given, the base pass shades at most {MAX_LIGHTS}", raw.len());
+            return Err(self.invalid("light", reason));
         }
         raw.iter().enumerate().map(|(i, l)| self.light(i, l)).collect()
     }
 
-    fn light(&self, i: usize, raw: &RawLight) -> Result<Light> {
+    fn light(&self, i: usize, raw: &RawLight) -> Result<SceneLight> {
         let name = |key: &str| format!("light[{i}].{key}");
         let kind = match (raw.kind, raw.direction, raw.position) {
             (RawLightKind::Directional, Some(d), None) => {
-                LightKind::Directional { direction: self.unit(&name("direction"), d)? }
+                LightKind::Directional { toward: self.unit(&name("direction"), d)? }
             }
             (RawLightKind::Point, None, Some(p)) => LightKind::Point { position: self.finite3(&name("position"), p)? },
             (RawLightKind::Directional, _, _) => {
@@ -589,7 +500,7 @@ impl Checker<'_> {
         if !(intensity.is_finite() && intensity >= 0.0) {
             return Err(self.invalid(name("intensity"), format!("must be finite and not negative, not {intensity}")));
         }
-        Ok(Light { kind, colour, intensity, shadows: raw.shadows })
+        Ok(SceneLight { light: Light { kind, color: colour, intensity }, shadows: raw.shadows })
     }
 
     fn cameras(&self, raw: &[RawCamera]) -> Result<Vec<Camera>> {
@@ -633,17 +544,17 @@ impl Checker<'_> {
         Ok(Output { size, path })
     }
 
-    fn effects(&self, raw: &[String]) -> Result<Vec<String>> {
-        let mut out: Vec<String> = Vec::new();
+    fn effects(&self, raw: &[String]) -> Result<Vec<Effect>> {
+        let mut out: Vec<Effect> = Vec::new();
         for (i, name) in raw.iter().enumerate() {
-            if !KNOWN_EFFECTS.contains(&name.as_str()) {
-                let reason = format!("unknown effect `{name}` (known: {})", KNOWN_EFFECTS.join(", "));
+            let Some(effect) = Effect::from_name(name) else {
+                let reason = format!("unknown effect `{name}` (known: {})", Effect::known_names());
                 return Err(self.invalid(format!("effects[{i}]"), reason));
-            }
-            if out.contains(name) {
+            };
+            if out.contains(&effect) {
                 return Err(self.invalid(format!("effects[{i}]"), format!("`{name}` is listed twice")));
             }
-            out.push(name.clone());
+            out.push(effect);
         }
         Ok(out)
     }

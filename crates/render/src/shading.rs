@@ -93,8 +93,9 @@ pub enum GreenAxis {
     Down,
 }
 
-/// Where the Lafortune lobes are evaluated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Where the Lafortune lobes are evaluated (a scene's `specular = "pixel"` or `"vertex"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum SpecularMode {
     /// Every lobe per pixel against the normal map's normal.
     #[default]

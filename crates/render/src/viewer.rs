@@ -1,9 +1,11 @@
 //! The interactive viewer (cargo feature `viewer`; `skinkit view SCENE`): a winit window showing
-//! the scene's first camera, orbited with the mouse, with the key light moved and the base pass's
-//! ingredients toggled from the keyboard.
+//! the scene's first camera, orbited with the mouse, with the key light moved, the base pass's
+//! ingredients and each of the scene's effects toggled from the keyboard.
 //!
-//! Frames are drawn by the same offscreen pass as headless renders (an Rgba8UnormSrgb target read
-//! back and shown through `softbuffer`), so what the window shows is what `skinkit render` writes,
+//! Frames are drawn by [`crate::view::ViewSession`]: the scene's pass graph (every effect it
+//! lists, less those switched off) through the same offscreen passes as headless renders (an
+//! Rgba8UnormSrgb target read back and shown through `softbuffer`), so what the window shows is
+//! what `skinkit render` writes,
 //! and it runs wherever the headless renderer does, lavapipe under a plain X server included. On
 //! a hardware GPU a swapchain would save the readback; at viewer sizes it costs a few
 //! milliseconds.
@@ -11,7 +13,8 @@
 //! Controls: left drag orbits the camera about its target, the wheel moves it closer or farther,
 //! right drag moves the first light (azimuth and elevation about the camera's up axis); `N`
 //! toggles the fine-scale normal map, `S` the specular lobes, `V` per-pixel / per-vertex specular,
-//! `R` resets the view, `Esc` or `Q` quits. The title shows the state and the last frame's time.
+//! `1` to `6` the scene's effects in the order it lists them, `R` resets the view, `Esc` or `Q`
+//! quits. The title shows the state and the last frame's time.
 
 use std::num::NonZeroU32;
 use std::rc::Rc;
@@ -25,9 +28,11 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::gpu::{Gpu, GpuError, OutputFormat, PreparedScene, Target};
-use crate::scene;
-use crate::shading::{LightKind, RenderInputs, SpecularMode, Texture, ToneCurve};
+use crate::gpu::{Gpu, GpuError, OutputFormat, Target};
+use crate::load::Loaded;
+use crate::scene::{self, Scene};
+use crate::shading::{LightKind, ToneCurve};
+use crate::view::{FrameError, Toggles, ViewSession};
 
 /// What went wrong opening or running the window.
 #[derive(Debug, thiserror::Error)]
@@ -39,14 +44,9 @@ pub enum ViewerError {
     /// The renderer failed.
     #[error(transparent)]
     Gpu(#[from] GpuError),
-}
-
-/// Which ingredients of the base pass are on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct Toggles {
-    normal_map: bool,
-    specular: bool,
-    vertex_specular: bool,
+    /// A frame could not be drawn.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
 }
 
 /// The orbit camera: the scene camera's target and up, a direction and a distance.
@@ -71,12 +71,11 @@ impl Orbit {
 
 struct App {
     gpu: Gpu,
-    base: RenderInputs,
+    session: ViewSession,
     orbit: Orbit,
     toggles: Toggles,
     light_turn: (f32, f32),
     size: (u32, u32),
-    prepared: Vec<(Toggles, PreparedScene)>,
     target: Option<Target>,
     window: Option<Rc<Window>>,
     surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
@@ -86,21 +85,22 @@ struct App {
     last_frame_ms: f64,
 }
 
-/// Opens a window on `inputs` (with the scene's first camera) and runs until it is closed.
+/// Opens a window on `scene` (its first camera) and runs until it is closed.
 ///
 /// # Errors
 /// No display, or a renderer error.
-pub fn run(gpu: Gpu, mut inputs: RenderInputs, camera: scene::Camera, size: (u32, u32)) -> Result<(), ViewerError> {
-    inputs.tone = ToneCurve::Reinhard;
+pub fn run(gpu: Gpu, scene: Scene, mut loaded: Loaded, size: (u32, u32)) -> Result<(), ViewerError> {
+    loaded.inputs.tone = ToneCurve::Reinhard;
+    let camera = scene.cameras[0];
+    let toggles = Toggles::all_on(&scene);
     let event_loop = EventLoop::new().map_err(|e| ViewerError::Window(e.to_string()))?;
     let mut app = App {
         gpu,
-        base: inputs,
+        session: ViewSession::new(scene, loaded),
         orbit: Orbit { start: camera, yaw: 0.0, pitch: 0.0, zoom: 1.0 },
-        toggles: Toggles { normal_map: true, specular: true, vertex_specular: false },
+        toggles,
         light_turn: (0.0, 0.0),
         size,
-        prepared: Vec::new(),
         target: None,
         window: None,
         surface: None,
@@ -114,22 +114,9 @@ pub fn run(gpu: Gpu, mut inputs: RenderInputs, camera: scene::Camera, size: (u32
 }
 
 impl App {
-    /// The inputs with the current toggles, light and camera.
-    fn inputs(&self, toggles: Toggles) -> RenderInputs {
-        let mut inputs = self.base.clone();
-        if !toggles.normal_map {
-            inputs.normal_map = Texture::flat_normals();
-        }
-        if !toggles.specular {
-            inputs.brdf.lobes.clear();
-        }
-        inputs.specular = if toggles.vertex_specular { SpecularMode::Vertex } else { SpecularMode::Pixel };
-        inputs
-    }
-
     /// The first light turned by the right-drag angles about the camera's up axis and right axis.
     fn light(&self) -> Option<crate::shading::Light> {
-        let light = *self.base.lights.first()?;
+        let light = self.session.first_light()?;
         let c = self.orbit.start;
         let right = (c.position - c.target).cross(c.up).normalize_or_zero();
         let turn = Mat3::from_axis_angle(c.up, self.light_turn.0)
@@ -147,22 +134,12 @@ impl App {
         if fresh {
             self.target = Some(self.gpu.create_target(w, h, OutputFormat::Srgb8)?);
         }
-        let toggles = self.toggles;
-        if !self.prepared.iter().any(|(t, _)| *t == toggles) {
-            let prepared = self.gpu.prepare(&self.inputs(toggles))?;
-            self.prepared.push((toggles, prepared));
-        }
+        let toggles = self.toggles.clone();
         let camera = crate::load::gpu_camera(&self.orbit.camera(), w, h);
         let light = self.light();
         let start = Instant::now();
-        let (_, prepared) = self.prepared.iter_mut().find(|(t, _)| *t == toggles).expect("prepared above");
-        prepared.set_camera(&camera);
-        if let Some(light) = light {
-            prepared.set_light(0, &light);
-        }
         let target = self.target.as_ref().expect("created above");
-        self.gpu.draw(prepared, target)?;
-        let frame = self.gpu.read(target)?;
+        let frame = self.session.frame(&self.gpu, &toggles, &camera, light, target)?;
         self.last_frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let (Some(surface), Some(window)) = (self.surface.as_mut(), self.window.as_ref()) else { return Ok(()) };
         let (Some(nw), Some(nh)) = (NonZeroU32::new(w), NonZeroU32::new(h)) else { return Ok(()) };
@@ -175,8 +152,15 @@ impl App {
             *dst = (u32::from(px[0]) << 16) | (u32::from(px[1]) << 8) | u32::from(px[2]);
         }
         buffer.present().map_err(|e| ViewerError::Window(e.to_string()))?;
+        let effects: String = self
+            .session
+            .effects()
+            .iter()
+            .enumerate()
+            .map(|(i, e)| format!(", {e} {} ({})", on(!toggles.off.contains(e)), i + 1))
+            .collect();
         window.set_title(&format!(
-            "skinkit view: normal map {} (N), specular {} (S), {} (V); {:.1} ms on {}",
+            "skinkit view: normal map {} (N), specular {} (S), {} (V){effects}; {:.1} ms on {}",
             on(toggles.normal_map),
             on(toggles.specular),
             if toggles.vertex_specular { "per vertex" } else { "per pixel" },
@@ -184,6 +168,12 @@ impl App {
             self.gpu.adapter_name()
         ));
         Ok(())
+    }
+
+    /// The scene effect a number key toggles (`1` is the first the scene lists).
+    fn effect_key(&self, key: &str) -> Option<crate::effect::Effect> {
+        let index: usize = key.parse().ok()?;
+        self.session.effects().get(index.checked_sub(1)?).copied()
     }
 
     fn redraw(&self) {
@@ -283,6 +273,10 @@ impl ApplicationHandler for App {
                     Key::Character("n") => self.toggles.normal_map = !self.toggles.normal_map,
                     Key::Character("s") => self.toggles.specular = !self.toggles.specular,
                     Key::Character("v") => self.toggles.vertex_specular = !self.toggles.vertex_specular,
+                    Key::Character(digit) if self.effect_key(digit).is_some() => {
+                        let effect = self.effect_key(digit).expect("checked by the guard");
+                        self.toggles.flip(effect);
+                    }
                     Key::Character("r") => {
                         self.orbit = Orbit { yaw: 0.0, pitch: 0.0, zoom: 1.0, ..self.orbit };
                         self.light_turn = (0.0, 0.0);

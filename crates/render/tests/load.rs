@@ -8,6 +8,7 @@ use glam::{Vec2, Vec3};
 use skinkit_maps::io::{PngLayout, write_normal_map, write_png};
 use skinkit_maps::{GreenAxis, Grid, NormalEncoding, NormalMap};
 use skinkit_render::gpu::OutputFormat;
+use skinkit_render::graph::PassGraph;
 use skinkit_render::head::write_obj;
 use skinkit_render::load::{load, orbit, plan};
 use skinkit_render::mesh::Mesh;
@@ -30,7 +31,7 @@ fn quad(dir: &Path) -> PathBuf {
     path
 }
 
-fn scene(dir: &Path, body: &str) -> (Scene, PathBuf) {
+fn scene(dir: &Path, body: &str) -> Scene {
     let mesh = quad(dir);
     let text = format!(
         "mesh = \"{}\"\nmm_per_unit = 10.0\n{body}\n[[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, 1.0]\n\
@@ -39,7 +40,7 @@ fn scene(dir: &Path, body: &str) -> (Scene, PathBuf) {
     );
     let path = dir.join("scene.toml");
     std::fs::write(&path, &text).unwrap();
-    (Scene::load(&path).unwrap(), path)
+    Scene::load(&path).unwrap()
 }
 
 /// A 256x128 map tilted toward +x on the left half and +y on the right half.
@@ -58,9 +59,8 @@ fn green_down_maps_are_read_green_up() {
     for green in [GreenAxis::Up, GreenAxis::Down] {
         let file = tilted(tmp.path(), green);
         let name = if green == GreenAxis::Up { "up" } else { "down" };
-        let (scene, path) =
-            scene(tmp.path(), &format!("[normal_map]\npath = \"{}\"\ngreen = \"{name}\"", file.display()));
-        let loaded = load(&scene, &path, 64, 64, 8192).unwrap();
+        let scene = scene(tmp.path(), &format!("[normal_map]\npath = \"{}\"\ngreen = \"{name}\"", file.display()));
+        let loaded = load(&scene, 64, 64, 8192).unwrap();
         let t = loaded.inputs.normal_map.texels[200];
         assert!((t[1] - 0.5 / 1.25f32.sqrt()).abs() < 1e-4, "{green:?}: {t:?}");
         assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
@@ -71,8 +71,8 @@ fn green_down_maps_are_read_green_up() {
 fn maps_above_the_device_limit_are_halved_with_a_warning() {
     let tmp = tempfile::tempdir().unwrap();
     let file = tilted(tmp.path(), GreenAxis::Up);
-    let (scene, path) = scene(tmp.path(), &format!("[normal_map]\npath = \"{}\"", file.display()));
-    let loaded = load(&scene, &path, 64, 64, 100).unwrap();
+    let scene = scene(tmp.path(), &format!("[normal_map]\npath = \"{}\"", file.display()));
+    let loaded = load(&scene, 64, 64, 100).unwrap();
     let map = &loaded.inputs.normal_map;
     assert_eq!((map.width, map.height), (64, 32));
     assert!(
@@ -91,19 +91,19 @@ fn eight_bit_albedo_is_srgb_and_sixteen_bit_is_linear() {
     write_png(&a8, 2, 1, PngLayout::Rgb8, &[128, 128, 128, 255, 0, 0]).unwrap();
     let a16 = tmp.path().join("a16.png");
     write_png(&a16, 1, 1, PngLayout::Gray16, &[32768]).unwrap();
-    let (s8, p8) = scene(tmp.path(), &format!("albedo = \"{}\"", a8.display()));
-    let t = load(&s8, &p8, 8, 8, 8192).unwrap().inputs.albedo;
+    let s8 = scene(tmp.path(), &format!("albedo = \"{}\"", a8.display()));
+    let t = load(&s8, 8, 8, 8192).unwrap().inputs.albedo;
     // sRGB 128/255 is 0.2158605 linear.
     assert!((t.texels[0][0] - 0.2158605).abs() < 1e-5, "{:?}", t.texels[0]);
     assert_eq!(t.texels[1], [1.0, 0.0, 0.0, 1.0]);
-    let (s16, p16) = scene(tmp.path(), &format!("albedo = \"{}\"", a16.display()));
-    let loaded = load(&s16, &p16, 8, 8, 8192).unwrap();
+    let s16 = scene(tmp.path(), &format!("albedo = \"{}\"", a16.display()));
+    let loaded = load(&s16, 8, 8, 8192).unwrap();
     assert!((loaded.inputs.albedo.texels[0][2] - 32768.0 / 65535.0).abs() < 1e-6);
     // A map is the whole rho_d: the BRDF's own diffuse is then 1.
     assert_eq!(loaded.inputs.brdf.diffuse, Vec3::ONE);
     // Without an albedo, rho_d is the BRDF's.
-    let (plain, pp) = scene(tmp.path(), "");
-    let loaded = load(&plain, &pp, 8, 8, 8192).unwrap();
+    let plain = scene(tmp.path(), "");
+    let loaded = load(&plain, 8, 8, 8192).unwrap();
     assert_eq!(loaded.inputs.brdf.diffuse, plain.brdf.diffuse);
     assert_eq!(loaded.inputs.albedo.texels, vec![[1.0; 4]]);
 }
@@ -126,8 +126,15 @@ fn a_turntable_keeps_the_distance_and_starts_at_the_camera() {
 fn more_lights_than_the_pass_shades_are_refused_by_name() {
     let tmp = tempfile::tempdir().unwrap();
     let light = "[[light]]\nkind = \"directional\"\ndirection = [0.0, 1.0, 1.0]\n";
-    let (scene, path) = scene(tmp.path(), &light.repeat(4));
-    let e = load(&scene, &path, 8, 8, 8192).unwrap_err().to_string();
+    let mesh = quad(tmp.path());
+    let text = format!(
+        "mesh = \"{}\"\nmm_per_unit = 1.0\n{}[[camera]]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\n",
+        mesh.display(),
+        light.repeat(5)
+    );
+    let path = tmp.path().join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let e = Scene::load(&path).unwrap_err().to_string();
     assert!(
         e.contains("scene.toml") && e.contains("light") && e.contains("5 lights") && e.contains("at most 4"),
         "{e}"
@@ -137,9 +144,11 @@ fn more_lights_than_the_pass_shades_are_refused_by_name() {
 /// The pass names and resource names of a scene's plan.
 fn graph_of(body: &str) -> (Vec<String>, Vec<String>, Vec<String>) {
     let tmp = tempfile::tempdir().unwrap();
-    let (scene, path) = scene(tmp.path(), body);
-    let loaded = load(&scene, &path, 8, 8, 8192).unwrap();
-    let p = plan(&scene, &path, &loaded, 8, 8, OutputFormat::Srgb8).unwrap();
+    let scene = scene(tmp.path(), body);
+    let loaded = load(&scene, 8, 8, 8192).unwrap();
+    let graph = PassGraph::for_loaded(&scene, &loaded);
+    let p = plan(&scene, &loaded, &graph, 8, 8, OutputFormat::Srgb8);
+    assert_eq!(p.passes.iter().map(|p| p.kind).collect::<Vec<_>>(), graph.passes);
     let passes = p.passes.iter().map(|p| p.name.clone()).collect();
     let resources = p.resources.iter().map(|r| r.name.clone()).collect();
     (passes, resources, p.notes)

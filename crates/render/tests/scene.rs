@@ -3,10 +3,12 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use skinkit_maps::GreenAxis;
+use skinkit_render::brdf::Lafortune;
+use skinkit_render::effect::Effect;
 use skinkit_render::frames::FrameMethod;
-use skinkit_render::scene::{
-    Albedo, Green, LightKind, OutputFormat, Scene, SceneError, Specular, default_diffuse, default_lobes,
-};
+use skinkit_render::scene::{Albedo, OutputFormat, Scene, SceneError};
+use skinkit_render::shading::{LightKind, SpecularMode};
 
 const ORIGIN: &str = "/scenes/face/scene.toml";
 
@@ -79,12 +81,12 @@ fn full_scene_parses_with_paths_resolved_against_the_scene_folder() {
     assert_eq!(s.mesh, base.join("../meshes/head.glb"));
     assert_eq!(s.mm_per_unit, 10.0);
     assert_eq!(s.albedo, Some(Albedo::Constant(Vec3::new(0.5, 0.4, 0.3))));
-    assert_eq!(s.specular, Specular::Vertex);
-    assert_eq!(s.effects, vec!["shadows".to_string(), "preintegrated".to_string()]);
+    assert_eq!(s.specular, SpecularMode::Vertex);
+    assert_eq!(s.effects, vec![Effect::Shadows, Effect::Preintegrated]);
+    assert_eq!(s.file, Path::new(ORIGIN));
     let nm = s.normal_map.as_ref().unwrap();
     assert_eq!(nm.path, base.join("maps/face.png"));
-    assert_eq!((nm.green, nm.frames), (Green::Down, FrameMethod::MikkTSpace));
-    assert_eq!(nm.green.axis(), skinkit_maps::GreenAxis::Down);
+    assert_eq!((nm.green, nm.frames), (GreenAxis::Down, FrameMethod::MikkTSpace));
     assert_eq!(s.brdf.diffuse, Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(s.brdf.lobes.len(), 2);
     let l0 = s.brdf.lobes[0];
@@ -93,10 +95,11 @@ fn full_scene_parses_with_paths_resolved_against_the_scene_folder() {
     let l1 = s.brdf.lobes[1];
     assert_eq!((l1.cx, l1.cy), (Vec3::new(-0.5, -0.6, -0.7), Vec3::new(-0.4, -0.3, -0.2)));
     assert_eq!(s.lights.len(), 2);
-    assert_eq!(s.lights[0].kind, LightKind::Point { position: Vec3::new(100.0, 200.0, 300.0) });
-    assert_eq!((s.lights[0].colour, s.lights[0].intensity, s.lights[0].shadows), (Vec3::new(1.0, 0.9, 0.8), 5.0, true));
+    let l0 = s.lights[0];
+    assert_eq!(l0.light.kind, LightKind::Point { position: Vec3::new(100.0, 200.0, 300.0) });
+    assert_eq!((l0.light.color, l0.light.intensity, l0.shadows), (Vec3::new(1.0, 0.9, 0.8), 5.0, true));
     // Directions are normalised: (3, 0, 4) / 5.
-    let LightKind::Directional { direction } = s.lights[1].kind else { panic!("{:?}", s.lights[1]) };
+    let LightKind::Directional { toward: direction } = s.lights[1].light.kind else { panic!("{:?}", s.lights[1]) };
     assert!((direction - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6);
     assert_eq!(s.cameras.len(), 2);
     assert_eq!((s.cameras[0].up, s.cameras[0].fov_deg), (Vec3::Y, 25.0));
@@ -114,17 +117,17 @@ fn defaults_fill_everything_optional() {
     assert_eq!(s.mesh, PathBuf::from("/scenes/face/head.obj"));
     assert_eq!(s.albedo, None);
     assert_eq!(s.normal_map, None);
-    assert_eq!(s.specular, Specular::Pixel);
+    assert_eq!(s.specular, SpecularMode::Pixel);
     assert!(s.effects.is_empty());
     assert_eq!(s.output.size, [1024, 1024]);
     assert_eq!(s.output.path, None);
     let light = s.lights[0];
-    assert_eq!((light.colour, light.intensity, light.shadows), (Vec3::ONE, 1.0, false));
-    assert_eq!(light.kind, LightKind::Directional { direction: Vec3::Z });
+    assert_eq!((light.light.color, light.light.intensity, light.shadows), (Vec3::ONE, 1.0, false));
+    assert_eq!(light.light.kind, LightKind::Directional { toward: Vec3::Z });
     assert_eq!((s.cameras[0].up, s.cameras[0].fov_deg), (Vec3::Y, 30.0));
     // The skin set exactly as REFERENCE.md tabulates it.
     assert_eq!(s.brdf.diffuse, Vec3::new(0.428425, 0.301341, 0.331054));
-    assert_eq!(s.brdf.lobes, default_lobes());
+    assert_eq!(s.brdf.lobes, Lafortune::skin().lobes);
     let l = &s.brdf.lobes;
     assert_eq!(l.len(), 3);
     assert_eq!(l[0].cx, Vec3::new(-1.131747, -1.016939, -0.966018));
@@ -139,9 +142,9 @@ fn defaults_fill_everything_optional() {
     assert_eq!(l[2].n, Vec3::new(64.208486, 63.919687, 43.809866));
     // A [brdf] table with only lobes keeps the default diffuse, and the reverse.
     let only_diffuse = parse(&format!("{MINIMAL}\n[brdf]\ndiffuse = [0.2, 0.2, 0.2]\n")).unwrap();
-    assert_eq!(only_diffuse.brdf.lobes, default_lobes());
+    assert_eq!(only_diffuse.brdf.lobes, Lafortune::skin().lobes);
     let no_lobes = parse(&format!("{MINIMAL}\n[brdf]\nlobes = []\n")).unwrap();
-    assert_eq!((no_lobes.brdf.diffuse, no_lobes.brdf.lobes.len()), (default_diffuse(), 0));
+    assert_eq!((no_lobes.brdf.diffuse, no_lobes.brdf.lobes.len()), (Lafortune::skin().diffuse, 0));
     // An albedo map path, resolved.
     let map = parse(&MINIMAL.replace("mm_per_unit = 1.0", "mm_per_unit = 1.0\nalbedo = \"a.png\"")).unwrap();
     assert_eq!(map.albedo, Some(Albedo::Map(PathBuf::from("/scenes/face/a.png"))));
@@ -213,6 +216,9 @@ fn bad_values_are_refused_with_file_and_field() {
     invalid(&format!("{MINIMAL}\n[output]\nsize = [0, 10]\n"), "output.size");
     invalid(&format!("{MINIMAL}\n[output]\npath = \"x.jpg\"\n"), "output.path");
     invalid(&lobe("[1,1,1], cx = [1,1,1]"), "brdf.lobes[0].cxy");
+    let five_lobes = vec!["{ cxy = [1,1,1], cz = [1,1,1], n = [1,1,1] }"; 5].join(", ");
+    let e = invalid(&format!("{MINIMAL}\n[brdf]\nlobes = [{five_lobes}]\n"), "brdf.lobes");
+    assert!(e.contains("5 lobes") && e.contains("at most 4"), "{e}");
     let no_camera = MINIMAL.split("[[camera]]").next().unwrap();
     invalid(no_camera, "camera");
 }

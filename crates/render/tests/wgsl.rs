@@ -50,3 +50,46 @@ fn validator_rejects_a_broken_shader() {
     let broken = "@fragment fn fs() -> @location(0) vec4<f32> { let x: f32 = vec2<f32>(1.0); return vec4<f32>(x); }";
     assert!(validate(broken).is_err());
 }
+
+#[test]
+fn every_uniform_struct_matches_its_wgsl_layout() {
+    let layouts = skinkit_render::gpu::uniform_layouts();
+    assert!(layouts.iter().any(|l| l.name == "Globals") && layouts.iter().any(|l| l.name == "Blur"));
+    for layout in layouts {
+        let module = validate(layout.source).unwrap();
+        let (members, span) = module
+            .types
+            .iter()
+            .find_map(|(_, ty)| match (&ty.name, &ty.inner) {
+                (Some(name), naga::TypeInner::Struct { members, span }) if name == layout.name => {
+                    Some((members.clone(), *span))
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("no struct {} in its WGSL", layout.name));
+        assert_eq!(span as usize, layout.size, "{}: WGSL size against size_of", layout.name);
+        let wgsl: Vec<(String, usize)> =
+            members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize)).collect();
+        let rust: Vec<(String, usize)> = layout.members.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        assert_eq!(wgsl, rust, "{}: member names and offsets, WGSL against Rust", layout.name);
+    }
+}
+
+#[test]
+fn the_layout_check_catches_a_moved_member() {
+    // The oracle can fail: a WGSL struct with two members swapped does not match.
+    let swapped = "struct Blur { flags: vec4<u32>, params: vec4<f32>, }\n@group(0) @binding(0) var<uniform> b: Blur;\n\
+                   @fragment fn fs() -> @location(0) vec4<f32> { return b.params; }";
+    let module = validate(swapped).unwrap();
+    let blur = skinkit_render::gpu::uniform_layouts().into_iter().find(|l| l.name == "Blur").unwrap();
+    let names: Vec<String> = module
+        .types
+        .iter()
+        .find_map(|(_, ty)| match &ty.inner {
+            naga::TypeInner::Struct { members, .. } => Some(members.iter().map(|m| m.name.clone().unwrap()).collect()),
+            _ => None,
+        })
+        .unwrap();
+    let rust: Vec<String> = blur.members.iter().map(|(n, _)| n.to_string()).collect();
+    assert_ne!(names, rust);
+}

@@ -19,7 +19,9 @@ use glam::{Vec2, Vec3};
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, Samples};
+use skinkit_render::gpu::Gpu;
 use skinkit_render::head;
+use skinkit_render::label::{RgbImage, draw_label};
 use skinkit_render::mesh::Mesh;
 
 use super::render::{Job, RenderReport, render};
@@ -30,6 +32,9 @@ pub const PANEL: usize = 768;
 
 /// Elevation of figure 8's lights above the patch, degrees.
 pub const PATCH_ELEVATION_DEG: f32 = 15.0;
+
+/// Azimuths of figure 8's four lights, degrees.
+const AZIMUTHS_DEG: [f32; 4] = [0.0, 90.0, 180.0, 270.0];
 
 /// What the figures cost and where they are.
 #[derive(Serialize)]
@@ -213,24 +218,27 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
     // sample layout's 0.05 mm texels).
     head::write_obj(&patch(20.0, [0.47, 0.53], [0.12, 0.24]), &dir.join("patch.obj"))?;
 
+    // One device for every render of the figures: shaders and pipelines are built once.
+    let gpu = Gpu::new()?;
     let mut renders = Vec::new();
     let mut job = |name: &str, text: String| -> Result<PathBuf> {
         let scene = dir.join(format!("{name}.toml"));
         write_text(&scene, &text)?;
         let image = dir.join(format!("{name}.png"));
-        renders.push(render(&Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None }, out)?);
+        let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
+        renders.push(render(&job, &gpu, out)?);
         Ok(image)
     };
     let smooth = job("head-smooth", head_scene(None))?;
     let skin = job("head-skin", head_scene(Some(&map)))?;
-    let lit: Vec<PathBuf> = [0.0f32, 90.0, 180.0, 270.0]
-        .iter()
-        .map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a)))
-        .collect::<Result<_>>()?;
+    let lit: Vec<PathBuf> =
+        AZIMUTHS_DEG.iter().map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a))).collect::<Result<_>>()?;
 
     let figure7 = dir.join("figure7.png");
-    grid(&[smooth, skin], 2, &figure7)?;
+    grid(&[(smooth, "without fine-scale structure".into()), (skin, "with the grown map".into())], 2, &figure7)?;
     let figure8 = dir.join("figure8.png");
+    let lit: Vec<(PathBuf, String)> =
+        lit.into_iter().zip(AZIMUTHS_DEG).map(|(p, a)| (p, format!("light azimuth {a} deg"))).collect();
     grid(&lit, 2, &figure8)?;
 
     let mut panels = Vec::new();
@@ -245,7 +253,7 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
             frames: None,
             reference: reference.then_some(REFERENCE_TEXELS),
         };
-        let report = render(&job, out)?;
+        let report = render(&job, &gpu, out)?;
         let seconds = report.skin_seconds + report.images.iter().map(|i| i.render_seconds).sum::<f64>();
         renders.push(report);
         panels.push((name, image, seconds));
@@ -276,29 +284,47 @@ fn skin_figure(panels: &[(&str, PathBuf, f64)], path: &Path) -> Result<SkinFigur
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let images: Vec<PathBuf> = panels.iter().map(|(_, p, _)| p.clone()).collect();
+    let images: Vec<(PathBuf, String)> = panels
+        .iter()
+        .zip(&methods)
+        .enumerate()
+        .map(|(i, ((name, p, _), m))| {
+            let label = match i + 1 == panels.len() {
+                true => format!("{name} (the reference)"),
+                false => format!("{name}: FLIP {:.3}", m.flip_mean),
+            };
+            (p.clone(), label)
+        })
+        .collect();
     grid(&images, 3, path)?;
     Ok(SkinFigure { image: path.display().to_string(), methods })
 }
 
-/// Tiles same-sized 8-bit RGB PNGs into `columns` columns.
-fn grid(images: &[PathBuf], columns: usize, path: &Path) -> Result<()> {
-    let photos = images.iter().map(|p| io::read_photo(p, &Limits::default())).collect::<Result<Vec<_>, _>>()?;
+/// Height of the panel labels, pixels.
+const LABEL_PX: f32 = 26.0;
+
+/// Tiles same-sized 8-bit RGB PNGs into `columns` columns, each with its label drawn into its
+/// top-left corner.
+fn grid(images: &[(PathBuf, String)], columns: usize, path: &Path) -> Result<()> {
+    let photos = images.iter().map(|(p, _)| io::read_photo(p, &Limits::default())).collect::<Result<Vec<_>, _>>()?;
     let (w, h) = (photos[0].width(), photos[0].height());
     let rows = images.len().div_ceil(columns);
     let (gw, gh) = (w * columns, h * rows);
     let mut samples = vec![0u16; gw * gh * 3];
     for (i, photo) in photos.iter().enumerate() {
         let (Samples::U8(s), Channels::Rgb) = (photo.samples(), photo.channels()) else {
-            bail!("{}: expected an 8-bit RGB render", images[i].display())
+            bail!("{}: expected an 8-bit RGB render", images[i].0.display())
         };
         if (photo.width(), photo.height()) != (w, h) {
-            bail!("{}: renders of one figure must share a size", images[i].display());
+            bail!("{}: renders of one figure must share a size", images[i].0.display());
         }
+        let mut panel = s.to_vec();
+        let mut image = RgbImage { pixels: &mut panel, width: w, height: h };
+        draw_label(&mut image, 0, 0, &images[i].1, LABEL_PX);
         let (x0, y0) = ((i % columns) * w, (i / columns) * h);
         for y in 0..h {
             for x in 0..w * 3 {
-                samples[((y0 + y) * gw + x0) * 3 + x] = s[y * w * 3 + x] as u16;
+                samples[((y0 + y) * gw + x0) * 3 + x] = panel[y * w * 3 + x] as u16;
             }
         }
     }

@@ -13,6 +13,7 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use skinkit_maps::io::{self, PngLayout};
 use skinkit_render::gpu::{Gpu, Rendered};
+use skinkit_render::graph::PassGraph;
 use skinkit_render::load::{self, Plan};
 use skinkit_render::scene::{self, Scene};
 use skinkit_render::skin;
@@ -108,7 +109,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         out.result(&explained, || explain_text(&explained));
         return Ok(0);
     }
-    let report = render(&job, out)?;
+    let report = render(&job, &Gpu::new()?, out)?;
     if let Some(path) = &args.report {
         crate::pipeline::write_json(path, &report)?;
     }
@@ -168,23 +169,25 @@ fn explain(job: &Job) -> Result<Explained> {
         Ok(gpu) => (Some(gpu.adapter_name()), gpu.max_texture_side()),
         Err(_) => (None, EXPLAIN_TEXTURE_SIDE),
     };
-    let loaded = load::load(&r.scene, &job.scene, r.width, r.height, limit)?;
-    let plan = load::plan(&r.scene, &job.scene, &loaded, r.width, r.height, target_format)?;
+    let loaded = load::load(&r.scene, r.width, r.height, limit)?;
+    let graph = PassGraph::for_loaded(&r.scene, &loaded);
+    let plan = load::plan(&r.scene, &loaded, &graph, r.width, r.height, target_format);
     let mut warnings = loaded.warnings;
     warnings.extend(plan.notes.iter().cloned());
     Ok(Explained { scene: job.scene.display().to_string(), adapter, width: r.width, height: r.height, plan, warnings })
 }
 
-/// Renders every image of a job and writes them.
-pub fn render(job: &Job, out: &Output) -> Result<RenderReport> {
+/// Renders every image of a job on `gpu` (a session: its shaders, pipelines and tables are
+/// reused by the next job) and writes them.
+pub fn render(job: &Job, gpu: &Gpu, out: &Output) -> Result<RenderReport> {
     let start = Instant::now();
     let Resolved { scene, width, height, path, format } = resolve(job)?;
     let (target_format, tone) = load::target_for(format);
-    let gpu = Gpu::new()?;
     let t = Instant::now();
-    let mut loaded = load::load(&scene, &job.scene, width, height, gpu.max_texture_side())?;
+    let mut loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
     loaded.inputs.tone = tone;
-    let plan = load::plan(&scene, &job.scene, &loaded, width, height, target_format)?;
+    let graph = PassGraph::for_loaded(&scene, &loaded);
+    let plan = load::plan(&scene, &loaded, &graph, width, height, target_format);
     loaded.warnings.extend(plan.notes.iter().cloned());
     for warning in &loaded.warnings {
         out.warn(warning);
@@ -193,13 +196,13 @@ pub fn render(job: &Job, out: &Output) -> Result<RenderReport> {
 
     let t = Instant::now();
     let skin = match job.reference {
-        None => skin::setup::build(&scene, &job.scene, &loaded, &load::graph(&scene))?,
+        None => skin::setup::build(&scene, &loaded, &graph)?,
         Some(size) => {
             if !(16..=8192).contains(&size) {
                 bail!("--reference: {size} is outside 16..=8192 texels");
             }
             out.note(&format!("baking and scattering the {size}x{size} reference light map on the CPU"));
-            skin::compare::Method::Reference { size }.setup(&scene, &job.scene, &loaded)?
+            skin::compare::Method::Reference { size }.setup(&scene, &loaded)?
         }
     };
     let skin_seconds = t.elapsed().as_secs_f64();
@@ -268,13 +271,12 @@ pub fn view(args: ViewArgs, out: &Output) -> Result<i32> {
         None => (scene.output.size[0].min(1280), scene.output.size[1].min(960)),
     };
     let gpu = Gpu::new()?;
-    let loaded = load::load(&scene, &args.scene, width, height, gpu.max_texture_side())?;
-    load::plan(&scene, &args.scene, &loaded, width, height, skinkit_render::gpu::OutputFormat::Srgb8)?;
+    let loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
     for warning in &loaded.warnings {
         out.warn(warning);
     }
-    out.note("left drag: orbit, wheel: zoom, right drag: move the light, N: normal map, S: specular, V: per-vertex specular, R: reset, Esc: quit");
-    skinkit_render::viewer::run(gpu, loaded.inputs, scene.cameras[0], (width, height))?;
+    out.note("left drag: orbit, wheel: zoom, right drag: move the light, N: normal map, S: specular, V: per-vertex specular, 1-6: the scene's effects, R: reset, Esc: quit");
+    skinkit_render::viewer::run(gpu, scene, loaded, (width, height))?;
     Ok(0)
 }
 

@@ -8,12 +8,12 @@
 //! shadow-casting light draws none); the pre-integrated methods add shadow scattering, as the
 //! paper's complete local model does.
 
-use std::path::Path;
-
 use super::options::Analytic;
 use super::profile::Profile;
 use super::{reference, setup};
-use crate::load::{self, LoadError, Loaded};
+use crate::effect::Effect;
+use crate::graph::PassGraph;
+use crate::load::{LoadError, Loaded};
 use crate::passes::{DiffuseMode, SkinSetup};
 use crate::scene::Scene;
 
@@ -73,36 +73,37 @@ impl Method {
     /// The scene with this method's effects (the scene's own `shadows` kept) and settings.
     pub fn scene(&self, scene: &Scene) -> Scene {
         let mut scene = scene.clone();
-        let shadows = scene.has_effect("shadows");
-        let ambient = scene.has_effect("sh-ambient");
-        let mut effects: Vec<&str> = Vec::new();
+        let shadows = scene.has(Effect::Shadows);
+        let ambient = scene.has(Effect::ShAmbient);
+        let mut effects: Vec<Effect> = Vec::new();
         match self {
             Self::Lambert | Self::Reference { .. } => {}
             Self::Blog | Self::OwnFit => {
-                effects.push("preintegrated-analytic");
+                effects.push(Effect::PreintegratedAnalytic);
                 scene.skin.preintegrated.analytic = if *self == Self::Blog { Analytic::Blog } else { Analytic::Own };
             }
             Self::Lut { size } => {
-                effects.push("preintegrated");
+                effects.push(Effect::Preintegrated);
                 scene.skin.preintegrated.lut_size = [*size, *size];
             }
             Self::Tsd { passes, size } => {
-                effects.push("tsd");
+                effects.push(Effect::Tsd);
                 scene.skin.tsd.passes = *passes;
                 scene.skin.tsd.size = *size;
             }
         }
         let preintegrated = matches!(self, Self::Blog | Self::OwnFit | Self::Lut { .. });
         if shadows {
-            effects.push("shadows");
+            effects.push(Effect::Shadows);
             if preintegrated {
-                effects.push("shadow-scattering");
+                effects.push(Effect::ShadowScattering);
             }
         }
         if ambient {
-            effects.push("sh-ambient");
+            effects.push(Effect::ShAmbient);
         }
-        scene.effects = effects.into_iter().map(String::from).collect();
+        debug_assert!(crate::effect::check_rules(&effects, true).is_ok(), "{effects:?}");
+        scene.effects = effects;
         scene
     }
 
@@ -112,12 +113,13 @@ impl Method {
     ///
     /// # Errors
     /// As [`setup::build`].
-    pub fn setup(&self, scene: &Scene, scene_file: &Path, loaded: &Loaded) -> Result<SkinSetup, LoadError> {
+    pub fn setup(&self, scene: &Scene, loaded: &Loaded) -> Result<SkinSetup, LoadError> {
         let scene = self.scene(scene);
-        let graph = load::graph(&scene);
-        let mut built = setup::build(&scene, scene_file, loaded, &graph)?;
+        let graph = PassGraph::for_loaded(&scene, loaded);
+        let mut built = setup::build(&scene, loaded, &graph)?;
         if let Self::Reference { size } = self {
-            let shadows: Vec<bool> = (0..loaded.inputs.lights.len()).map(|i| graph.key_light == Some(i)).collect();
+            let key = graph.shadow.map(|s| s.light);
+            let shadows: Vec<bool> = (0..loaded.inputs.lights.len()).map(|i| key == Some(i)).collect();
             let bake = reference::bake(&loaded.inputs, &shadows, scene.mm_per_unit, *size);
             let scattered = reference::scatter(&bake, &Profile::default());
             built.light_map = Some(reference::dilate(&bake.to_texture(&scattered), 4));

@@ -1,4 +1,4 @@
-//! From a scene's pass graph ([`crate::load::graph`]) to what the GPU draws with
+//! From a scene's pass graph ([`crate::graph::PassGraph`]) to what the GPU draws with
 //! ([`crate::passes::SkinSetup`]): per-vertex curvature and UV stretch, the diffuse, shadow and
 //! zonal tables (built on the CPU, cached in-process by their parameters, so a turntable builds
 //! each once), the environment's SH coefficients, the key light's shadow projection and the
@@ -16,7 +16,8 @@ use super::options::{Sky, Zonal};
 use super::profile::{VARIANCES_MM2, WEIGHTS};
 use super::sh::{self, Sh9, ZonalTable};
 use super::shadow::{ShadowLut, ShadowLutSpec};
-use crate::load::{Graph, LoadError, Loaded};
+use crate::graph::PassGraph;
+use crate::load::{LoadError, Loaded};
 use crate::passes::{self, ShadowSetup, SkinSetup, Table, TsdSetup};
 use crate::scene::Scene;
 use crate::shading::Texture;
@@ -39,7 +40,8 @@ const LUMINANCE: [f64; 3] = [0.2125, 0.7154, 0.0721];
 /// # Errors
 /// An unreadable environment or kernel map (the error names the field and file), or a table
 /// whose parameters are refused.
-pub fn build(scene: &Scene, scene_file: &Path, loaded: &Loaded, graph: &Graph) -> Result<SkinSetup, LoadError> {
+pub fn build(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSetup, LoadError> {
+    let scene_file = scene.file.as_path();
     let inputs = &loaded.inputs;
     let pre = &scene.skin.preintegrated;
     let mut setup = SkinSetup {
@@ -73,25 +75,14 @@ pub fn build(scene: &Scene, scene_file: &Path, loaded: &Loaded, graph: &Graph) -
     {
         setup.sh = environment_sh(&env.sky, env.intensity, scene_file)?;
     }
-    if let Some(key) = graph.key_light {
+    if let Some(plan) = graph.shadow {
         let options = &scene.skin.shadow;
         let (centre, radius) = passes::bounding_sphere(&inputs.vertices);
-        let (map_size, filter) = if graph.shadow_lut {
-            let size = scattering_map_size(
-                options.map_size,
-                options.scatter_filter,
-                options.scatter_width_mm,
-                radius * scene.mm_per_unit,
-            );
-            (size, options.scatter_filter)
-        } else {
-            (options.map_size, options.filter)
-        };
-        let (view_proj, texel) = passes::light_view_proj(&inputs.lights[key], centre, radius, map_size);
+        let (view_proj, texel) = passes::light_view_proj(&inputs.lights[plan.light], centre, radius, plan.size);
         setup.shadow = Some(ShadowSetup {
-            light: key,
-            map_size,
-            filter,
+            light: plan.light,
+            map_size: plan.size,
+            filter: plan.filter,
             bias: options.bias,
             view_proj,
             texel,
@@ -108,14 +99,14 @@ pub fn build(scene: &Scene, scene_file: &Path, loaded: &Loaded, graph: &Graph) -
         };
         setup.shadow_lut = Some(shadow_table(&spec).map_err(|reason| refused(scene_file, "shadow", reason))?);
     }
-    if graph.tsd {
-        setup.tsd = Some(tsd_setup(scene)?);
+    if let Some(plan) = graph.tsd {
+        setup.tsd = Some(tsd_setup(scene, plan)?);
     }
     Ok(setup)
 }
 
 /// The scene's translucent casters, loaded (only when the graph draws translucent shadows).
-fn translucent_casters(scene: &Scene, graph: &Graph) -> Result<Vec<passes::TranslucentCaster>, LoadError> {
+fn translucent_casters(scene: &Scene, graph: &PassGraph) -> Result<Vec<passes::TranslucentCaster>, LoadError> {
     if !graph.features.translucent_shadows {
         return Ok(Vec::new());
     }
@@ -131,14 +122,6 @@ fn translucent_casters(scene: &Scene, graph: &Graph) -> Result<Vec<passes::Trans
             })
         })
         .collect()
-}
-
-/// The shadow map side whose `filter` texels span `width_mm` across a sphere of `radius_mm`
-/// (the light's projection covers its diameter), at most `map_size` and at least 16.
-pub fn scattering_map_size(map_size: u32, filter: u32, width_mm: f32, radius_mm: f32) -> u32 {
-    let texel_mm = width_mm / filter.max(1) as f32;
-    let side = (2.0 * radius_mm / texel_mm).ceil();
-    if side.is_finite() { (side as u32).clamp(16, map_size.max(16)) } else { map_size }
 }
 
 fn refused(scene_file: &Path, field: &str, reason: String) -> LoadError {
@@ -239,17 +222,17 @@ pub fn luminance_variance() -> f32 {
         as f32
 }
 
-fn tsd_setup(scene: &Scene) -> Result<TsdSetup, LoadError> {
+fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, LoadError> {
     let options = &scene.skin.tsd;
     let kernel_map = match &options.kernel_map {
         None => None,
         Some(path) => Some(read_kernel(path).map_err(|source| LoadError::Map { field: "tsd.kernel_map", source })?),
     };
     // The chapter's (a, b) are texels of a 512 map: keep their size on the skin at any resolution.
-    let to_size = options.size as f32 / 512.0;
+    let to_size = plan.size as f32 / 512.0;
     Ok(TsdSetup {
-        size: options.size,
-        passes: options.passes,
+        size: plan.size,
+        passes: plan.blurs,
         kernel_map,
         kernel_scale: [options.kernel_scale[0] * to_size, options.kernel_scale[1] * to_size],
         kernel_mm: passes::kernel_mm_for(luminance_variance(), options.passes),

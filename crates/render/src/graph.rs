@@ -1,0 +1,235 @@
+//! The pass graph: what a scene's effects and lights build, decided once per render.
+//!
+//! [`PassGraph::build`] turns the scene's [`Effect`]s and lights into the base pass's shader
+//! features (each effect a WGSL override, compiled out when absent), which light draws the one
+//! shadow map (the first with `shadows = true`, and only when `shadows` is listed) and at which
+//! size, which tables are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
+//! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse), and
+//! the ordered list of passes. The order itself is written once, in [`ordered_passes`]: the
+//! graph, the GPU encoder ([`crate::gpu::Gpu::draw`]), its timestamps and `--explain`
+//! ([`crate::load::plan`]) all walk that list. What was asked and cannot be built (a `shadows`
+//! effect with no shadow-casting light) is a note, never a silent omission.
+
+use crate::effect::Effect;
+use crate::passes::{DiffuseMode, Features};
+use crate::scene::Scene;
+use crate::skin::options::{Analytic, CurvatureSource};
+
+/// One pass of a frame, in the order [`ordered_passes`] gives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PassKind {
+    /// Depth of the mesh seen from the key light.
+    ShadowMap,
+    /// Opacity of the translucent casters seen from the key light.
+    TranslucentShadows,
+    /// TSD's texture-space back-face and culling pre-pass.
+    TsdPrepass,
+    /// TSD's light map: every light's diffuse irradiance in texture space.
+    TsdLightMap,
+    /// TSD blur pass `i` (0-based) of the ping-pong pair.
+    TsdBlur(u32),
+    /// The base pass: texture-space bump mapping and the Lafortune BRDF into the target.
+    Base,
+}
+
+impl PassKind {
+    /// The pass's name, as `--explain` and the GPU timings print it.
+    pub fn name(self) -> String {
+        match self {
+            PassKind::ShadowMap => "shadow map".into(),
+            PassKind::TranslucentShadows => "translucent shadows".into(),
+            PassKind::TsdPrepass => "tsd back-face pre-pass".into(),
+            PassKind::TsdLightMap => "tsd light map".into(),
+            PassKind::TsdBlur(i) => format!("tsd blur {}", i + 1),
+            PassKind::Base => "base".into(),
+        }
+    }
+
+    /// Whether the pass belongs to texture-space diffusion (which frustum and distance culling
+    /// may skip as a whole).
+    pub fn is_tsd(self) -> bool {
+        matches!(self, PassKind::TsdPrepass | PassKind::TsdLightMap | PassKind::TsdBlur(_))
+    }
+}
+
+/// The passes of a frame, in execution order: the shadow map (and its translucent casters),
+/// texture-space diffusion's pre-pass, light map and `tsd_blurs` blurs, then the base pass. The
+/// one place the order is written.
+pub fn ordered_passes(shadow_map: bool, translucent: bool, tsd_blurs: Option<u32>) -> Vec<PassKind> {
+    let mut passes = Vec::new();
+    if shadow_map {
+        passes.push(PassKind::ShadowMap);
+        if translucent {
+            passes.push(PassKind::TranslucentShadows);
+        }
+    }
+    if let Some(blurs) = tsd_blurs {
+        passes.extend([PassKind::TsdPrepass, PassKind::TsdLightMap]);
+        passes.extend((0..blurs).map(PassKind::TsdBlur));
+    }
+    passes.push(PassKind::Base);
+    passes
+}
+
+/// The key light's shadow map, its size and filter decided once.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ShadowMapPlan {
+    /// Index of the light that draws it.
+    pub light: usize,
+    /// Side in texels.
+    pub size: u32,
+    /// Box filter side.
+    pub filter: u32,
+}
+
+/// Texture-space diffusion's light maps.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TsdPlan {
+    /// Light map side in texels.
+    pub size: u32,
+    /// Blur passes.
+    pub blurs: u32,
+}
+
+/// What a scene's effects and lights decide.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PassGraph {
+    /// The base pass's shader features.
+    pub features: Features,
+    /// The key light's shadow map, if one is drawn.
+    pub shadow: Option<ShadowMapPlan>,
+    /// Whether the diffuse LUT is built (read by the base pass).
+    pub diffuse_lut: bool,
+    /// Whether the shadow-scattering LUT is built.
+    pub shadow_lut: bool,
+    /// Whether the skin's zonal table is built (SH ambient with a pre-integrated diffuse).
+    pub zonal_table: bool,
+    /// Whether per-vertex curvature is computed from the mesh.
+    pub vertex_curvature: bool,
+    /// Texture-space diffusion, if it runs.
+    pub tsd: Option<TsdPlan>,
+    /// The passes, in execution order ([`ordered_passes`]).
+    pub passes: Vec<PassKind>,
+    /// Why something asked for is not built (no shadow-casting light, extra shadow lights).
+    pub notes: Vec<String>,
+}
+
+impl PassGraph {
+    /// The graph of `scene` whose mesh's bounding sphere has `radius` mesh units: only what its
+    /// effects and lights ask for.
+    pub fn build(scene: &Scene, radius: f32) -> PassGraph {
+        let mut notes = Vec::new();
+        let pre = &scene.skin.preintegrated;
+        let diffuse = diffuse_mode(scene);
+        let key_light = key_light(scene, &mut notes);
+        let shadows = key_light.is_some();
+        let shadow_scattering = shadows && scene.has(Effect::ShadowScattering);
+        let translucent_shadows = shadows && !scene.translucent.is_empty();
+        if !shadows && !scene.translucent.is_empty() {
+            notes.push("[[translucent]] casters tint only the key light's shadow map, and none is drawn".into());
+        }
+        let sh_ambient = scene.has(Effect::ShAmbient);
+        let derivative = diffuse.reads_curvature() && pre.curvature == CurvatureSource::Derivative;
+        let zonal_table = sh_ambient && diffuse.reads_curvature();
+        let tsd = (diffuse == DiffuseMode::LightMap)
+            .then(|| TsdPlan { size: scene.skin.tsd.size, blurs: scene.skin.tsd.passes });
+        let vertex_curvature = (diffuse.reads_curvature() && !derivative) || zonal_table || tsd.is_some();
+        let shadow = key_light.map(|light| {
+            let options = &scene.skin.shadow;
+            match shadow_scattering {
+                true => ShadowMapPlan {
+                    light,
+                    size: scattering_map_size(
+                        options.map_size,
+                        options.scatter_filter,
+                        options.scatter_width_mm,
+                        radius * scene.mm_per_unit,
+                    ),
+                    filter: options.scatter_filter,
+                },
+                false => ShadowMapPlan { light, size: options.map_size, filter: options.filter },
+            }
+        });
+        PassGraph {
+            features: Features {
+                diffuse,
+                derivative_curvature: derivative,
+                sh_ambient,
+                shadows,
+                shadow_scattering,
+                translucent_shadows,
+            },
+            shadow,
+            diffuse_lut: diffuse == DiffuseMode::Lut,
+            shadow_lut: shadow_scattering,
+            zonal_table,
+            vertex_curvature,
+            tsd,
+            passes: ordered_passes(shadows, translucent_shadows, tsd.map(|t| t.blurs)),
+            notes,
+        }
+    }
+
+    /// [`PassGraph::build`] for the scene's loaded mesh.
+    pub fn for_loaded(scene: &Scene, loaded: &crate::load::Loaded) -> PassGraph {
+        let (_, radius) = crate::passes::bounding_sphere(&loaded.inputs.vertices);
+        PassGraph::build(scene, radius)
+    }
+
+    /// The pass names, in order.
+    pub fn pass_names(&self) -> Vec<String> {
+        self.passes.iter().map(|p| p.name()).collect()
+    }
+}
+
+fn diffuse_mode(scene: &Scene) -> DiffuseMode {
+    let decider = scene.effects.iter().copied().find(|e| e.decides_diffuse());
+    match decider {
+        Some(Effect::Preintegrated) => DiffuseMode::Lut,
+        Some(Effect::PreintegratedAnalytic) => match scene.skin.preintegrated.analytic {
+            Analytic::Own => DiffuseMode::OwnFit,
+            Analytic::Blog => DiffuseMode::Blog,
+        },
+        Some(Effect::Tsd) => DiffuseMode::LightMap,
+        _ => DiffuseMode::Lambert,
+    }
+}
+
+/// The light that draws the shadow map, with a note for every light whose request is not met.
+fn key_light(scene: &Scene, notes: &mut Vec<String>) -> Option<usize> {
+    let casters: Vec<usize> = scene.lights.iter().enumerate().filter(|(_, l)| l.shadows).map(|(i, _)| i).collect();
+    let listed = scene.has(Effect::Shadows);
+    match (listed, casters.first()) {
+        (true, Some(&key)) => {
+            for &other in &casters[1..] {
+                notes.push(format!("light[{other}] asks for shadows: one shadow map is drawn, for light[{key}]"));
+            }
+            Some(key)
+        }
+        (true, None) => {
+            notes.push(format!(
+                "effect `{}`: no light has `shadows = true`, so no shadow map is drawn",
+                Effect::Shadows
+            ));
+            None
+        }
+        (false, _) => {
+            for &i in &casters {
+                notes.push(format!(
+                    "light[{i}] asks for shadows but `effects` does not list `{}`: drawn unshadowed",
+                    Effect::Shadows
+                ));
+            }
+            None
+        }
+    }
+}
+
+/// The shadow map side whose `filter` texels span `width_mm` across a sphere of `radius_mm`
+/// (the light's projection covers its diameter), at most `map_size` and at least 16.
+pub fn scattering_map_size(map_size: u32, filter: u32, width_mm: f32, radius_mm: f32) -> u32 {
+    let texel_mm = width_mm / filter.max(1) as f32;
+    let side = (2.0 * radius_mm / texel_mm).ceil();
+    if side.is_finite() { (side as u32).clamp(16, map_size.max(16)) } else { map_size }
+}
