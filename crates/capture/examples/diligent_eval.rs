@@ -101,7 +101,7 @@ impl Object {
         let photos = picked.iter().map(|&i| self.photos[i].clone()).collect();
         let names = picked.iter().map(|i| format!("{:03}.png", i + 1)).collect();
         let stack = PhotoStack::new(photos, names)?.with_mask(self.mask.clone())?;
-        let lights = picked.iter().map(|&i| self.rig.lights[i].clone()).collect();
+        let lights = picked.iter().map(|&i| self.rig.lights()[i].clone()).collect();
         let rig = Rig::new(lights, "subset")?;
         let config = SolveConfig { method, ..SolveConfig::default() };
         let start = Instant::now();
@@ -112,7 +112,7 @@ impl Object {
 
     /// Mean error and seconds of `robust::fit_pixel` over the mask from the `picked` lights.
     fn fit(&self, picked: &[usize], config: &RobustConfig) -> Result<(f32, f64), Failure> {
-        let dirs: Vec<Vec3> = picked.iter().map(|&i| self.rig.lights[i].direction).collect();
+        let dirs: Vec<Vec3> = picked.iter().map(|&i| self.rig.lights()[i].direction()).collect();
         let lights = Lights::new(&dirs)?;
         let (w, h) = self.truth.size();
         let start = Instant::now();
@@ -140,7 +140,7 @@ impl Object {
         picked
             .iter()
             .map(|&i| {
-                let e = self.rig.lights[i].intensity;
+                let e = self.rig.lights()[i].intensity();
                 let Samples::U16(s) = self.photos[i].samples() else {
                     panic!("DiLiGenT photos are 16-bit RGB");
                 };
@@ -168,7 +168,7 @@ fn nonzero(photo: &Photo) -> Vec<bool> {
 
 /// The light indices `spec` names: `all`, a count picked well spread, or a 1-based list.
 fn pick(rig: &Rig, spec: &str) -> Result<Vec<usize>, Failure> {
-    let k = rig.lights.len();
+    let k = rig.lights().len();
     if spec == "all" {
         return Ok((0..k).collect());
     }
