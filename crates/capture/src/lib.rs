@@ -16,8 +16,8 @@ pub mod import;
 pub mod near;
 pub mod readings;
 pub mod rig;
-pub mod session;
 pub mod robust;
+pub mod session;
 pub mod solve;
 pub mod sphere;
 
