@@ -5,7 +5,8 @@
 //! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
 //! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
 //! (device, offscreen targets, the base pass); [`load`] turns a scene into what the passes draw
-//! and plans the passes and resources it needs.
+//! and plans the passes and resources it needs; [`highlight`] measures how much of a render's
+//! highlights the specular lobes make.
 
 pub mod brdf;
 pub mod effect;
@@ -13,6 +14,7 @@ pub mod frames;
 pub mod gpu;
 pub mod graph;
 pub mod head;
+pub mod highlight;
 pub mod label;
 pub mod load;
 pub mod mesh;

@@ -183,3 +183,43 @@ fn skin_albedo_is_finite_at_several_angles() {
         assert!(a.max_element() < 2.0, "{degrees}: {a}");
     }
 }
+
+/// Unpolarised Fresnel reflectance of a smooth dielectric interface of index `eta` (from air)
+/// at incidence `theta` (radians).
+fn fresnel(theta: f64, eta: f64) -> f64 {
+    let (ci, si) = (theta.cos(), theta.sin());
+    let ct = (1.0 - (si / eta).powi(2)).sqrt();
+    let rs = ((ci - eta * ct) / (ci + eta * ct)).powi(2);
+    let rp = ((eta * ci - ct) / (eta * ci + ct)).powi(2);
+    0.5 * (rs + rp)
+}
+
+/// The default lobes against the physics they were fitted to (issue 13: "check the default
+/// lobes"). Skin's specular is reflection at the oily surface of the stratum corneum, index about
+/// 1.4, so the lobes' directional albedo should be about the Fresnel reflectance of such an
+/// interface: 2.8 % at normal incidence, rising toward grazing (Marschner et al. 1999 measured
+/// skin's specular rising steeply toward grazing). It is: 3.1 / 2.3 / 2.3 % (R/G/B) at normal
+/// incidence, 4.4 % at 45 degrees (Fresnel 3.7 %), 6.5 % at 60 (7.2 %), 10 % at 70 (15 %). At
+/// 80 degrees the fit falls to half of the smooth interface's 37 %, as a rough surface's
+/// shadowing and masking make it. So the small value at normal incidence (lobe 2 about 6e-5 at
+/// l = v = n) is the data, not a transcription error: the sheen shows where light and view are
+/// oblique, which is where the demo's figure 7 puts them.
+#[test]
+fn skin_lobes_reflect_like_the_skin_surface() {
+    let lobes = Lafortune { diffuse: Vec3::ZERO, lobes: Lafortune::skin().lobes };
+    let albedo = |deg: f64| {
+        let t = deg.to_radians();
+        lobes.albedo(Vec3::new(t.sin() as f32, 0.0, t.cos() as f32), 200)
+    };
+    let mut last = Vec3::ZERO;
+    for deg in [0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0] {
+        let a = albedo(deg);
+        let f = fresnel(f64::to_radians(deg), 1.4) as f32;
+        // Within a factor 1.6 of the smooth interface up to 70 degrees (the fit's own scatter
+        // across channels is 1.4x at normal incidence); above half of it at 80.
+        let (lo, hi) = if deg < 75.0 { (f / 1.6, f * 1.6) } else { (f / 2.5, f) };
+        assert!(a.min_element() > lo && a.max_element() < hi, "{deg} deg: lobes {a}, Fresnel {f}");
+        assert!(a.cmpgt(last).all(), "{deg} deg: {a} does not rise from {last}");
+        last = a;
+    }
+}

@@ -1,7 +1,8 @@
 //! The demo's renders of the sample face map (Haro et al. 2001, section 6):
 //!
-//! - figure 7: the sample head (`skinkit_render::head`) with and without the fine-scale normal
-//!   map, same light and camera, side by side;
+//! - figure 7 (`super::figure7`): the sample head's face (`skinkit_render::head`), close, with and
+//!   without the fine-scale normal map, same light and camera, side by side, with what the
+//!   specular lobes add to its highlights;
 //! - figure 8: one patch of the map on a flat square under four light directions (azimuths 0, 90,
 //!   180 and 270 degrees at 15 degrees elevation, where the fine structure shows), in a 2 x 2 grid.
 //! - the skin figure (issue 6): the head wearing the map under a shadow-casting key light, drawn
@@ -24,6 +25,7 @@ use skinkit_render::head;
 use skinkit_render::label::{RgbImage, draw_label};
 use skinkit_render::mesh::Mesh;
 
+use super::figure7::{Figure7, figure7};
 use super::render::{Job, RenderReport, render};
 use crate::output::Output;
 
@@ -39,7 +41,7 @@ const AZIMUTHS_DEG: [f32; 4] = [0.0, 90.0, 180.0, 270.0];
 /// What the figures cost and where they are.
 #[derive(Serialize)]
 pub struct FiguresReport {
-    pub figure7: String,
+    pub figure7: Figure7,
     pub figure8: String,
     pub skin: SkinFigure,
     pub renders: Vec<RenderReport>,
@@ -125,38 +127,6 @@ size = [{PANEL}, {PANEL}]
     )
 }
 
-/// Head scene text: the sample head, with `normal_map` (a path relative to the scene) or flat.
-fn head_scene(normal_map: Option<&str>) -> String {
-    let map = normal_map
-        .map_or(String::new(), |p| format!("\n[normal_map]\npath = \"{p}\"\ngreen = \"up\"\nframes = \"paper\"\n"));
-    format!(
-        r#"# Written by `skinkit demo`: the sample head (figure 7 of Haro et al. 2001){}.
-mesh = "head.obj"
-mm_per_unit = 1.0
-specular = "pixel"
-{map}
-[[light]]
-kind = "directional"
-direction = [0.85, 0.45, 0.25]
-intensity = 4.0
-
-[[light]]
-kind = "directional"
-direction = [-0.6, 0.1, 0.8]
-intensity = 0.6
-
-[[camera]]
-position = [150.0, 30.0, 330.0]
-target = [10.0, 5.0, 40.0]
-fov_deg = 30.0
-
-[output]
-size = [{PANEL}, {PANEL}]
-"#,
-        if normal_map.is_some() { ", with the grown face map" } else { ", without fine-scale structure" }
-    )
-}
-
 /// Patch scene text: the map's patch on a flat square lit from `azimuth_deg` at 30 degrees.
 fn patch_scene(normal_map: &str, azimuth_deg: f32) -> String {
     let (elevation, azimuth) = (PATCH_ELEVATION_DEG.to_radians(), azimuth_deg.to_radians());
@@ -200,7 +170,7 @@ fn patch(side: f32, u: [f32; 2], v: [f32; 2]) -> Mesh {
     }
 }
 
-fn write_text(path: &Path, text: &str) -> Result<()> {
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
     io::write_atomic(path, |w| {
         use std::io::Write;
         w.write_all(text.as_bytes()).map_err(|source| skinkit_maps::Error::Io { path: path.to_owned(), source })
@@ -229,13 +199,10 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
         renders.push(render(&job, &gpu, out)?);
         Ok(image)
     };
-    let smooth = job("head-smooth", head_scene(None))?;
-    let skin = job("head-skin", head_scene(Some(&map)))?;
     let lit: Vec<PathBuf> =
         AZIMUTHS_DEG.iter().map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a))).collect::<Result<_>>()?;
 
-    let figure7 = dir.join("figure7.png");
-    grid(&[(smooth, "without fine-scale structure".into()), (skin, "with the grown map".into())], 2, &figure7)?;
+    let figure7 = figure7(&map, dir, &gpu, out, &mut renders)?;
     let figure8 = dir.join("figure8.png");
     let lit: Vec<(PathBuf, String)> =
         lit.into_iter().zip(AZIMUTHS_DEG).map(|(p, a)| (p, format!("light azimuth {a} deg"))).collect();
@@ -259,7 +226,7 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
         panels.push((name, image, seconds));
     }
     let skin = skin_figure(&panels, &dir.join("figure-skin.png"))?;
-    Ok(FiguresReport { figure7: figure7.display().to_string(), figure8: figure8.display().to_string(), skin, renders })
+    Ok(FiguresReport { figure7, figure8: figure8.display().to_string(), skin, renders })
 }
 
 /// The skin figure: the six panels in a 3 x 2 grid, each method's FLIP mean against the last.
@@ -305,7 +272,7 @@ const LABEL_PX: f32 = 26.0;
 
 /// Tiles same-sized 8-bit RGB PNGs into `columns` columns, each with its label drawn into its
 /// top-left corner.
-fn grid(images: &[(PathBuf, String)], columns: usize, path: &Path) -> Result<()> {
+pub fn grid(images: &[(PathBuf, String)], columns: usize, path: &Path) -> Result<()> {
     let photos = images.iter().map(|(p, _)| io::read_photo(p, &Limits::default())).collect::<Result<Vec<_>, _>>()?;
     let (w, h) = (photos[0].width(), photos[0].height());
     let rows = images.len().div_ceil(columns);

@@ -1,0 +1,139 @@
+//! The demo's figure 7 (Haro et al. 2001, section 6, figure 7): the sample head's face without
+//! and with the grown map, side by side, under the same light and camera, with a label per panel.
+//!
+//! # Framing
+//! The camera looks at the face from the subject's left, three-quarters on, close enough that
+//! a pixel covers about 0.1 mm of skin at the cheek: a texel of the demo's 2048 x 1024 face map
+//! (0.1 x 0.2 mm on the sample head) is about a pixel, so pores (0.1-0.3 mm across) and the
+//! furrows between them (0.5-1 mm apart) are a few pixels wide.
+//!
+//! # Light
+//! The default skin lobes (pbrt's Lafortune fit of the Cornell skin measurements; see
+//! `skinkit_render::brdf`) are weak where light and view are both near the normal (their albedo
+//! is about Fresnel's 2.8 % there) and strong toward grazing, as skin is (Marschner et al.
+//! 1999). A key light from the subject's right, above and a little behind the face, meets the
+//! forehead and the far cheek obliquely where the camera sees them obliquely too, so the sheen
+//! lies there ("specular highlights such as those on the forehead and left cheek", section 6);
+//! a dim fill from the camera's side keeps the rest of the face readable.
+//!
+//! # Measured
+//! The skin panel is also drawn to linear EXR with the lobes and without (`lobes = []`), and the
+//! same for the smooth head; [`skinkit_render::highlight::specular_share`] says how much of the
+//! highlight pixels the lobes make, and how much the bumps spread the sheen (the report's
+//! `figure7_specular`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use serde::Serialize;
+use skinkit_maps::Samples;
+use skinkit_maps::io::{self, Limits};
+use skinkit_render::gpu::Gpu;
+use skinkit_render::highlight::{SpecularShare, specular_share};
+
+use super::figures::{grid, write_text};
+use super::render::{Job, RenderReport, render};
+use crate::output::Output;
+
+/// Side of each figure-7 panel, pixels.
+pub const PANEL: usize = 1024;
+
+/// The camera and lights of figure 7 (and of `samples/scenes/head.toml`, which repeats them).
+const LIGHTS_AND_CAMERA: &str = r#"[[light]]
+kind = "directional"
+direction = [-0.85, 0.45, -0.25]
+intensity = 4.0
+
+[[light]]
+kind = "directional"
+direction = [0.6, 0.1, 0.8]
+intensity = 0.5
+
+[[camera]]
+position = [95.0, 45.0, 290.0]
+target = [12.0, 28.0, 80.0]
+fov_deg = 26.0
+"#;
+
+/// Figure 7 and what its specular lobes contribute.
+#[derive(Serialize)]
+pub struct Figure7 {
+    pub image: String,
+    /// The lobes' share of the skin panel's highlights.
+    pub skin: SpecularShare,
+    /// The same for the smooth head (no fine-scale structure).
+    pub smooth: SpecularShare,
+}
+
+/// The face scene: the sample head with `normal_map` (a path relative to the scene) or smooth,
+/// with the default skin lobes or none.
+pub fn face_scene(normal_map: Option<&str>, lobes: bool) -> String {
+    let map = normal_map
+        .map_or(String::new(), |p| format!("\n[normal_map]\npath = \"{p}\"\ngreen = \"up\"\nframes = \"paper\"\n"));
+    let brdf =
+        if lobes { "" } else { "\n# The diffuse term alone, to measure what the lobes add.\n[brdf]\nlobes = []\n" };
+    format!(
+        r#"# Written by `skinkit demo`: the sample head's face (figure 7 of Haro et al. 2001){}{}.
+mesh = "head.obj"
+mm_per_unit = 1.0
+specular = "pixel"
+{map}{brdf}
+{LIGHTS_AND_CAMERA}
+[output]
+size = [{PANEL}, {PANEL}]
+"#,
+        if normal_map.is_some() { ", with the grown face map" } else { ", without fine-scale structure" },
+        if lobes { "" } else { ", diffuse only" },
+    )
+}
+
+/// Renders figure 7 of `map` (an absolute path with forward slashes) into `dir`, which already
+/// holds `head.obj`; every render's report is pushed to `renders`.
+pub fn figure7(map: &str, dir: &Path, gpu: &Gpu, out: &Output, renders: &mut Vec<RenderReport>) -> Result<Figure7> {
+    let mut scenes = Scenes { dir, gpu, out, renders };
+    let smooth = scenes.draw("head-smooth", face_scene(None, true), "png")?;
+    let skin = scenes.draw("head-skin", face_scene(Some(map), true), "png")?;
+    let skin_share = scenes.share("head-skin", Some(map))?;
+    let smooth_share = scenes.share("head-smooth", None)?;
+    let image = dir.join("figure7.png");
+    let panels = [(smooth, "without fine-scale structure".to_owned()), (skin, "with the grown map".to_owned())];
+    grid(&panels, 2, &image)?;
+    Ok(Figure7 { image: image.display().to_string(), skin: skin_share, smooth: smooth_share })
+}
+
+/// Writes scenes into a folder and renders them on one device.
+struct Scenes<'a> {
+    dir: &'a Path,
+    gpu: &'a Gpu,
+    out: &'a Output,
+    renders: &'a mut Vec<RenderReport>,
+}
+
+impl Scenes<'_> {
+    /// Writes `name.toml` and renders it to `name.ext`.
+    fn draw(&mut self, name: &str, text: String, ext: &str) -> Result<PathBuf> {
+        let scene = self.dir.join(format!("{name}.toml"));
+        write_text(&scene, &text)?;
+        let image = self.dir.join(format!("{name}.{ext}"));
+        let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
+        self.renders.push(render(&job, self.gpu, self.out)?);
+        Ok(image)
+    }
+
+    /// The face with `map` drawn to EXR with and without the lobes, and the lobes' share.
+    fn share(&mut self, name: &str, map: Option<&str>) -> Result<SpecularShare> {
+        let with = self.draw(name, face_scene(map, true), "exr")?;
+        let without = self.draw(&format!("{name}-diffuse"), face_scene(map, false), "exr")?;
+        specular_share(&linear(&with)?, &linear(&without)?)
+            .with_context(|| format!("comparing {} with {}", with.display(), without.display()))
+    }
+}
+
+/// The linear RGB samples of an EXR render.
+fn linear(path: &Path) -> Result<Vec<f32>> {
+    let photo = io::read_photo(path, &Limits::default())?;
+    match photo.samples() {
+        Samples::F32(s) => Ok(s.clone()),
+        _ => bail!("{}: expected a float render", path.display()),
+    }
+}
