@@ -2,19 +2,21 @@
 //! and with the grown map, side by side, under the same light and camera, with a label per panel.
 //!
 //! # Framing
-//! The camera looks at the face from the subject's left, three-quarters on, close enough that
-//! a pixel covers about 0.1 mm of skin at the cheek: a texel of the demo's 2048 x 1024 face map
-//! (0.1 x 0.2 mm on the sample head) is about a pixel, so pores (0.1-0.3 mm across) and the
-//! furrows between them (0.5-1 mm apart) are a few pixels wide.
+//! The camera looks from the subject's left front at the right brow, eye socket, temple and the
+//! side of the nose, about 96 mm across 1024 pixels (0.09 mm a pixel at the brow): a texel of the
+//! demo's 2048 x 1024 face map (about 0.1 x 0.2 mm on the sample head) is one to two pixels, so
+//! pores (0.1-0.3 mm across) and the temple's furrows (0.5-1 mm apart) are a few pixels wide. A
+//! whole head at this scale would need panels about 2500 pixels tall.
 //!
 //! # Light
 //! The default skin lobes (pbrt's Lafortune fit of the Cornell skin measurements; see
-//! `skinkit_render::brdf`) are weak where light and view are both near the normal (their albedo
-//! is about Fresnel's 2.8 % there) and strong toward grazing, as skin is (Marschner et al.
-//! 1999). A key light from the subject's right, above and a little behind the face, meets the
-//! forehead and the far cheek obliquely where the camera sees them obliquely too, so the sheen
-//! lies there ("specular highlights such as those on the forehead and left cheek", section 6);
-//! a dim fill from the camera's side keeps the rest of the face readable.
+//! `skinkit_render::brdf` and the test `skin_lobes_reflect_like_the_skin_surface`) are weak
+//! where light and view are both near the normal (their albedo is about a 1.4-index surface's
+//! Fresnel reflectance there, 2-3 %) and strong toward grazing, as skin is (Marschner et al.
+//! 1999). So the sheen comes from a light above and behind the subject's right, which meets the
+//! temple, the brow and the side of the nose obliquely where the camera also sees them
+//! obliquely; a warm light from the subject's left front draws the rest of the face. Section 6:
+//! "specular highlights ... look more realistic when there is fine detail under the highlight".
 //!
 //! # Measured
 //! The skin panel is also drawn to linear EXR with the lobes and without (`lobes = []`), and the
@@ -41,18 +43,19 @@ pub const PANEL: usize = 1024;
 /// The camera and lights of figure 7 (and of `samples/scenes/head.toml`, which repeats them).
 const LIGHTS_AND_CAMERA: &str = r#"[[light]]
 kind = "directional"
-direction = [-0.85, 0.45, -0.25]
+direction = [-0.45, 0.77, -0.45]
 intensity = 4.0
 
 [[light]]
 kind = "directional"
-direction = [0.6, 0.1, 0.8]
-intensity = 0.5
+direction = [0.85, 0.45, 0.25]
+colour = [1.0, 0.93, 0.85]
+intensity = 2.5
 
 [[camera]]
-position = [95.0, 45.0, 290.0]
-target = [12.0, 28.0, 80.0]
-fov_deg = 26.0
+position = [40.0, 30.0, 300.0]
+target = [-12.0, 28.0, 80.0]
+fov_deg = 24.0
 "#;
 
 /// Figure 7 and what its specular lobes contribute.
