@@ -7,13 +7,17 @@
 //! (luminance of the render with lobes, Rec. 709 weights; background pixels are 0 in both
 //! renders and never count). For them [`SpecularShare`] gives the mean and median of
 //! `(with - without) / with`, the share of each highlight pixel's luminance the lobes make, and
-//! the relative spread of the lobes' radiance there (standard deviation over mean), which is what
-//! the fine-scale bumps raise when they break a sheen up.
+//! the lobes' local contrast there: the mean absolute difference between the lobes' luminance
+//! and its [`CONTRAST_BOX`] x [`CONTRAST_BOX`] box average, over the lobes' mean luminance. Smooth
+//! shading varies little over 9 pixels; fine-scale bumps that break a sheen up raise it.
 
 use serde::Serialize;
 
 /// The brightest part of the covered pixels taken as the highlight: 2 %.
 pub const HIGHLIGHT_FRACTION: f64 = 0.02;
+
+/// Side of the box the local contrast compares each pixel with (odd).
+pub const CONTRAST_BOX: usize = 9;
 
 /// The lobes' part of a render's highlights.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -28,16 +32,16 @@ pub struct SpecularShare {
     pub median: f64,
     /// The lobes' share of all the covered pixels' summed luminance.
     pub overall: f64,
-    /// Standard deviation over mean of the lobes' luminance on the highlight pixels.
-    pub specular_spread: f64,
+    /// Local contrast of the lobes' luminance on the highlight pixels (see the module docs).
+    pub local_contrast: f64,
 }
 
 /// Errors from comparing two renders.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ShareError {
-    /// The renders differ in pixel count or are not RGB triples.
-    #[error("renders of {with} and {without} samples cannot be compared (same size, RGB, needed)")]
+    /// The renders differ in pixel count, are not RGB triples or not `width` wide.
+    #[error("renders of {with} and {without} samples cannot be compared (same size, RGB, whole rows needed)")]
     Size {
         /// Samples of the render with lobes.
         with: usize,
@@ -54,38 +58,59 @@ pub fn luminance(rgb: &[f32]) -> f64 {
     0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64
 }
 
-/// Compares `with` (lobes on) and `without` (lobes off): linear RGB samples, 3 per pixel, the
-/// same scene, camera and size.
+/// Compares `with` (lobes on) and `without` (lobes off): linear RGB samples, 3 per pixel, rows
+/// `width` pixels long, the same scene, camera and size.
 ///
 /// # Errors
 /// When the sizes differ or no pixel of `with` is lit.
-pub fn specular_share(with: &[f32], without: &[f32]) -> Result<SpecularShare, ShareError> {
-    if with.len() != without.len() || with.len() % 3 != 0 {
+pub fn specular_share(with: &[f32], without: &[f32], width: usize) -> Result<SpecularShare, ShareError> {
+    if with.len() != without.len() || width == 0 || with.len() % (3 * width) != 0 {
         return Err(ShareError::Size { with: with.len(), without: without.len() });
     }
-    // (luminance with, luminance of the lobes) per covered pixel.
-    let mut pixels: Vec<(f64, f64)> = with
-        .chunks_exact(3)
-        .zip(without.chunks_exact(3))
-        .map(|(a, b)| (luminance(a), luminance(b)))
-        .filter(|&(a, _)| a > 0.0 && a.is_finite())
-        .map(|(a, b)| (a, (a - b).max(0.0)))
-        .collect();
-    if pixels.is_empty() {
+    let lum: Vec<f64> = with.chunks_exact(3).map(luminance).collect();
+    let lobes: Vec<f64> = lum.iter().zip(without.chunks_exact(3)).map(|(a, b)| (a - luminance(b)).max(0.0)).collect();
+    // Covered pixels, brightest first.
+    let mut order: Vec<usize> = (0..lum.len()).filter(|&i| lum[i] > 0.0 && lum[i].is_finite()).collect();
+    if order.is_empty() {
         return Err(ShareError::Empty);
     }
-    let covered = pixels.len();
-    let overall = pixels.iter().map(|p| p.1).sum::<f64>() / pixels.iter().map(|p| p.0).sum::<f64>();
+    let covered = order.len();
+    let overall = order.iter().map(|&i| lobes[i]).sum::<f64>() / order.iter().map(|&i| lum[i]).sum::<f64>();
     let highlight = ((covered as f64 * HIGHLIGHT_FRACTION).round() as usize).max(1);
-    pixels.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let top = &pixels[..highlight];
-    let mut shares: Vec<f64> = top.iter().map(|&(a, s)| s / a).collect();
+    order.sort_by(|&a, &b| lum[b].total_cmp(&lum[a]));
+    let top = &order[..highlight];
+    let mut shares: Vec<f64> = top.iter().map(|&i| lobes[i] / lum[i]).collect();
     shares.sort_by(f64::total_cmp);
     let mean = shares.iter().sum::<f64>() / highlight as f64;
-    let specular_mean = top.iter().map(|p| p.1).sum::<f64>() / highlight as f64;
-    let variance = top.iter().map(|p| (p.1 - specular_mean).powi(2)).sum::<f64>() / highlight as f64;
-    let specular_spread = if specular_mean > 0.0 { variance.sqrt() / specular_mean } else { 0.0 };
-    Ok(SpecularShare { covered, highlight, mean, median: median(&shares), overall, specular_spread })
+    let boxed = box_mean(&lobes, width, CONTRAST_BOX / 2);
+    let lobes_mean = top.iter().map(|&i| lobes[i]).sum::<f64>() / highlight as f64;
+    let deviation = top.iter().map(|&i| (lobes[i] - boxed[i]).abs()).sum::<f64>() / highlight as f64;
+    let local_contrast = if lobes_mean > 0.0 { deviation / lobes_mean } else { 0.0 };
+    Ok(SpecularShare { covered, highlight, mean, median: median(&shares), overall, local_contrast })
+}
+
+/// The mean of each pixel's `(2 r + 1)^2` box, clamped at the image's edges (a summed-area
+/// table, in f64).
+fn box_mean(values: &[f64], width: usize, r: usize) -> Vec<f64> {
+    let height = values.len() / width;
+    let mut sat = vec![0.0; (width + 1) * (height + 1)];
+    for y in 0..height {
+        let mut row = 0.0;
+        for x in 0..width {
+            row += values[y * width + x];
+            sat[(y + 1) * (width + 1) + x + 1] = sat[y * (width + 1) + x + 1] + row;
+        }
+    }
+    let at = |x: usize, y: usize| sat[y * (width + 1) + x];
+    (0..values.len())
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(width));
+            let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(height));
+            let sum = at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0);
+            sum / ((x1 - x0) * (y1 - y0)) as f64
+        })
+        .collect()
 }
 
 /// Median of sorted values (the mean of the middle two for an even count).
@@ -112,28 +137,51 @@ mod tests {
         without.extend([5.0, 6.0]);
         with.extend([1.0; 98]);
         without.extend([1.0; 98]);
-        let s = specular_share(&grey(&with), &grey(&without)).unwrap();
+        let s = specular_share(&grey(&with), &grey(&without), 105).unwrap();
         assert_eq!((s.covered, s.highlight), (100, 2));
         assert!((s.mean - 0.375).abs() < 1e-12, "{s:?}");
         assert!((s.median - 0.375).abs() < 1e-12, "{s:?}");
         assert!((s.overall - 7.0 / 116.0).abs() < 1e-12, "{s:?}");
-        // Lobes 5 and 2: mean 3.5, standard deviation 1.5.
-        assert!((s.specular_spread - 1.5 / 3.5).abs() < 1e-12, "{s:?}");
+        // One row: the 9-box around pixel 5 (lobes 5) holds pixels 1-9, lobes 5 + 2 = 7, mean
+        // 7/9; around pixel 6 (lobes 2) pixels 2-10, the same. Deviations 38/9 and 11/9 over the
+        // lobes' mean 3.5.
+        let expected = (38.0 / 9.0 + 11.0 / 9.0) / 2.0 / 3.5;
+        assert!((s.local_contrast - expected).abs() < 1e-12, "{s:?}");
     }
 
     #[test]
     fn luminance_weights_the_channels() {
         let with = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
         let without = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-        let s = specular_share(&with, &without).unwrap();
+        let s = specular_share(&with, &without, 1).unwrap();
         // The green pixel is the brighter one (0.7152) and has no specular.
         assert_eq!((s.highlight, s.mean), (1, 0.0));
         assert!((s.overall - 0.2126 / (0.2126 + 0.7152)).abs() < 1e-9);
     }
 
     #[test]
+    fn box_mean_against_a_direct_sum() {
+        let (w, h, r) = (7, 5, 2);
+        let values: Vec<f64> = (0..w * h).map(|i| ((i * 37) % 11) as f64).collect();
+        let fast = box_mean(&values, w, r);
+        for y in 0..h {
+            for x in 0..w {
+                let (mut sum, mut n) = (0.0, 0);
+                for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
+                    for xx in x.saturating_sub(r)..(x + r + 1).min(w) {
+                        sum += values[yy * w + xx];
+                        n += 1;
+                    }
+                }
+                assert!((fast[y * w + x] - sum / n as f64).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
     fn refuses_mismatched_or_dark_renders() {
-        assert!(matches!(specular_share(&[1.0; 6], &[1.0; 3]), Err(ShareError::Size { .. })));
-        assert!(matches!(specular_share(&[0.0; 6], &[0.0; 6]), Err(ShareError::Empty)));
+        assert!(matches!(specular_share(&[1.0; 6], &[1.0; 3], 1), Err(ShareError::Size { .. })));
+        assert!(matches!(specular_share(&[1.0; 6], &[1.0; 6], 4), Err(ShareError::Size { .. })));
+        assert!(matches!(specular_share(&[0.0; 6], &[0.0; 6], 2), Err(ShareError::Empty)));
     }
 }

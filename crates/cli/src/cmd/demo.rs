@@ -226,10 +226,12 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             );
             let (skin, smooth) = (&r.figure7.skin, &r.figure7.smooth);
             s += &format!(
-                "figure 7 highlights (brightest 2 %): the specular lobes make {:.0} % of a pixel (median {:.0} %) with the grown map, {:.0} % on the smooth head\n",
+                "figure 7 highlights (brightest 2 %): the specular lobes make {:.0} % of a pixel (median {:.0} %; smooth head {:.0} %), local contrast of the sheen {:.3} with the grown map, {:.3} without\n",
                 skin.mean * 100.0,
                 skin.median * 100.0,
-                smooth.mean * 100.0
+                smooth.mean * 100.0,
+                skin.local_contrast,
+                smooth.local_contrast
             );
         }
         s + &format!("outputs and demo-report.json in {}", args.out.display())

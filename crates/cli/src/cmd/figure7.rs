@@ -21,8 +21,8 @@
 //! # Measured
 //! The skin panel is also drawn to linear EXR with the lobes and without (`lobes = []`), and the
 //! same for the smooth head; [`skinkit_render::highlight::specular_share`] says how much of the
-//! highlight pixels the lobes make, and how much the bumps spread the sheen (the report's
-//! `figure7_specular`).
+//! highlight pixels the lobes make, and how much local contrast the bumps give the sheen (the
+//! demo report's `renders.figure7`).
 
 use std::path::{Path, PathBuf};
 
@@ -127,16 +127,53 @@ impl Scenes<'_> {
     fn share(&mut self, name: &str, map: Option<&str>) -> Result<SpecularShare> {
         let with = self.draw(name, face_scene(map, true), "exr")?;
         let without = self.draw(&format!("{name}-diffuse"), face_scene(map, false), "exr")?;
-        specular_share(&linear(&with)?, &linear(&without)?)
+        let ((a, width), (b, _)) = (linear(&with)?, linear(&without)?);
+        specular_share(&a, &b, width)
             .with_context(|| format!("comparing {} with {}", with.display(), without.display()))
     }
 }
 
-/// The linear RGB samples of an EXR render.
-fn linear(path: &Path) -> Result<Vec<f32>> {
+/// The linear RGB samples of an EXR render and its width.
+fn linear(path: &Path) -> Result<(Vec<f32>, usize)> {
     let photo = io::read_photo(path, &Limits::default())?;
     match photo.samples() {
-        Samples::F32(s) => Ok(s.clone()),
+        Samples::F32(s) => Ok((s.clone(), photo.width())),
         _ => bail!("{}: expected a float render", path.display()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use skinkit_render::scene::Scene;
+
+    use super::*;
+
+    fn samples() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/scenes")
+    }
+
+    /// `samples/scenes/head.toml` and `head-smooth.toml` promise figure 7's light and camera.
+    #[test]
+    fn sample_scenes_repeat_the_figure() {
+        let figure = Scene::parse(&face_scene(Some("map.png"), true), &samples().join("figure.toml")).unwrap();
+        for name in ["head.toml", "head-smooth.toml"] {
+            let sample = Scene::load(&samples().join(name)).unwrap();
+            assert_eq!(sample.lights, figure.lights, "{name}");
+            assert_eq!(sample.cameras, figure.cameras, "{name}");
+            assert_eq!(sample.brdf, figure.brdf, "{name}");
+        }
+    }
+
+    #[test]
+    fn the_diffuse_scene_differs_only_by_its_lobes() {
+        let origin = samples().join("figure.toml");
+        let with = Scene::parse(&face_scene(Some("map.png"), true), &origin).unwrap();
+        let without = Scene::parse(&face_scene(Some("map.png"), false), &origin).unwrap();
+        assert_eq!(with.brdf.lobes.len(), 3);
+        assert!(without.brdf.lobes.is_empty());
+        assert_eq!(with.brdf.diffuse, without.brdf.diffuse);
+        assert_eq!((with.lights, with.cameras, with.normal_map), (without.lights, without.cameras, without.normal_map));
     }
 }
