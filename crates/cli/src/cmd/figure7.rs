@@ -9,14 +9,14 @@
 //! whole head at this scale would need panels about 2500 pixels tall.
 //!
 //! # Light
-//! The default skin lobes (pbrt's Lafortune fit of the Cornell skin measurements; see
+//! The default skin lobes (pbrt-v1's skin set; see
 //! `skinkit_render::brdf` and the test `skin_lobes_reflect_like_the_skin_surface`) are weak
 //! where light and view are both near the normal (their albedo is about a 1.4-index surface's
 //! Fresnel reflectance there, 2-3 %) and strong toward grazing, as skin is (Marschner et al.
 //! 1999). So the sheen comes from a light above and behind the subject's right, which meets the
 //! temple, the brow and the side of the nose obliquely where the camera also sees them
-//! obliquely; a warm light from the subject's left front draws the rest of the face. Section 6:
-//! "specular highlights ... look more realistic when there is fine detail under the highlight".
+//! obliquely; a warm light from the subject's left front draws the rest of the face. Section 6
+//! of the paper notes that highlights look more real with fine detail under them.
 //!
 //! # Measured
 //! The skin panel is also drawn to linear EXR with the lobes and without (`lobes = []`), and the
