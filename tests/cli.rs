@@ -253,25 +253,35 @@ fn demo_reports_every_mold_with_both_solvers() {
     for name in ["normal.png", "normal.exr", "labels.png", "report.json"] {
         assert!(tmp.path().join("face").join(name).is_file(), "face/{name} missing");
     }
-    // Figures 7 (the head without and with the face map) and 8 (a patch under four lights),
+    // Figures 7 (the face without and with the face map) and 8 (a patch under four lights),
     // rendered on the test machine's adapter (lavapipe in CI: scripts/test installs it).
     let renders = &report["renders"];
-    assert_eq!(renders["renders"].as_array().unwrap().len(), 12, "{renders}");
+    // Figure 7: two PNG panels and four EXRs (skin and smooth, lobes on and off); figure 8: four
+    // patches; the skin figure: six methods.
+    assert_eq!(renders["renders"].as_array().unwrap().len(), 16, "{renders}");
     let read = |name: &str| {
         let p = skinkit_maps::io::read_photo(&tmp.path().join("render").join(name), &Default::default()).unwrap();
         let skinkit_maps::Samples::U8(v) = p.samples() else { panic!("{name} is not 8-bit") };
         (p.width(), p.height(), v.clone())
     };
     let (w7, h7, fig7) = read("figure7.png");
-    assert_eq!((w7, h7), (2 * 768, 768));
+    assert_eq!((w7, h7), (2 * 1024, 1024));
     let (w8, h8, _) = read("figure8.png");
     assert_eq!((w8, h8), (2 * 768, 2 * 768));
     // The right panel (with fine-scale structure) is not the left one.
     let differ = (0..h7)
-        .flat_map(|y| (0..768).map(move |x| (x, y)))
-        .filter(|&(x, y)| fig7[3 * (y * w7 + x)] != fig7[3 * (y * w7 + x + 768)])
+        .flat_map(|y| (0..1024).map(move |x| (x, y)))
+        .filter(|&(x, y)| fig7[3 * (y * w7 + x)] != fig7[3 * (y * w7 + x + 1024)])
         .count();
-    assert!(differ > 768 * 768 / 20, "figure 7's panels differ in only {differ} pixels");
+    assert!(differ > 1024 * 1024 / 20, "figure 7's panels differ in only {differ} pixels");
+    // Issue 13: the lobes make most of figure 7's highlights (73 % measured; the old lighting gave
+    // at most about a quarter), and the grown map raises the sheen's local contrast (0.042
+    // against 0.028 measured).
+    let (skin, smooth) = (&renders["figure7"]["skin"], &renders["figure7"]["smooth"]);
+    let share = skin["mean"].as_f64().unwrap();
+    assert!(share > 0.5, "the lobes make only {share} of figure 7's highlights");
+    let (c_skin, c_smooth) = (skin["local_contrast"].as_f64().unwrap(), smooth["local_contrast"].as_f64().unwrap());
+    assert!(c_skin > 1.2 * c_smooth, "sheen contrast {c_skin} with the map, {c_smooth} without");
     assert!(tmp.path().join("render").join("head-skin.toml").is_file());
     // The skin figure: six methods in a 3 x 2 grid, each with its FLIP mean against the
     // reference (the last panel, 0 against itself; the others differ from it but stay close).
