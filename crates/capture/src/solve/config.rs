@@ -1,5 +1,6 @@
 //! What a solve is asked to do: [`Method`], [`SolveConfig`] and progress reports.
 
+use crate::readings::{SHADOW_ABS, SHADOW_REL, Shadows};
 use crate::{Error, Result};
 
 /// Which per-pixel solve to run.
@@ -13,7 +14,7 @@ pub enum Method {
     #[default]
     Robust,
     /// The earlier robust solve: drop readings under the shadow thresholds (`shadow_abs`,
-    /// `shadow_rel` of the brightest) or saturated, least squares on the rest. Less accurate than
+    /// `shadow_rel` of the pixel's 90th-percentile reading) or saturated, least squares on the rest. Less accurate than
     /// [`Method::Robust`] on every case measured, kept for speed on shadowed photos.
     Threshold,
 }
@@ -30,9 +31,10 @@ impl Method {
 pub struct SolveConfig {
     pub method: Method,
     /// Absolute shadow floor, as a fraction of full scale after ambient subtraction and division
-    /// by the light's intensity.
+    /// by the light's intensity ([`Shadows::abs`]).
     pub shadow_abs: f32,
-    /// Shadow threshold relative to the pixel's own brightest (intensity-divided) reading.
+    /// Shadow threshold relative to the pixel's own 90th-percentile usable reading
+    /// ([`Shadows::rel`]); the robust fit, the threshold solve and the near-light solve all use it.
     pub shadow_rel: f32,
     /// Fraction of full scale at or above which a raw reading is saturated.
     pub saturation: f32,
@@ -48,8 +50,8 @@ impl Default for SolveConfig {
     fn default() -> Self {
         SolveConfig {
             method: Method::Robust,
-            shadow_abs: 0.005,
-            shadow_rel: 0.05,
+            shadow_abs: SHADOW_ABS,
+            shadow_rel: SHADOW_REL,
             saturation: 0.995,
             min_lights: 3,
             max_condition: 50.0,
@@ -59,6 +61,11 @@ impl Default for SolveConfig {
 }
 
 impl SolveConfig {
+    /// The shadow rule of [`Self::shadow_abs`] and [`Self::shadow_rel`].
+    pub fn shadows(&self) -> Shadows {
+        Shadows { abs: self.shadow_abs, rel: self.shadow_rel }
+    }
+
     /// Checks every field's range.
     ///
     /// # Errors
