@@ -8,14 +8,16 @@ use crate::{Error, Result};
 pub enum Method {
     /// One least-squares solve over all lights (the paper).
     LeastSquares,
-    /// Least squares where it explains the readings; elsewhere the rank-trimmed fit of
-    /// [`crate::robust`] (shadow threshold from the pixel's own readings, the brightest 40 % and
-    /// darkest 10 % of the lit readings left out of the start, every light that agrees refitted).
+    /// Drops shadowed and saturated readings as [`Method::Threshold`] does and keeps least squares
+    /// on the rest where it explains them (relative residual within 2 %); elsewhere the
+    /// rank-trimmed fit of [`crate::robust`] (the brightest 40 % and darkest 10 % of the lit
+    /// readings left out of the start, every light that agrees refitted).
     #[default]
     Robust,
     /// The earlier robust solve: drop readings under the shadow thresholds (`shadow_abs`,
-    /// `shadow_rel` of the pixel's 90th-percentile reading) or saturated, least squares on the rest. Less accurate than
-    /// [`Method::Robust`] on every case measured, kept for speed on shadowed photos.
+    /// `shadow_rel` of the pixel's 90th-percentile reading) or saturated, least squares on the
+    /// rest, no fit. Less accurate than [`Method::Robust`] on every case measured; faster only
+    /// where pixels need the fit (highlights, inter-reflections).
     Threshold,
 }
 

@@ -207,7 +207,7 @@ impl Plan<'_> {
         let Some(fit) = &self.fit else { return };
         for t in 0..std::mem::take(&mut s.refits) {
             let j = s.refit[t] as usize;
-            let (normal, albedo, confidence, used) = self.finish_fit(fit, j, s);
+            let (normal, albedo, confidence, used) = self.finish_fit(fit, j, s, subsets);
             stats.lights_used[used] += 1;
             out.normals[j] = normal;
             out.albedo[j] = A::rgb(albedo);

@@ -11,6 +11,7 @@
 use glam::Vec3;
 
 use super::plan::{Plan, Scratch};
+use super::subsets::Subsets;
 use super::{CHUNK, RESIDUAL_SCALE, SolveConfig};
 use crate::Result;
 use crate::robust::{self, Lights, RobustConfig};
@@ -48,15 +49,16 @@ impl Fit {
 
 impl Plan<'_> {
     /// Normal, albedo, confidence and lights used of pixel `j` of the chunk, by the robust fit of
-    /// its loaded readings.
-    pub(super) fn finish_fit(&self, fit: &Fit, j: usize, s: &Scratch) -> (Vec3, Vec3, f32, usize) {
+    /// its loaded readings (condition numbers from the dense subset table when there is one).
+    pub(super) fn finish_fit(&self, fit: &Fit, j: usize, s: &Scratch, subsets: &Subsets) -> (Vec3, Vec3, f32, usize) {
         let mut r = [0.0f32; super::MAX_LIGHTS];
         let mut sat = [false; super::MAX_LIGHTS];
         for i in 0..self.k {
             r[i] = s.r[i * CHUNK + j];
             sat[i] = s.sat[i * CHUNK + j] != 0;
         }
-        let f = robust::fit_pixel(&r[..self.k], &sat[..self.k], &fit.lights, &fit.config);
+        let condition = |bits| subsets.dense_condition(bits);
+        let f = robust::fit_pixel_cached(&r[..self.k], &sat[..self.k], &fit.lights, &fit.config, &condition);
         if f.used() == 0 {
             return (Vec3::ZERO, Vec3::ZERO, 0.0, 0);
         }

@@ -449,11 +449,11 @@ impl<'a> Plan<'a> {
             let (normal, albedo, confidence, used) = if self.robust && scratch.dropped[j] > 0 {
                 let (texel, factor) = self.finish_subset(j, scratch, subsets, &mut local);
                 match &self.fit {
-                    Some(fit) if !fit.agrees(factor) => self.finish_fit(fit, j, scratch),
+                    Some(fit) if !fit.agrees(factor) => self.finish_fit(fit, j, scratch, subsets),
                     _ => texel,
                 }
             } else if let Some(fit) = refit {
-                self.finish_fit(fit, j, scratch)
+                self.finish_fit(fit, j, scratch, subsets)
             } else {
                 let normal = Vec3::new(scratch.gx[j], scratch.gy[j], scratch.gz[j]);
                 let albedo = if self.rgb {
