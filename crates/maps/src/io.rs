@@ -324,9 +324,12 @@ pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, 
         "exr" => write_exr_rgb(path, w, h, |x, y| encoding.encode_float(map.get(x, y))),
         "png" => {
             let (max, layout) = if bits == 8 { (255, PngLayout::Rgb8) } else { (65535, PngLayout::Rgb16) };
-            let samples: Vec<u16> =
-                map.as_slice().iter().flat_map(|&n| encoding.encode(n, max).map(|c| c as u16)).collect();
-            write_png(path, w, h, layout, &samples)
+            let texels = map.as_slice();
+            write_png_rows(path, w, h, layout, |y, row| {
+                for (out, &n) in row.chunks_exact_mut(3).zip(&texels[y * w..(y + 1) * w]) {
+                    out.copy_from_slice(&encoding.encode(n, max).map(|c| c as u16));
+                }
+            })
         }
         other => Err(Error::InvalidParameter(format!(
             "{}: cannot write a normal map as `.{other}` (use .png or .exr)",
@@ -345,18 +348,19 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
     match extension(path).as_str() {
         "exr" => write_exr_rgb(path, w, h, |x, y| map.get(x, y).to_array()),
         "png" => {
-            let samples: Vec<u16> = if bits == 8 {
-                map.as_slice()
-                    .iter()
-                    .flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0).round() as u16))
-                    .collect()
-            } else {
-                map.as_slice()
-                    .iter()
-                    .flat_map(|c| c.to_array().map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16))
-                    .collect()
-            };
-            write_png(path, w, h, if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 }, &samples)
+            let texels = map.as_slice();
+            let layout = if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 };
+            write_png_rows(path, w, h, layout, |y, row| {
+                for (out, c) in row.chunks_exact_mut(3).zip(&texels[y * w..(y + 1) * w]) {
+                    out.copy_from_slice(&c.to_array().map(|v| {
+                        if bits == 8 {
+                            (linear_to_srgb(v) * 255.0).round() as u16
+                        } else {
+                            (v.clamp(0.0, 1.0) * 65535.0).round() as u16
+                        }
+                    }));
+                }
+            })
         }
         other => Err(Error::InvalidParameter(format!("{}: cannot write a colour map as `.{other}`", path.display()))),
     }
