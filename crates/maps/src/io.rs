@@ -280,9 +280,10 @@ pub use exr::compression::Compression as ExrCompression;
 
 /// Writes float RGB triples to an uncompressed scanline EXR file, atomically.
 ///
-/// Uncompressed on purpose: measured on a captured 4096x4096 normal map, ZIP took 4.8 s to save 1%
-/// (float normals carry sensor noise in every mantissa bit) and RLE saved nothing, while
-/// uncompressed writes in about 0.2 s.
+/// Uncompressed on purpose: float normals carry sensor noise in every mantissa bit, so the
+/// compressors buy little for their time. `cargo bench -p skinkit-maps --bench codecs` on a
+/// noisy 1024x1024 normal map (2-core machine at load 10): uncompressed 18 ms; RLE 120 ms and
+/// no smaller; ZIP1 0.87 s for 0.9 % less; ZIP16 0.88 s for 5.8 % less; PIZ 1.09 s for 13 % less.
 ///
 /// # Errors
 /// When writing fails.
