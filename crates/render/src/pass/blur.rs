@@ -1,0 +1,101 @@
+//! TSD's blur (`blur.wgsl`): a Poisson disc scaled per texel by the light map's kernel size,
+//! ping-ponged between the two light maps; the first pass also dilates across UV seams.
+
+use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, colour_attachment};
+use crate::pass::light_map::UNWRITTEN_TEXEL;
+use crate::pass::tsd::TsdResources;
+
+/// The `Blur` uniform of blur.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct BlurRaw {
+    pub(crate) params: [f32; 4],
+    pub(crate) flags: [u32; 4],
+}
+
+impl Gpu {
+    /// TSD blur `i`: over the whole map, from `maps[i % 2]` into the other (the first also
+    /// dilates into the texels the light map left unwritten).
+    pub(crate) fn encode_blur(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        tsd: &TsdResources,
+        i: usize,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let view = tsd.maps[(i + 1) % 2].create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd blur"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::Blur));
+        pass.set_bind_group(0, &tsd.blur_groups[i], &[]);
+        pass.draw(0..3, 0..1);
+    }
+
+    pub(crate) fn build_blur_pipeline(&self) -> wgpu::RenderPipeline {
+        self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tsd blur pipeline"),
+            layout: Some(&self.blur_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &self.blur_shader,
+                entry_point: Some("vs_full_screen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &self.blur_shader,
+                entry_point: Some("fs_blur"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: LIGHT_MAP_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+}
+
+pub(crate) fn blur_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("tsd blur bind group layout"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
+}

@@ -1,0 +1,32 @@
+//! TSD's light map (`light_map.wgsl`): every light's diffuse irradiance in texture space, the
+//! blur's kernel size in alpha.
+
+use crate::gpu::{Gpu, PipelineKey, PreparedScene, colour_attachment, depth_attachment};
+use crate::pass::tsd::TsdResources;
+
+/// What the light maps hold where no texel was drawn (the first blur dilates into them).
+pub(crate) const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+
+impl Gpu {
+    /// TSD's light map (depth "equal": only texels the pre-pass kept).
+    pub(crate) fn encode_light_map(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        tsd: &TsdResources,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let depth_view = tsd.depth.create_view(&Default::default());
+        let view = tsd.maps[0].create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd light map"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            depth_stencil_attachment: Some(depth_attachment(&depth_view, wgpu::LoadOp::Load)),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::LightMap(scene.features)));
+        self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+    }
+}

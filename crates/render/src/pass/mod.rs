@@ -1,0 +1,131 @@
+//! The passes of a frame, one module each, in the order [`crate::graph::ordered_passes`] gives:
+//! [`shadow`] (the key light's depth), [`translucent`] (the translucent casters' opacity),
+//! [`tsd_prepass`], [`light_map`] and [`blur`] (texture-space diffusion, with what they share in
+//! [`tsd`]), then [`base`]. Each module owns its WGSL (beside it), the resources it allocates,
+//! its pipeline and how it encodes itself; [`Gpu::encode_pass`] is the one place a
+//! [`PassKind`] is dispatched to its pass.
+//!
+//! The mesh passes share one shader module, [`BASE_WGSL`], assembled here from `common.wgsl` and
+//! each pass's file (one module compiled once per device, its pipelines differing by entry point
+//! and override constants); the blur is a full-screen pass with its own module, [`BLUR_WGSL`].
+
+pub(crate) mod base;
+pub(crate) mod blur;
+pub(crate) mod light_map;
+pub(crate) mod shadow;
+pub(crate) mod translucent;
+pub(crate) mod tsd;
+pub(crate) mod tsd_prepass;
+
+use crate::gpu::{Gpu, PreparedScene, Target};
+use crate::graph::PassKind;
+use base::{Globals, LightRaw, LobeRaw};
+use blur::BlurRaw;
+
+/// The WGSL source of the mesh passes: the closed-form LUT fits, the shared part, then each
+/// pass's file in graph order.
+pub const BASE_WGSL: &str = concat!(
+    include_str!("../../shaders/skin_fit.wgsl"),
+    "\n",
+    include_str!("common.wgsl"),
+    "\n",
+    include_str!("shadow.wgsl"),
+    "\n",
+    include_str!("translucent.wgsl"),
+    "\n",
+    include_str!("tsd.wgsl"),
+    "\n",
+    include_str!("tsd_prepass.wgsl"),
+    "\n",
+    include_str!("light_map.wgsl"),
+    "\n",
+    include_str!("base.wgsl"),
+);
+
+/// The WGSL source of texture-space diffusion's Poisson blur.
+pub const BLUR_WGSL: &str = include_str!("blur.wgsl");
+
+/// Bytes of the base pass's uniform block (camera, lights, lobes, options).
+pub const UNIFORM_BYTES: u64 = std::mem::size_of::<Globals>() as u64;
+
+/// The layout of one uniform struct as Rust writes it, to check against the WGSL that reads it
+/// (the naga-reflection test in `tests/wgsl.rs`).
+#[derive(Debug, Clone)]
+pub struct UniformLayout {
+    /// The WGSL source declaring the struct.
+    pub source: &'static str,
+    /// The struct's name in the WGSL.
+    pub name: &'static str,
+    /// `size_of` of the Rust struct.
+    pub size: usize,
+    /// Each field's name and `offset_of`, in declaration order.
+    pub members: Vec<(&'static str, usize)>,
+}
+
+/// The layouts of every uniform struct the passes upload.
+pub fn uniform_layouts() -> Vec<UniformLayout> {
+    macro_rules! layout {
+        ($source:expr, $name:literal, $ty:ty, [$($field:ident),* $(,)?]) => {
+            UniformLayout {
+                source: $source,
+                name: $name,
+                size: std::mem::size_of::<$ty>(),
+                members: vec![$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
+            }
+        };
+    }
+    vec![
+        layout!(BASE_WGSL, "Light", LightRaw, [vector, radiance]),
+        layout!(BASE_WGSL, "Lobe", LobeRaw, [cx, cy, cz, n]),
+        layout!(
+            BASE_WGSL,
+            "Globals",
+            Globals,
+            [
+                view_proj,
+                eye,
+                diffuse,
+                counts,
+                options,
+                lights,
+                lobes,
+                skin,
+                blur,
+                shadow_view_proj,
+                shadow,
+                shadow_lut,
+                sh,
+                zonal,
+                tsd,
+                tsd_kernel
+            ]
+        ),
+        layout!(BLUR_WGSL, "Blur", BlurRaw, [params, flags]),
+    ]
+}
+
+impl Gpu {
+    /// Encodes one pass of the graph.
+    pub(crate) fn encode_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kind: PassKind,
+        scene: &PreparedScene,
+        target: &Target,
+        writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let shadow = || scene.shadow.as_ref().expect("a shadow pass is listed only with its shadow map");
+        let tsd = || scene.tsd.as_ref().expect("a TSD pass is listed only with its light maps");
+        match kind {
+            PassKind::ShadowMap => self.encode_shadow(encoder, scene, shadow(), writes),
+            PassKind::TranslucentShadows => {
+                let opacity = shadow().opacity.as_ref().expect("translucent shadows are listed with their map");
+                self.encode_translucent(encoder, shadow(), opacity, writes);
+            }
+            PassKind::TsdPrepass => self.encode_tsd_prepass(encoder, scene, tsd(), writes),
+            PassKind::TsdLightMap => self.encode_light_map(encoder, scene, tsd(), writes),
+            PassKind::TsdBlur(i) => self.encode_blur(encoder, tsd(), i as usize, writes),
+            PassKind::Base => self.encode_base(encoder, scene, target, writes),
+        }
+    }
+}
