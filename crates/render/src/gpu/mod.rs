@@ -27,7 +27,7 @@ pub use crate::pass::{BASE_WGSL, BLUR_WGSL, UNIFORM_BYTES, UniformLayout, unifor
 pub use device::quiet_vulkan_loader;
 pub use frame::PreparedScene;
 pub(crate) use frame::tone_code;
-pub(crate) use pipelines::PipelineKey;
+pub(crate) use pipelines::{MESH_BUFFERS, MeshPipeline, POSITION_BUFFER, PipelineKey, depth_state};
 pub use readback::{Rendered, padded_row_bytes};
 pub(crate) use resources::{
     DEPTH_FORMAT, LIGHT_MAP_FORMAT, SceneTextures, colour_attachment, depth_attachment, extent,

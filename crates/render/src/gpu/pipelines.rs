@@ -1,11 +1,12 @@
 //! The pipeline cache: every pipeline is built once per key (pass, features, target format) and
-//! kept for the life of the [`Gpu`], so a second render of a scene builds none.
+//! kept for the life of the [`Gpu`], so a second render of a scene builds none. The passes say
+//! what their pipelines are ([`MeshPipeline`]); this module builds them.
 
-use super::{DEPTH_FORMAT, Gpu, LIGHT_MAP_FORMAT, OutputFormat};
+use super::{DEPTH_FORMAT, Gpu, OutputFormat};
 use crate::passes::Features;
 use crate::shading::Vertex;
 
-/// Which pipeline: the base pass for an output format and features, or one of the skin passes.
+/// Which pipeline: a pass, with the shader features and target format it is built for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum PipelineKey {
     Base(OutputFormat, Features),
@@ -16,6 +17,59 @@ pub(crate) enum PipelineKey {
     Blur,
 }
 
+/// A mesh pass's pipeline in the shared module ([`crate::pass::BASE_WGSL`]): its entry points,
+/// vertex buffers, colour target and depth test, and the features its override constants take.
+pub(crate) struct MeshPipeline<'a> {
+    pub(crate) label: &'static str,
+    pub(crate) vertex_entry: &'static str,
+    pub(crate) buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    pub(crate) fragment_entry: Option<&'static str>,
+    pub(crate) target: Option<wgpu::TextureFormat>,
+    pub(crate) depth: Option<wgpu::DepthStencilState>,
+    pub(crate) features: Features,
+}
+
+const STRIDE: u64 = std::mem::size_of::<Vertex>() as u64;
+const MESH_ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2
+];
+const SKIN_ATTRIBUTES: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![4 => Float32x2];
+const POSITION_ATTRIBUTE: [wgpu::VertexAttribute; 1] =
+    [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
+
+/// The mesh's two vertex buffers: [`Vertex`] and the per-vertex skin attributes (1/r, mm per UV).
+pub(crate) const MESH_BUFFERS: [Option<wgpu::VertexBufferLayout<'static>>; 2] = [
+    Some(wgpu::VertexBufferLayout {
+        array_stride: STRIDE,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &MESH_ATTRIBUTES,
+    }),
+    Some(wgpu::VertexBufferLayout {
+        array_stride: 8,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &SKIN_ATTRIBUTES,
+    }),
+];
+
+/// Only the positions of the mesh's vertex buffer.
+pub(crate) const POSITION_BUFFER: [Option<wgpu::VertexBufferLayout<'static>>; 1] =
+    [Some(wgpu::VertexBufferLayout {
+        array_stride: STRIDE,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &POSITION_ATTRIBUTE,
+    })];
+
+/// A depth test against [`DEPTH_FORMAT`], writing the depth or not.
+pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
 impl Gpu {
     /// The pipeline for `key`, built once.
     pub(crate) fn pipeline(&self, key: PipelineKey) -> wgpu::RenderPipeline {
@@ -23,109 +77,31 @@ impl Gpu {
         if let Some((_, p)) = cache.iter().find(|(k, _)| *k == key) {
             return p.clone();
         }
-        let pipeline = self.build_pipeline(key);
+        let pipeline = crate::pass::build_pipeline(self, key);
         cache.push((key, pipeline.clone()));
         pipeline
     }
 
-    fn build_pipeline(&self, key: PipelineKey) -> wgpu::RenderPipeline {
-        if key == PipelineKey::Blur {
-            return self.build_blur_pipeline();
-        }
-        let attributes = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2
-        ];
-        let skin_attributes = wgpu::vertex_attr_array![4 => Float32x2];
-        let position_only =
-            [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
-        let stride = std::mem::size_of::<Vertex>() as u64;
-        let step_mode = wgpu::VertexStepMode::Vertex;
-        let full_buffers = [
-            Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode, attributes: &attributes }),
-            Some(wgpu::VertexBufferLayout { array_stride: 8, step_mode, attributes: &skin_attributes }),
-        ];
-        let shadow_buffers =
-            [Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode, attributes: &position_only })];
-        let translucent_position = wgpu::vertex_attr_array![0 => Float32x3];
-        let translucent_opacity = wgpu::vertex_attr_array![1 => Float32x3];
-        let translucent_buffers = [
-            Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode, attributes: &translucent_position }),
-            Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode, attributes: &translucent_opacity }),
-        ];
-        let features = match key {
-            PipelineKey::Base(_, f) | PipelineKey::TsdPrepass(f) | PipelineKey::LightMap(f) => f,
-            PipelineKey::Shadow | PipelineKey::Translucent | PipelineKey::Blur => Features::default(),
-        };
-        let constants = features.constants();
+    /// Builds a mesh pass's pipeline in the shared module, with the shared bind group layout.
+    pub(crate) fn mesh_pipeline(&self, spec: &MeshPipeline) -> wgpu::RenderPipeline {
+        let constants = spec.features.constants();
         let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
-        let depth = |write: bool, compare| {
-            Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(write),
-                depth_compare: Some(compare),
-                stencil: Default::default(),
-                bias: Default::default(),
-            })
-        };
-        let (label, vertex_entry, buffers, fragment, target, depth_stencil): (_, _, &[_], _, _, _) = match key {
-            PipelineKey::Base(format, _) => (
-                "base pass pipeline",
-                "vs_main",
-                &full_buffers,
-                Some("fs_main"),
-                Some(format.texture_format()),
-                depth(true, wgpu::CompareFunction::Less),
-            ),
-            PipelineKey::Shadow => (
-                "shadow map pipeline",
-                "vs_shadow",
-                &shadow_buffers,
-                None,
-                None,
-                depth(true, wgpu::CompareFunction::Less),
-            ),
-            PipelineKey::Translucent => (
-                "translucent shadows pipeline",
-                "vs_translucent",
-                &translucent_buffers,
-                Some("fs_translucent"),
-                Some(LIGHT_MAP_FORMAT),
-                depth(false, wgpu::CompareFunction::Less),
-            ),
-            PipelineKey::TsdPrepass(_) => (
-                "tsd back-face pre-pass pipeline",
-                "vs_texture_space",
-                &full_buffers,
-                Some("fs_tsd_prepass"),
-                None,
-                depth(true, wgpu::CompareFunction::Always),
-            ),
-            PipelineKey::LightMap(_) => (
-                "tsd light map pipeline",
-                "vs_texture_space",
-                &full_buffers,
-                Some("fs_light_map"),
-                Some(LIGHT_MAP_FORMAT),
-                depth(false, wgpu::CompareFunction::Equal),
-            ),
-            PipelineKey::Blur => unreachable!("built above"),
-        };
         let targets =
-            [target.map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
-        let targets: &[Option<wgpu::ColorTargetState>] = if target.is_some() { &targets } else { &[] };
+            [spec.target.map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let targets: &[Option<wgpu::ColorTargetState>] = if spec.target.is_some() { &targets } else { &[] };
         self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
+            label: Some(spec.label),
             layout: Some(&self.pipeline_layout),
             vertex: wgpu::VertexState {
                 module: &self.shader,
-                entry_point: Some(vertex_entry),
+                entry_point: Some(spec.vertex_entry),
                 compilation_options: options.clone(),
-                buffers,
+                buffers: spec.buffers,
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil,
+            depth_stencil: spec.depth.clone(),
             multisample: Default::default(),
-            fragment: fragment.map(|entry| wgpu::FragmentState {
+            fragment: spec.fragment_entry.map(|entry| wgpu::FragmentState {
                 module: &self.shader,
                 entry_point: Some(entry),
                 compilation_options: options.clone(),

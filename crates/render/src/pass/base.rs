@@ -2,9 +2,9 @@
 //! the target (Haro et al. 2001, section 5), with the skin effects it reads; and the uniform block
 //! every mesh pass reads.
 
-use crate::gpu::{Gpu, PipelineKey, PreparedScene, Target};
+use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, PipelineKey, PreparedScene, Target, depth_state};
 use crate::gpu::tone_code;
-use crate::passes::{self, SkinSetup, Table};
+use crate::passes::{self, Features, SkinSetup, Table};
 use crate::shading::{GreenAxis, LightKind, MAX_LIGHTS, MAX_LOBES, RenderInputs, SpecularMode};
 
 /// One light as the shader reads it.
@@ -117,6 +117,19 @@ pub(crate) fn globals(inputs: &RenderInputs, skin: &SkinSetup) -> Globals {
         zonal: [zonal_scale, zonal_offset, 0.0, 0.0],
         tsd,
         tsd_kernel,
+    }
+}
+
+/// The base pass's pipeline for a target of `format`.
+pub(crate) fn pipeline(format: OutputFormat, features: Features) -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "base pass pipeline",
+        vertex_entry: "vs_main",
+        buffers: &MESH_BUFFERS,
+        fragment_entry: Some("fs_main"),
+        target: Some(format.texture_format()),
+        depth: depth_state(true, wgpu::CompareFunction::Less),
+        features,
     }
 }
 

@@ -36,34 +36,6 @@ impl Gpu {
         pass.set_bind_group(0, &tsd.blur_groups[i], &[]);
         pass.draw(0..3, 0..1);
     }
-
-    pub(crate) fn build_blur_pipeline(&self) -> wgpu::RenderPipeline {
-        self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("tsd blur pipeline"),
-            layout: Some(&self.blur_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &self.blur_shader,
-                entry_point: Some("vs_full_screen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &self.blur_shader,
-                entry_point: Some("fs_blur"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: LIGHT_MAP_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    }
 }
 
 pub(crate) fn blur_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -97,5 +69,34 @@ pub(crate) fn blur_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLa
                 count: None,
             },
         ],
+    })
+}
+
+/// The blur's pipeline: a full-screen triangle in its own module.
+pub(crate) fn pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
+    gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("tsd blur pipeline"),
+        layout: Some(&gpu.blur_pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &gpu.blur_shader,
+            entry_point: Some("vs_full_screen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &gpu.blur_shader,
+            entry_point: Some("fs_blur"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: LIGHT_MAP_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
     })
 }

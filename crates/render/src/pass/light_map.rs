@@ -1,11 +1,28 @@
 //! TSD's light map (`light_map.wgsl`): every light's diffuse irradiance in texture space, the
 //! blur's kernel size in alpha.
 
-use crate::gpu::{Gpu, PipelineKey, PreparedScene, colour_attachment, depth_attachment};
+use crate::gpu::{
+    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, colour_attachment,
+    depth_attachment, depth_state,
+};
 use crate::pass::tsd::TsdResources;
+use crate::passes::Features;
 
 /// What the light maps hold where no texel was drawn (the first blur dilates into them).
 pub(crate) const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+
+/// The light map's pipeline: depth test "equal" against the pre-pass, so only kept texels shade.
+pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "tsd light map pipeline",
+        vertex_entry: "vs_texture_space",
+        buffers: &MESH_BUFFERS,
+        fragment_entry: Some("fs_light_map"),
+        target: Some(LIGHT_MAP_FORMAT),
+        depth: depth_state(false, wgpu::CompareFunction::Equal),
+        features,
+    }
+}
 
 impl Gpu {
     /// TSD's light map (depth "equal": only texels the pre-pass kept).

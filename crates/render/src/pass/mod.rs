@@ -17,7 +17,7 @@ pub(crate) mod translucent;
 pub(crate) mod tsd;
 pub(crate) mod tsd_prepass;
 
-use crate::gpu::{Gpu, PreparedScene, Target};
+use crate::gpu::{Gpu, PipelineKey, PreparedScene, Target};
 use crate::graph::PassKind;
 use base::{Globals, LightRaw, LobeRaw};
 use blur::BlurRaw;
@@ -127,5 +127,17 @@ impl Gpu {
             PassKind::TsdBlur(i) => self.encode_blur(encoder, tsd(), i as usize, writes),
             PassKind::Base => self.encode_base(encoder, scene, target, writes),
         }
+    }
+}
+
+/// Builds the pipeline of `key`: the one place a pipeline key is dispatched to its pass.
+pub(crate) fn build_pipeline(gpu: &Gpu, key: PipelineKey) -> wgpu::RenderPipeline {
+    match key {
+        PipelineKey::Base(format, features) => gpu.mesh_pipeline(&base::pipeline(format, features)),
+        PipelineKey::Shadow => gpu.mesh_pipeline(&shadow::pipeline()),
+        PipelineKey::Translucent => gpu.mesh_pipeline(&translucent::pipeline()),
+        PipelineKey::TsdPrepass(features) => gpu.mesh_pipeline(&tsd_prepass::pipeline(features)),
+        PipelineKey::LightMap(features) => gpu.mesh_pipeline(&light_map::pipeline(features)),
+        PipelineKey::Blur => blur::pipeline(gpu),
     }
 }

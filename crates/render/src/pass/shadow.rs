@@ -1,9 +1,12 @@
 //! The key light's shadow map (`shadow.wgsl`): the mesh's depth seen from the light, and the
 //! filtered lookup the base and light-map passes read it with.
 
-use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, PreparedScene, SceneTextures, extent};
+use crate::gpu::{
+    Gpu, LIGHT_MAP_FORMAT, MeshPipeline, POSITION_BUFFER, PipelineKey, PreparedScene, SceneTextures, depth_state,
+    extent,
+};
 use crate::pass::translucent::CasterBuffers;
-use crate::passes;
+use crate::passes::{self, Features};
 
 /// The key light's shadow map and the bind group its pass draws with (one that does not sample
 /// the map being written).
@@ -13,6 +16,19 @@ pub(crate) struct ShadowResources {
     /// Summed opacity of the translucent casters (with their buffers), when there are any.
     pub(crate) opacity: Option<wgpu::Texture>,
     pub(crate) casters: Vec<CasterBuffers>,
+}
+
+/// The shadow map's pipeline: positions only, depth only.
+pub(crate) fn pipeline() -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "shadow map pipeline",
+        vertex_entry: "vs_shadow",
+        buffers: &POSITION_BUFFER,
+        fragment_entry: None,
+        target: None,
+        depth: depth_state(true, wgpu::CompareFunction::Less),
+        features: Features::default(),
+    }
 }
 
 impl Gpu {

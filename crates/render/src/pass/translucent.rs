@@ -1,8 +1,9 @@
 //! Translucent shadows (`translucent.wgsl`, Gosselin et al.): the translucent casters' summed
 //! opacity seen from the key light, tested against the shadow map's depth.
 
-use crate::gpu::{Gpu, PipelineKey, colour_attachment};
+use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, MeshPipeline, PipelineKey, colour_attachment, depth_state};
 use crate::pass::shadow::ShadowResources;
+use crate::passes::Features;
 
 /// One translucent caster's positions, per-vertex opacity and indices.
 pub(crate) struct CasterBuffers {
@@ -10,6 +11,36 @@ pub(crate) struct CasterBuffers {
     pub(crate) opacity: wgpu::Buffer,
     pub(crate) indices: wgpu::Buffer,
     pub(crate) count: u32,
+}
+
+const POSITION: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Float32x3];
+const OPACITY: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![1 => Float32x3];
+
+/// A caster's two vertex buffers: positions and per-vertex RGB opacity.
+const CASTER_BUFFERS: [Option<wgpu::VertexBufferLayout<'static>>; 2] = [
+    Some(wgpu::VertexBufferLayout {
+        array_stride: 12,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &POSITION,
+    }),
+    Some(wgpu::VertexBufferLayout {
+        array_stride: 12,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &OPACITY,
+    }),
+];
+
+/// The casters' pipeline: tested against the opaque depth, not writing it.
+pub(crate) fn pipeline() -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "translucent shadows pipeline",
+        vertex_entry: "vs_translucent",
+        buffers: &CASTER_BUFFERS,
+        fragment_entry: Some("fs_translucent"),
+        target: Some(LIGHT_MAP_FORMAT),
+        depth: depth_state(false, wgpu::CompareFunction::Less),
+        features: Features::default(),
+    }
 }
 
 impl Gpu {

@@ -1,8 +1,22 @@
 //! TSD's back-face pre-pass (`tsd_prepass.wgsl`): the texture-space depth that keeps the
 //! light-map pass off texels facing away from the eye.
 
-use crate::gpu::{Gpu, PipelineKey, PreparedScene, depth_attachment};
+use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, depth_attachment, depth_state};
 use crate::pass::tsd::TsdResources;
+use crate::passes::Features;
+
+/// The pre-pass's pipeline: the mesh at its UVs, depth only, every fragment kept but the culled.
+pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "tsd back-face pre-pass pipeline",
+        vertex_entry: "vs_texture_space",
+        buffers: &MESH_BUFFERS,
+        fragment_entry: Some("fs_tsd_prepass"),
+        target: None,
+        depth: depth_state(true, wgpu::CompareFunction::Always),
+        features,
+    }
+}
 
 impl Gpu {
     /// TSD's back-face pre-pass into the UV-space depth.
