@@ -4,7 +4,7 @@
 use super::timing::{PassTimer, timestamp_writes};
 use super::{Gpu, GpuError, OutputFormat, Result, Target};
 use crate::graph::PassKind;
-use crate::pass::base::{Globals, globals, light_raw, vec4};
+use crate::pass::uniforms::{Globals, globals, light_raw};
 use crate::pass::shadow::ShadowResources;
 use crate::pass::tsd::TsdResources;
 use crate::passes::{self, Features, SkinSetup};
@@ -50,14 +50,14 @@ impl PreparedScene {
     /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the
     /// uniform block, which every draw writes anyway).
     pub fn set_camera(&mut self, camera: &crate::shading::Camera) {
-        self.globals.view_proj = camera.view_proj.to_cols_array_2d();
-        self.globals.eye = vec4(camera.eye, self.globals.eye[3]);
+        self.globals.scene.view_proj = camera.view_proj.to_cols_array_2d();
+        self.globals.scene.eye = camera.eye.to_array();
     }
 
     /// Replaces light `index` (below the scene's light count) for the next [`Gpu::draw`].
     pub fn set_light(&mut self, index: usize, light: &crate::shading::Light) {
-        if index < self.globals.counts[0] as usize {
-            self.globals.lights[index] = light_raw(light);
+        if index < self.globals.scene.light_count as usize {
+            self.globals.scene.lights[index] = light_raw(light);
         }
     }
 }
@@ -182,7 +182,7 @@ impl Gpu {
     ) -> Result<Vec<bool>> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut globals = scene.globals;
-        globals.options[0] = tone_code(target_curve(target.format, globals.options[0]));
+        globals.base.tone = tone_code(target_curve(target.format, globals.base.tone));
         self.queue.write_buffer(&scene.uniforms, 0, bytemuck::bytes_of(&globals));
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame encoder") });

@@ -4,6 +4,44 @@
 // keep the two in step (tests/gpu.rs compares them pixel by pixel). Part of the module that
 // src/pass/mod.rs assembles after common.wgsl.
 
+struct Lobe {
+    cx: vec4<f32>,
+    cy: vec4<f32>,
+    cz: vec4<f32>,
+    n: vec4<f32>,
+}
+
+// The base pass's uniforms (`BaseUniforms` in src/pass/base.rs).
+struct BaseUniforms {
+    // Lafortune rho_d.
+    diffuse: vec3<f32>,
+    lobe_count: u32,
+    // Per-channel blend toward the blurred normal.
+    normal_blur: vec3<f32>,
+    // 1: the specular is evaluated per vertex.
+    vertex_specular: u32,
+    // 0 none, 1 clamp, 2 Reinhard.
+    tone: u32,
+    curvature_scale: f32,
+    // Diffuse LUT v = inv_r * lut_scale + lut_offset.
+    lut_scale: f32,
+    lut_offset: f32,
+    // Zonal table u = inv_r * zonal_scale + zonal_offset.
+    zonal_scale: f32,
+    zonal_offset: f32,
+    // Shadow LUT v = width_mm * shadow_lut_scale + shadow_lut_offset.
+    shadow_lut_scale: f32,
+    shadow_lut_offset: f32,
+    // The sharp penumbra's share (shadow scattering).
+    new_penumbra: f32,
+    pad0: f32,
+    pad1: f32,
+    pad2: f32,
+    lobes: array<Lobe, 4>,
+    // Environment radiance SH, 9 RGB coefficients (l = 0, 1, 2).
+    sh: array<vec4<f32>, 9>,
+}
+
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
@@ -30,9 +68,9 @@ fn lobe_power(base: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 fn lobes_sum(l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
-    let count = min(globals.counts.y, MAX_LOBES);
+    let count = min(globals.base.lobe_count, MAX_LOBES);
     for (var i = 0u; i < count; i++) {
-        let lobe = globals.lobes[i];
+        let lobe = globals.base.lobes[i];
         let base = lobe.cx.xyz * (l.x * v.x) + lobe.cy.xyz * (l.y * v.y) + lobe.cz.xyz * (l.z * v.z);
         sum += lobe_power(base, lobe.n.xyz);
     }
@@ -48,21 +86,21 @@ fn vs_main(input: VertexIn) -> VertexOut {
     // Object space to the vertex's texture space (the paper's M_T, equation 6).
     let to_ts = transpose(mat3x3<f32>(t, b, n));
     let world = input.position;
-    let view_ts = to_ts * normalize_or(globals.eye.xyz - world, n);
+    let view_ts = to_ts * normalize_or(globals.scene.eye - world, n);
 
     var lights_ts = array<vec3<f32>, 4>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     var vertex_specular = vec3<f32>(0.0);
-    let count = min(globals.counts.x, MAX_LIGHTS);
+    let count = min(globals.scene.light_count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let l = to_ts * light_direction(i, world);
         lights_ts[i] = l;
-        if globals.counts.z == 1u {
+        if globals.base.vertex_specular == 1u {
             vertex_specular += light_irradiance(i, world) * lobes_sum(l, view_ts) * max(l.z, 0.0);
         }
     }
 
     var out: VertexOut;
-    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.clip = globals.scene.view_proj * vec4<f32>(world, 1.0);
     out.uv = input.uv;
     out.view_ts = view_ts;
     out.world = world;
@@ -86,11 +124,11 @@ fn to_normal_frame(n: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
 }
 
 fn tone_map(radiance: vec3<f32>) -> vec3<f32> {
-    let c = max(radiance * globals.eye.w, vec3<f32>(0.0));
-    if globals.options.x == 1u {
+    let c = max(radiance * globals.scene.exposure, vec3<f32>(0.0));
+    if globals.base.tone == 1u {
         return min(c, vec3<f32>(1.0));
     }
-    if globals.options.x == 2u {
+    if globals.base.tone == 2u {
         return c / (vec3<f32>(1.0) + c);
     }
     return c;
@@ -102,10 +140,10 @@ fn curvature(skin: vec2<f32>, world: vec3<f32>, geo_n: vec3<f32>) -> f32 {
     var k = skin.x;
     if CURVATURE_MODE == 1u {
         let dn = length(fwidth(geo_n));
-        let dp = length(fwidth(world)) * globals.skin.y;
+        let dp = length(fwidth(world)) * globals.scene.mm_per_unit;
         k = dn / max(dp, 1e-6);
     }
-    let scaled = k * globals.skin.x;
+    let scaled = k * globals.base.curvature_scale;
     if scaled > 0.0 && scaled < 3.0e38 {
         return scaled;
     }
@@ -115,21 +153,21 @@ fn curvature(skin: vec2<f32>, world: vec3<f32>, geo_n: vec3<f32>) -> f32 {
 // The filtered penumbra's width on this surface in mm: filter taps x texel, stretched by the
 // slope of the surface to the light.
 fn penumbra_mm(cos_light: f32) -> f32 {
-    return globals.shadow.y * globals.shadow.z * globals.skin.y / max(cos_light, 0.05);
+    return globals.shadow.taps * globals.shadow.texel * globals.scene.mm_per_unit / max(cos_light, 0.05);
 }
 
 // The sharp penumbra P'(P^-1(s)) (a ramp `new_penumbra` as wide), for the specular.
 fn sharp_shadow(s: f32) -> f32 {
-    return clamp(0.5 + (s - 0.5) / globals.shadow_lut.z, 0.0, 1.0);
+    return clamp(0.5 + (s - 0.5) / globals.base.new_penumbra, 0.0, 1.0);
 }
 
 fn shadow_scattered(s: f32, width_mm: f32) -> vec3<f32> {
-    let v = width_mm * globals.shadow_lut.x + globals.shadow_lut.y;
+    let v = width_mm * globals.base.shadow_lut_scale + globals.base.shadow_lut_offset;
     return textureSampleLevel(shadow_lut, lut_sampler, vec2<f32>(s, v), 0.0).rgb;
 }
 
 fn lut_lookup(ndl: vec3<f32>, inv_r: f32) -> vec3<f32> {
-    let v = inv_r * globals.skin.z + globals.skin.w;
+    let v = inv_r * globals.base.lut_scale + globals.base.lut_offset;
     let r = textureSampleLevel(diffuse_lut, lut_sampler, vec2<f32>(ndl.x * 0.5 + 0.5, v), 0.0).r;
     let g = textureSampleLevel(diffuse_lut, lut_sampler, vec2<f32>(ndl.y * 0.5 + 0.5, v), 0.0).g;
     let b = textureSampleLevel(diffuse_lut, lut_sampler, vec2<f32>(ndl.z * 0.5 + 0.5, v), 0.0).b;
@@ -139,9 +177,9 @@ fn lut_lookup(ndl: vec3<f32>, inv_r: f32) -> vec3<f32> {
 // Per-channel normals: the full map blended toward its blurred (mip-clamped) sample.
 fn channel_normals(n: vec3<f32>, n_blur: vec3<f32>) -> array<vec3<f32>, 3> {
     return array<vec3<f32>, 3>(
-        normalize_or(mix(n, n_blur, globals.blur.x), n),
-        normalize_or(mix(n, n_blur, globals.blur.y), n),
-        normalize_or(mix(n, n_blur, globals.blur.z), n),
+        normalize_or(mix(n, n_blur, globals.base.normal_blur.x), n),
+        normalize_or(mix(n, n_blur, globals.base.normal_blur.y), n),
+        normalize_or(mix(n, n_blur, globals.base.normal_blur.z), n),
     );
 }
 
@@ -180,7 +218,7 @@ fn zonal_factors(c: u32, inv_r: f32) -> vec3<f32> {
     if DIFFUSE_MODE == 0u || DIFFUSE_MODE == 4u {
         return vec3<f32>(PI, 2.0 * PI / 3.0, PI / 4.0);
     }
-    let u = inv_r * globals.zonal.x + globals.zonal.y;
+    let u = inv_r * globals.base.zonal_scale + globals.base.zonal_offset;
     let a0 = textureSampleLevel(zonal_table, lut_sampler, vec2<f32>(u, 1.0 / 6.0), 0.0);
     let a1 = textureSampleLevel(zonal_table, lut_sampler, vec2<f32>(u, 0.5), 0.0);
     let a2 = textureSampleLevel(zonal_table, lut_sampler, vec2<f32>(u, 5.0 / 6.0), 0.0);
@@ -202,7 +240,7 @@ fn ambient_irradiance(normals: array<vec3<f32>, 3>, inv_r: f32) -> vec3<f32> {
             } else if k >= 1u {
                 band = a.y;
             }
-            sum += band * globals.sh[k][c] * y[k];
+            sum += band * globals.base.sh[k][c] * y[k];
         }
         e[c] = max(sum, 0.0);
     }
@@ -223,16 +261,16 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
     let albedo = textureSample(albedo_map, map_sampler, input.uv).rgb;
     let geo_n = normalize_or(input.frame_n, vec3<f32>(0.0, 0.0, 1.0));
     let inv_r = curvature(input.skin, input.world, geo_n);
-    let rho = globals.diffuse.rgb * albedo / PI;
+    let rho = globals.base.diffuse * albedo / PI;
     let v = to_normal_frame(n, normalize_or(input.view_ts, vec3<f32>(0.0, 0.0, 1.0)));
     var lights_ts = array<vec3<f32>, 4>(input.light0, input.light1, input.light2, input.light3);
     let normals = channel_normals(n, n_blur);
-    let key = u32(globals.blur.w);
+    let key = globals.scene.key_light;
 
     var radiance = input.vertex_specular;
     var unshadowed = vec3<f32>(0.0);
     var key_specular = vec3<f32>(0.0);
-    let count = min(globals.counts.x, MAX_LIGHTS);
+    let count = min(globals.scene.light_count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let l_ts = normalize_or(lights_ts[i], vec3<f32>(0.0, 0.0, 1.0));
         let l = to_normal_frame(n, l_ts);
@@ -259,7 +297,7 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
         } else {
             radiance += e * rho * diffuse_falloff(normals, l_ts, inv_r) * shadow_diffuse;
         }
-        if globals.counts.z == 0u {
+        if globals.base.vertex_specular == 0u {
             let specular = e * lobes_sum(l, v) * max(l.z, 0.0);
             if DIFFUSE_MODE == 4u && SHADOWS && i == key {
                 key_specular = specular;

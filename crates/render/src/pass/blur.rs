@@ -5,12 +5,17 @@ use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, colour_attachment};
 use crate::pass::light_map::UNWRITTEN_TEXEL;
 use crate::pass::tsd::TsdResources;
 
-/// The `Blur` uniform of blur.wgsl.
+/// The blur's uniforms (`BlurUniforms` in blur.wgsl).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct BlurRaw {
-    pub(crate) params: [f32; 4],
-    pub(crate) flags: [u32; 4],
+pub(crate) struct BlurUniforms {
+    pub(crate) inv_size: [f32; 2],
+    pub(crate) a: f32,
+    pub(crate) b: f32,
+    pub(crate) dilate: u32,
+    pub(crate) pad0: u32,
+    pub(crate) pad1: u32,
+    pub(crate) pad2: u32,
 }
 
 impl Gpu {

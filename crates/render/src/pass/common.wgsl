@@ -29,44 +29,29 @@ struct Light {
     radiance: vec4<f32>,
 }
 
-struct Lobe {
-    cx: vec4<f32>,
-    cy: vec4<f32>,
-    cz: vec4<f32>,
-    n: vec4<f32>,
+// What every mesh pass reads (`SceneUniforms` in src/pass/uniforms.rs).
+struct SceneUniforms {
+    view_proj: mat4x4<f32>,
+    eye: vec3<f32>,
+    // Radiance scale before the tone curve.
+    exposure: f32,
+    light_count: u32,
+    // 1: the normal map is green-down.
+    green_down: u32,
+    // The light with the shadow map (MAX_LIGHTS when there is none).
+    key_light: u32,
+    mm_per_unit: f32,
+    lights: array<Light, 4>,
 }
 
+// The one uniform block of the mesh passes: the shared part, then each pass's own struct,
+// declared in its file (`Globals` in src/pass/uniforms.rs).
 struct Globals {
-    view_proj: mat4x4<f32>,
-    // xyz: eye position; w: exposure.
-    eye: vec4<f32>,
-    // rgb: Lafortune rho_d.
-    diffuse: vec4<f32>,
-    // x: light count, y: lobe count, z: 1 = specular per vertex, w: 1 = green-down normal map.
-    counts: vec4<u32>,
-    // x: tone curve (0 none, 1 clamp, 2 Reinhard).
-    options: vec4<u32>,
-    lights: array<Light, 4>,
-    lobes: array<Lobe, 4>,
-    // x: curvature scale, y: mm per mesh unit, z, w: LUT v = inv_r * z + w.
-    skin: vec4<f32>,
-    // rgb: per-channel blend toward the blurred normal; w: key light index (shadows).
-    blur: vec4<f32>,
-    // The key light's view-projection (its shadow map).
-    shadow_view_proj: mat4x4<f32>,
-    // x: 1 / shadow map side, y: filter taps per side, z: one shadow-map texel in mesh units,
-    // w: normal offset in texels.
-    shadow: vec4<f32>,
-    // x, y: shadow LUT v = width_mm * x + y; z: the sharp penumbra's share; w: unused.
-    shadow_lut: vec4<f32>,
-    // Environment radiance SH, 9 RGB coefficients (l = 0, 1, 2).
-    sh: array<vec4<f32>, 9>,
-    // x, y: zonal table u = inv_r * x + y.
-    zonal: vec4<f32>,
-    // x: TSD back-face bias, y: light-map side, z: kernel mm (derived), w: curvature gain (mm).
-    tsd: vec4<f32>,
-    // x, y: kernel radius = a * k + b texels; z: 1 = kernel from the map; w: largest radius.
-    tsd_kernel: vec4<f32>,
+    scene: SceneUniforms,
+    base: BaseUniforms,
+    shadow: ShadowUniforms,
+    prepass: PrepassUniforms,
+    light_map: LightMapUniforms,
 }
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -121,7 +106,7 @@ fn perpendicular_part(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 // Unit direction toward light i at `world` (xyz) and its irradiance (returned separately).
 fn light_direction(i: u32, world: vec3<f32>) -> vec3<f32> {
-    let light = globals.lights[i];
+    let light = globals.scene.lights[i];
     if light.vector.w == 0.0 {
         return normalize_or(light.vector.xyz, vec3<f32>(0.0, 0.0, 1.0));
     }
@@ -129,7 +114,7 @@ fn light_direction(i: u32, world: vec3<f32>) -> vec3<f32> {
 }
 
 fn light_irradiance(i: u32, world: vec3<f32>) -> vec3<f32> {
-    let light = globals.lights[i];
+    let light = globals.scene.lights[i];
     if light.vector.w == 0.0 {
         return light.radiance.rgb;
     }
@@ -151,7 +136,7 @@ fn vertex_frame(input: VertexIn) -> mat3x3<f32> {
 
 fn decode_normal(texel: vec4<f32>) -> vec3<f32> {
     var n = texel.xyz;
-    if globals.counts.w == 1u {
+    if globals.scene.green_down == 1u {
         n.y = -n.y;
     }
     return normalize_or(n, vec3<f32>(0.0, 0.0, 1.0));

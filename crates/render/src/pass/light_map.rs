@@ -6,10 +6,42 @@ use crate::gpu::{
     depth_attachment, depth_state,
 };
 use crate::pass::tsd::TsdResources;
-use crate::passes::Features;
+use crate::passes::{self, Features};
 
 /// What the light maps hold where no texel was drawn (the first blur dilates into them).
 pub(crate) const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+
+/// The light map's uniforms (`LightMapUniforms` in light_map.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct LightMapUniforms {
+    pub(crate) size: f32,
+    pub(crate) kernel_mm: f32,
+    pub(crate) curvature_gain: f32,
+    pub(crate) max_radius: f32,
+    pub(crate) kernel_from_map: u32,
+    pub(crate) pad0: u32,
+    pub(crate) pad1: u32,
+    pub(crate) pad2: u32,
+}
+
+/// The light map's uniforms (a unit-sized placeholder without texture-space diffusion).
+pub(crate) fn uniforms(tsd: Option<&passes::TsdSetup>) -> LightMapUniforms {
+    let (size, kernel_mm, curvature_gain, max_radius, from_map) = match tsd {
+        Some(t) => (t.size as f32, t.kernel_mm, t.curvature_gain, passes::MAX_KERNEL_TEXELS, t.kernel_map.is_some()),
+        None => (1.0, 0.0, 0.0, 1.0, false),
+    };
+    LightMapUniforms {
+        size,
+        kernel_mm,
+        curvature_gain,
+        max_radius,
+        kernel_from_map: from_map as u32,
+        pad0: 0,
+        pad1: 0,
+        pad2: 0,
+    }
+}
 
 /// The light map's pipeline: depth test "equal" against the pre-pass, so only kept texels shade.
 pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {

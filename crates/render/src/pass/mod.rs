@@ -5,6 +5,9 @@
 //! its pipeline and how it encodes itself; [`Gpu::encode_pass`] is the one place a
 //! [`PassKind`] is dispatched to its pass.
 //!
+//! The mesh passes share one uniform block ([`uniforms`]): a part every pass reads, then one
+//! named struct per pass, declared beside it.
+//!
 //! The mesh passes share one shader module, [`BASE_WGSL`], assembled here from `common.wgsl` and
 //! each pass's file (one module compiled once per device, its pipelines differing by entry point
 //! and override constants); the blur is a full-screen pass with its own module, [`BLUR_WGSL`].
@@ -16,11 +19,12 @@ pub(crate) mod shadow;
 pub(crate) mod translucent;
 pub(crate) mod tsd;
 pub(crate) mod tsd_prepass;
+pub(crate) mod uniforms;
+
+pub use uniforms::{UNIFORM_BYTES, UniformLayout, uniform_layouts};
 
 use crate::gpu::{Gpu, PipelineKey, PreparedScene, Target};
 use crate::graph::PassKind;
-use base::{Globals, LightRaw, LobeRaw};
-use blur::BlurRaw;
 
 /// The WGSL source of the mesh passes: the closed-form LUT fits, the shared part, then each
 /// pass's file in graph order.
@@ -44,65 +48,6 @@ pub const BASE_WGSL: &str = concat!(
 
 /// The WGSL source of texture-space diffusion's Poisson blur.
 pub const BLUR_WGSL: &str = include_str!("blur.wgsl");
-
-/// Bytes of the base pass's uniform block (camera, lights, lobes, options).
-pub const UNIFORM_BYTES: u64 = std::mem::size_of::<Globals>() as u64;
-
-/// The layout of one uniform struct as Rust writes it, to check against the WGSL that reads it
-/// (the naga-reflection test in `tests/wgsl.rs`).
-#[derive(Debug, Clone)]
-pub struct UniformLayout {
-    /// The WGSL source declaring the struct.
-    pub source: &'static str,
-    /// The struct's name in the WGSL.
-    pub name: &'static str,
-    /// `size_of` of the Rust struct.
-    pub size: usize,
-    /// Each field's name and `offset_of`, in declaration order.
-    pub members: Vec<(&'static str, usize)>,
-}
-
-/// The layouts of every uniform struct the passes upload.
-pub fn uniform_layouts() -> Vec<UniformLayout> {
-    macro_rules! layout {
-        ($source:expr, $name:literal, $ty:ty, [$($field:ident),* $(,)?]) => {
-            UniformLayout {
-                source: $source,
-                name: $name,
-                size: std::mem::size_of::<$ty>(),
-                members: vec![$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
-            }
-        };
-    }
-    vec![
-        layout!(BASE_WGSL, "Light", LightRaw, [vector, radiance]),
-        layout!(BASE_WGSL, "Lobe", LobeRaw, [cx, cy, cz, n]),
-        layout!(
-            BASE_WGSL,
-            "Globals",
-            Globals,
-            [
-                view_proj,
-                eye,
-                diffuse,
-                counts,
-                options,
-                lights,
-                lobes,
-                skin,
-                blur,
-                shadow_view_proj,
-                shadow,
-                shadow_lut,
-                sh,
-                zonal,
-                tsd,
-                tsd_kernel
-            ]
-        ),
-        layout!(BLUR_WGSL, "Blur", BlurRaw, [params, flags]),
-    ]
-}
 
 impl Gpu {
     /// Encodes one pass of the graph.

@@ -18,6 +18,38 @@ pub(crate) struct ShadowResources {
     pub(crate) casters: Vec<CasterBuffers>,
 }
 
+/// The shadow map's uniforms (`ShadowUniforms` in shadow.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ShadowUniforms {
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) inv_size: f32,
+    pub(crate) taps: f32,
+    pub(crate) texel: f32,
+    pub(crate) normal_offset: f32,
+}
+
+/// The shadow map's uniforms; an identity placeholder without one (never read: the shadow
+/// branches are compiled out).
+pub(crate) fn uniforms(shadow: Option<&passes::ShadowSetup>) -> ShadowUniforms {
+    match shadow {
+        Some(s) => ShadowUniforms {
+            view_proj: s.view_proj.to_cols_array_2d(),
+            inv_size: 1.0 / s.map_size.max(1) as f32,
+            taps: s.filter as f32,
+            texel: s.texel,
+            normal_offset: s.bias,
+        },
+        None => ShadowUniforms {
+            view_proj: glam::Mat4::IDENTITY.to_cols_array_2d(),
+            inv_size: 1.0,
+            taps: 1.0,
+            texel: 0.0,
+            normal_offset: 0.0,
+        },
+    }
+}
+
 /// The shadow map's pipeline: positions only, depth only.
 pub(crate) fn pipeline() -> MeshPipeline<'static> {
     MeshPipeline {

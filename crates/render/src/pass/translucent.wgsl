@@ -8,7 +8,7 @@ fn translucent_transmittance(world: vec3<f32>, geo_n: vec3<f32>) -> vec3<f32> {
     if !TRANSLUCENT_SHADOWS {
         return vec3<f32>(1.0);
     }
-    let p = shadow_coords(world + geo_n * (globals.shadow.z * globals.shadow.w));
+    let p = shadow_coords(world + geo_n * (globals.shadow.texel * globals.shadow.normal_offset));
     if p.z <= 0.0 || p.z >= 1.0 || p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0 {
         return vec3<f32>(1.0);
     }
@@ -26,7 +26,7 @@ struct TranslucentOut {
 @vertex
 fn vs_translucent(@location(0) position: vec3<f32>, @location(1) opacity: vec3<f32>) -> TranslucentOut {
     var out: TranslucentOut;
-    out.clip = globals.shadow_view_proj * vec4<f32>(position, 1.0);
+    out.clip = globals.shadow.view_proj * vec4<f32>(position, 1.0);
     out.opacity = opacity;
     return out;
 }

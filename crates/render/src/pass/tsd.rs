@@ -4,7 +4,7 @@
 //! light-map pass is `tsd.wgsl`.
 
 use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PreparedScene, SceneTextures, Target, extent};
-use crate::pass::blur::BlurRaw;
+use crate::pass::blur::BlurUniforms;
 use crate::passes;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -65,8 +65,8 @@ impl Gpu {
         let (a, b) = (tsd.kernel_scale[0], tsd.kernel_scale[1]);
         let blur_groups = (0..tsd.passes)
             .map(|i| {
-                let raw =
-                    BlurRaw { params: [1.0 / size as f32, 1.0 / size as f32, a, b], flags: [(i == 0) as u32, 0, 0, 0] };
+                let inv_size = [1.0 / size as f32; 2];
+                let raw = BlurUniforms { inv_size, a, b, dilate: (i == 0) as u32, pad0: 0, pad1: 0, pad2: 0 };
                 let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
                 let view = maps[(i % 2) as usize].create_view(&Default::default());
                 self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -97,8 +97,8 @@ impl Gpu {
     /// Whether texture-space diffusion runs this frame: the head is in the frustum, and it is
     /// not so small on screen that an earlier frame's light map is reused.
     pub(crate) fn tsd_runs(&self, scene: &PreparedScene, tsd: &TsdResources, target: &Target) -> bool {
-        let camera = glam::Mat4::from_cols_array_2d(&scene.globals.view_proj);
-        let eye = glam::Vec3::from_slice(&scene.globals.eye[..3]);
+        let camera = glam::Mat4::from_cols_array_2d(&scene.globals.scene.view_proj);
+        let eye = glam::Vec3::from_array(scene.globals.scene.eye);
         let (centre, radius) = scene.bounds;
         let visible = passes::sphere_in_frustum(camera, centre, radius);
         let small = passes::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;

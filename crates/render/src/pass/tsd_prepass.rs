@@ -3,7 +3,23 @@
 
 use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, depth_attachment, depth_state};
 use crate::pass::tsd::TsdResources;
-use crate::passes::Features;
+use crate::passes::{self, Features};
+
+/// The pre-pass's uniforms (`PrepassUniforms` in tsd_prepass.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct PrepassUniforms {
+    pub(crate) backface_bias: f32,
+    pub(crate) pad0: f32,
+    pub(crate) pad1: f32,
+    pub(crate) pad2: f32,
+}
+
+/// The pre-pass's uniforms (zeros without texture-space diffusion).
+pub(crate) fn uniforms(tsd: Option<&passes::TsdSetup>) -> PrepassUniforms {
+    let backface_bias = tsd.map_or(0.0, |t| t.backface_bias);
+    PrepassUniforms { backface_bias, pad0: 0.0, pad1: 0.0, pad2: 0.0 }
+}
 
 /// The pre-pass's pipeline: the mesh at its UVs, depth only, every fragment kept but the culled.
 pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
