@@ -36,7 +36,8 @@ fn every_standalone_wgsl_file_validates() {
 
 #[test]
 fn the_assembled_pass_modules_validate() {
-    for (name, source) in [("BASE_WGSL", skinkit_render::gpu::BASE_WGSL), ("BLUR_WGSL", skinkit_render::gpu::BLUR_WGSL)] {
+    for (name, source) in [("BASE_WGSL", skinkit_render::gpu::BASE_WGSL), ("BLUR_WGSL", skinkit_render::gpu::BLUR_WGSL)]
+    {
         if let Err(message) = validate(source) {
             panic!("{name}: {message}");
         }
@@ -72,7 +73,18 @@ fn validator_rejects_a_broken_shader() {
 #[test]
 fn every_uniform_struct_matches_its_wgsl_layout() {
     let layouts = skinkit_render::gpu::uniform_layouts();
-    assert!(layouts.iter().any(|l| l.name == "Globals") && layouts.iter().any(|l| l.name == "Blur"));
+    // One named struct per pass, and the block the mesh passes share.
+    for name in [
+        "Globals",
+        "SceneUniforms",
+        "BaseUniforms",
+        "ShadowUniforms",
+        "PrepassUniforms",
+        "LightMapUniforms",
+        "BlurUniforms",
+    ] {
+        assert!(layouts.iter().any(|l| l.name == name), "no layout for {name}");
+    }
     for layout in layouts {
         let module = validate(layout.source).unwrap();
         let (members, span) = module
@@ -96,10 +108,11 @@ fn every_uniform_struct_matches_its_wgsl_layout() {
 #[test]
 fn the_layout_check_catches_a_moved_member() {
     // The oracle can fail: a WGSL struct with two members swapped does not match.
-    let swapped = "struct Blur { flags: vec4<u32>, params: vec4<f32>, }\n@group(0) @binding(0) var<uniform> b: Blur;\n\
-                   @fragment fn fs() -> @location(0) vec4<f32> { return b.params; }";
+    let swapped = "struct BlurUniforms { inv_size: vec2<f32>, b: f32, a: f32, dilate: u32, pad0: u32, pad1: u32, \
+                   pad2: u32, }\n@group(0) @binding(0) var<uniform> u: BlurUniforms;\n\
+                   @fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(u.a); }";
     let module = validate(swapped).unwrap();
-    let blur = skinkit_render::gpu::uniform_layouts().into_iter().find(|l| l.name == "Blur").unwrap();
+    let blur = skinkit_render::gpu::uniform_layouts().into_iter().find(|l| l.name == "BlurUniforms").unwrap();
     let names: Vec<String> = module
         .types
         .iter()

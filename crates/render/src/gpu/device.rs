@@ -60,7 +60,7 @@ impl Gpu {
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&device_desc))
             .map_err(|e| GpuError::Device { adapter: adapter.get_info().name, message: e.to_string() })?;
-        let layout = bind_group_layout(&device);
+        let layout = super::resources::bind_group_layout(&device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("base pass layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -68,9 +68,9 @@ impl Gpu {
         });
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("mesh passes (pass::BASE_WGSL)"),
-            source: wgpu::ShaderSource::Wgsl(BASE_WGSL.into()),
+            source: wgpu::ShaderSource::Wgsl(pass::BASE_WGSL.into()),
         });
-        let blur_layout = blur_bind_group_layout(&device);
+        let blur_layout = pass::blur::blur_bind_group_layout(&device);
         let blur_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("tsd blur layout"),
             bind_group_layouts: &[Some(&blur_layout)],
@@ -78,7 +78,7 @@ impl Gpu {
         });
         let blur_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("blur.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(BLUR_WGSL.into()),
+            source: wgpu::ShaderSource::Wgsl(pass::BLUR_WGSL.into()),
         });
         Ok(Self {
             adapter,
@@ -124,15 +124,6 @@ impl Gpu {
             .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
             .flags
             .contains(wgpu::TextureFormatFeatureFlags::FILTERABLE)
-    }
-
-    /// Rgba32Float for tables where the device filters it, else Rgba16Float.
-    pub fn table_format(&self) -> wgpu::TextureFormat {
-        if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
-            TABLE_FORMAT
-        } else {
-            wgpu::TextureFormat::Rgba16Float
-        }
     }
 
     pub(crate) fn pop_scope(&self, scope: wgpu::ErrorScopeGuard, stage: &'static str) -> Result<()> {

@@ -2,11 +2,11 @@
 //! pass graph in order ([`Gpu::draw`]); each pass encodes itself (`crate::pass`).
 
 use super::timing::{PassTimer, timestamp_writes};
-use super::{Gpu, GpuError, OutputFormat, Result, Target};
+use super::{DEPTH_FORMAT, Gpu, GpuError, OutputFormat, Rendered, Result, Target};
 use crate::graph::PassKind;
-use crate::pass::uniforms::{Globals, globals, light_raw};
 use crate::pass::shadow::ShadowResources;
 use crate::pass::tsd::TsdResources;
+use crate::pass::uniforms::{Globals, globals, light_raw};
 use crate::passes::{self, Features, SkinSetup};
 use crate::shading::{RenderInputs, ToneCurve};
 use std::sync::atomic::Ordering;

@@ -139,7 +139,7 @@ pub enum OutputFormat {
 }
 
 impl OutputFormat {
-    fn texture_format(self) -> wgpu::TextureFormat {
+    pub(crate) fn texture_format(self) -> wgpu::TextureFormat {
         match self {
             Self::Hdr16 => wgpu::TextureFormat::Rgba16Float,
             Self::Hdr32 => wgpu::TextureFormat::Rgba32Float,

@@ -52,12 +52,11 @@ pub(crate) const MESH_BUFFERS: [Option<wgpu::VertexBufferLayout<'static>>; 2] = 
 ];
 
 /// Only the positions of the mesh's vertex buffer.
-pub(crate) const POSITION_BUFFER: [Option<wgpu::VertexBufferLayout<'static>>; 1] =
-    [Some(wgpu::VertexBufferLayout {
-        array_stride: STRIDE,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &POSITION_ATTRIBUTE,
-    })];
+pub(crate) const POSITION_BUFFER: [Option<wgpu::VertexBufferLayout<'static>>; 1] = [Some(wgpu::VertexBufferLayout {
+    array_stride: STRIDE,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &POSITION_ATTRIBUTE,
+})];
 
 /// A depth test against [`DEPTH_FORMAT`], writing the depth or not.
 pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> Option<wgpu::DepthStencilState> {
@@ -86,8 +85,11 @@ impl Gpu {
     pub(crate) fn mesh_pipeline(&self, spec: &MeshPipeline) -> wgpu::RenderPipeline {
         let constants = spec.features.constants();
         let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
-        let targets =
-            [spec.target.map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let targets = [spec.target.map(|format| wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
         let targets: &[Option<wgpu::ColorTargetState>] = if spec.target.is_some() { &targets } else { &[] };
         self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(spec.label),

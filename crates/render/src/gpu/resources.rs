@@ -17,6 +17,15 @@ pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth3
 const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl Gpu {
+    /// Rgba32Float for tables where the device filters it, else Rgba16Float.
+    pub fn table_format(&self) -> wgpu::TextureFormat {
+        if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
+            TABLE_FORMAT
+        } else {
+            wgpu::TextureFormat::Rgba16Float
+        }
+    }
+
     pub(crate) fn buffer(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
     }
@@ -243,7 +252,10 @@ pub(crate) struct SceneTextures {
     pub(crate) shadow_sampler: wgpu::Sampler,
 }
 
-pub(crate) fn colour_attachment(view: &wgpu::TextureView, load: wgpu::LoadOp<wgpu::Color>) -> wgpu::RenderPassColorAttachment<'_> {
+pub(crate) fn colour_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> wgpu::RenderPassColorAttachment<'_> {
     wgpu::RenderPassColorAttachment {
         view,
         depth_slice: None,
@@ -252,7 +264,10 @@ pub(crate) fn colour_attachment(view: &wgpu::TextureView, load: wgpu::LoadOp<wgp
     }
 }
 
-pub(crate) fn depth_attachment(view: &wgpu::TextureView, load: wgpu::LoadOp<f32>) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+pub(crate) fn depth_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<f32>,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
     wgpu::RenderPassDepthStencilAttachment {
         view,
         depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),

@@ -1,7 +1,9 @@
 //! The base pass (`base.wgsl`): texture-space per-pixel bump mapping and the Lafortune BRDF into
 //! the target (Haro et al. 2001, section 5), with the skin effects it reads.
 
-use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, PipelineKey, PreparedScene, Target, depth_state, tone_code};
+use crate::gpu::{
+    Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, PipelineKey, PreparedScene, Target, depth_state, tone_code,
+};
 use crate::pass::uniforms::vec4;
 use crate::passes::{Features, SkinSetup, Table};
 use crate::shading::{MAX_LOBES, RenderInputs, SpecularMode};

@@ -4,6 +4,7 @@
 use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, colour_attachment};
 use crate::pass::light_map::UNWRITTEN_TEXEL;
 use crate::pass::tsd::TsdResources;
+use crate::passes;
 
 /// The blur's uniforms (`BlurUniforms` in blur.wgsl).
 #[repr(C)]
@@ -19,6 +20,44 @@ pub(crate) struct BlurUniforms {
 }
 
 impl Gpu {
+    /// One bind group per blur pass: pass `i` reads `maps[i % 2]`, the first with a nearest
+    /// sampler (it dilates), the others bilinear.
+    pub(crate) fn blur_groups(&self, tsd: &passes::TsdSetup, maps: &[wgpu::Texture; 2]) -> Vec<wgpu::BindGroup> {
+        let sampler = |label, filter| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: filter,
+                min_filter: filter,
+                ..Default::default()
+            })
+        };
+        let nearest = sampler("tsd dilation sampler", wgpu::FilterMode::Nearest);
+        let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
+        let (a, b) = (tsd.kernel_scale[0], tsd.kernel_scale[1]);
+        (0..tsd.passes)
+            .map(|i| {
+                let inv_size = [1.0 / tsd.size as f32; 2];
+                let raw = BlurUniforms { inv_size, a, b, dilate: (i == 0) as u32, pad0: 0, pad1: 0, pad2: 0 };
+                let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
+                let view = maps[(i % 2) as usize].create_view(&Default::default());
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("tsd blur bind group"),
+                    layout: &self.blur_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::Sampler(if i == 0 { &nearest } else { &linear }),
+                        },
+                    ],
+                })
+            })
+            .collect()
+    }
+
     /// TSD blur `i`: over the whole map, from `maps[i % 2]` into the other (the first also
     /// dilates into the texels the light map left unwritten).
     pub(crate) fn encode_blur(

@@ -2,8 +2,8 @@
 //! blur's kernel size in alpha.
 
 use crate::gpu::{
-    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, colour_attachment,
-    depth_attachment, depth_state,
+    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, colour_attachment, depth_attachment,
+    depth_state,
 };
 use crate::pass::tsd::TsdResources;
 use crate::passes::{self, Features};

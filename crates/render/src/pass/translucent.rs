@@ -18,16 +18,8 @@ const OPACITY: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![1 => Float3
 
 /// A caster's two vertex buffers: positions and per-vertex RGB opacity.
 const CASTER_BUFFERS: [Option<wgpu::VertexBufferLayout<'static>>; 2] = [
-    Some(wgpu::VertexBufferLayout {
-        array_stride: 12,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &POSITION,
-    }),
-    Some(wgpu::VertexBufferLayout {
-        array_stride: 12,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &OPACITY,
-    }),
+    Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &POSITION }),
+    Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &OPACITY }),
 ];
 
 /// The casters' pipeline: tested against the opaque depth, not writing it.

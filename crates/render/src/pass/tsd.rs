@@ -4,7 +4,6 @@
 //! light-map pass is `tsd.wgsl`.
 
 use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PreparedScene, SceneTextures, Target, extent};
-use crate::pass::blur::BlurUniforms;
 use crate::passes;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -24,6 +23,8 @@ pub(crate) struct TsdResources {
 }
 
 impl Gpu {
+    /// The light maps, their depth and bind groups for `tsd`, reading the shadow map (and the
+    /// translucent casters' opacity) when there is one.
     pub(crate) fn tsd_resources(
         &self,
         tsd: &passes::TsdSetup,
@@ -50,39 +51,7 @@ impl Gpu {
         };
         let maps = [map("tsd light map A"), map("tsd light map B")];
         let bind_group = self.create_bind_group(textures, uniforms, shadow, opacity, None);
-        let sampler = |label, filter| {
-            self.device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some(label),
-                address_mode_u: wgpu::AddressMode::ClampToEdge,
-                address_mode_v: wgpu::AddressMode::ClampToEdge,
-                mag_filter: filter,
-                min_filter: filter,
-                ..Default::default()
-            })
-        };
-        let nearest = sampler("tsd dilation sampler", wgpu::FilterMode::Nearest);
-        let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
-        let (a, b) = (tsd.kernel_scale[0], tsd.kernel_scale[1]);
-        let blur_groups = (0..tsd.passes)
-            .map(|i| {
-                let inv_size = [1.0 / size as f32; 2];
-                let raw = BlurUniforms { inv_size, a, b, dilate: (i == 0) as u32, pad0: 0, pad1: 0, pad2: 0 };
-                let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
-                let view = maps[(i % 2) as usize].create_view(&Default::default());
-                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("tsd blur bind group"),
-                    layout: &self.blur_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::Sampler(if i == 0 { &nearest } else { &linear }),
-                        },
-                    ],
-                })
-            })
-            .collect();
+        let blur_groups = self.blur_groups(tsd, &maps);
         TsdResources {
             passes: tsd.passes,
             reuse_below_px: tsd.reuse_below_px,
