@@ -3,7 +3,7 @@
 //!
 //! A lamp 0.1-2 m from a 2 cm mold is not a distant light: across the field its direction turns by
 //! up to a few degrees and its irradiance falls off as `1/d^2`, which biases a directional solve by
-//! a smooth 2-10 degrees (REFERENCE.md, capture). The detrend removes most of that bias; when the
+//! a smooth 2-10 degrees (docs/references.md, capture). The detrend removes most of that bias; when the
 //! rig knows where its lamps are (`position` per light) and how large a pixel is (`mm_per_pixel`),
 //! this module removes it at the source instead.
 //!
