@@ -1,4 +1,5 @@
-//! Throughput of the per-pixel solves (pixels per second) on 16-bit grey photos, 8 lights: at
+//! Throughput of the per-pixel solves (pixels per second) on 16-bit grey photos, 8 lights (with
+//! about half the pixels dropping a shadowed reading, or with a highlight to reject): at
 //! 2048x2048 (64 MiB of samples, 80 MiB of output: memory-bound) and at sizes whose samples and
 //! output fit in the caches (256x256: 1 + 1.25 MiB; 512x512: 4 + 5 MiB), where the kernel's own
 //! rate shows.
@@ -7,7 +8,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use skinkit_capture::solve::{Method, SolveConfig, no_progress, solve, solve_into};
 
 mod common;
-use common::{photos, ring};
+use common::{photos, photos_with, ring};
 
 fn bench_solve(c: &mut Criterion) {
     let size = 2048;
@@ -19,16 +20,21 @@ fn bench_solve(c: &mut Criterion) {
         .warm_up_time(std::time::Duration::from_secs(1));
     group.throughput(Throughput::Elements((size * size) as u64));
     let cases = [
-        (Method::LeastSquares, false),
-        (Method::Robust, false),
-        (Method::Robust, true),
-        (Method::Threshold, false),
-        (Method::Threshold, true),
+        (Method::LeastSquares, false, false),
+        (Method::Robust, false, false),
+        (Method::Robust, true, false),
+        (Method::Robust, false, true),
+        (Method::Threshold, false, false),
+        (Method::Threshold, true, false),
     ];
-    for (method, shadows) in cases {
-        let stack = photos(size, &rig, shadows);
+    for (method, shadows, highlights) in cases {
+        let stack = photos_with(size, &rig, shadows, highlights);
         let config = SolveConfig { method, ..SolveConfig::default() };
-        let name = format!("{method:?}{}", if shadows { "_shadows" } else { "" });
+        let name = format!(
+            "{method:?}{}{}",
+            if shadows { "_shadows" } else { "" },
+            if highlights { "_highlights" } else { "" }
+        );
         // The kernel, writing into maps reused between iterations.
         let mut out = solve(&stack, &rig, &config, &no_progress).unwrap();
         group.bench_with_input(BenchmarkId::new(format!("{name}_into"), size), &stack, |b, stack| {

@@ -62,7 +62,7 @@ fn tuned(mut config: RobustConfig, args: &[String]) -> Result<RobustConfig, Fail
         let (field, value) = arg.split_once('=').ok_or("overrides are field=value")?;
         let value: f32 = value.parse()?;
         match field {
-            "shadow_rel" => config.shadow_rel = value,
+            "shadow_rel" => config.shadows.rel = value,
             "trim_dark" => config.trim_dark = value,
             "trim_bright" => config.trim_bright = value,
             other => return Err(format!("unknown field {other}").into()),

@@ -1,6 +1,6 @@
 //! Rigs from public photometric-stereo light files.
 //!
-//! * DiLiGenT (Shi et al., the benchmark quoted in REFERENCE.md): `light_directions.txt` holds one
+//! * DiLiGenT (Shi et al., the benchmark in docs/references.md): `light_directions.txt` holds one
 //!   `x y z` per line and `light_intensities.txt` one `r g b` per line, photo order. DiLiGenT's
 //!   frame is x right, y up, z toward the camera (loaders of the benchmark document it so and
 //!   flip y and z when they convert to image coordinates), which is skinkit's frame: directions

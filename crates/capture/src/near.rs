@@ -3,7 +3,7 @@
 //!
 //! A lamp 0.1-2 m from a 2 cm mold is not a distant light: across the field its direction turns by
 //! up to a few degrees and its irradiance falls off as `1/d^2`, which biases a directional solve by
-//! a smooth 2-10 degrees (REFERENCE.md, capture). The detrend removes most of that bias; when the
+//! a smooth 2-10 degrees (docs/references.md, capture). The detrend removes most of that bias; when the
 //! rig knows where its lamps are (`position` per light) and how large a pixel is (`mm_per_pixel`),
 //! this module removes it at the source instead.
 //!
@@ -14,9 +14,10 @@
 //! then has its own light matrix, so instead of a cached pseudo-inverse it solves the 3x3 normal
 //! equations `(sum L_i L_i^T) g = sum r_i L_i` over its usable lights, in f64. Readings are used
 //! as [`crate::solve`] uses them for each method: [`Method::Threshold`] drops those under the
-//! shadow thresholds of [`crate::readings`] (absolute and relative to the pixel's brightest reading) or saturated;
-//! [`Method::Robust`] keeps least squares where it explains every reading and otherwise runs
-//! [`crate::robust::fit_directions`] with the pixel's own directions; with
+//! shadow rule of [`crate::readings::Shadows`] (absolute, and relative to the pixel's
+//! 90th-percentile reading) or saturated; [`Method::Robust`] drops the same readings, keeps least
+//! squares on the rest where its relative residual is within [`crate::robust::AGREEMENT`] and
+//! otherwise runs [`crate::robust::fit_directions`] with the pixel's own directions; with
 //! [`Method::LeastSquares`] every reading is used.
 
 use glam::{DMat3, DVec3, Vec3};
@@ -164,25 +165,23 @@ impl Pixel {
         self.least_squares(config, rgb)
     }
 
-    /// [`Method::Robust`], the rules of the directional solve: least squares when no reading is
-    /// dropped and its relative residual is within [`robust::AGREEMENT`], else the robust fit
-    /// (its confidence without the conditioning factor, which near lights never had).
+    /// [`Method::Robust`], the rules of the directional solve: least squares on the readings left
+    /// after dropping shadowed and saturated ones when its relative residual is within
+    /// [`robust::AGREEMENT`], else the robust fit (its confidence without the conditioning
+    /// factor, which near lights never had).
     fn robust(&mut self, config: &SolveConfig, rgb: bool) -> Option<(Vec3, Vec3, f32, usize)> {
         let all = self.usable.clone();
         self.drop_shadows(config);
-        if self.usable == all && self.usable.iter().all(|u| *u) {
-            let ls = self.least_squares(config, rgb);
-            if let Some(ls) = ls
-                && ls.2 as f64 >= 1.0 / (1.0 + (robust::AGREEMENT as f64 / 0.1).powi(2))
-            {
-                return Some(ls);
-            }
+        if let Some((ls, residual)) = self.least_squares_residual(config, rgb)
+            && residual <= robust::AGREEMENT as f64
+        {
+            return Some(ls);
         }
         let value: Vec<f32> = self.value.iter().map(|&v| v as f32).collect();
         let saturated: Vec<bool> = all.iter().map(|u| !u).collect();
         let dirs: Vec<Vec3> = self.dirs.iter().map(|d| d.as_vec3()).collect();
         let fit_config = RobustConfig {
-            shadow_abs: config.shadow_abs,
+            shadows: config.shadows(),
             min_lights: config.min_lights,
             max_condition: config.max_condition,
             ..RobustConfig::default()
@@ -200,6 +199,11 @@ impl Pixel {
 
     /// Least squares over the usable readings.
     fn least_squares(&self, config: &SolveConfig, rgb: bool) -> Option<(Vec3, Vec3, f32, usize)> {
+        self.least_squares_residual(config, rgb).map(|(texel, _)| texel)
+    }
+
+    /// [`Self::least_squares`] and its relative residual `|r - L g| / |r|`.
+    fn least_squares_residual(&self, config: &SolveConfig, rgb: bool) -> Option<((Vec3, Vec3, f32, usize), f64)> {
         let lights = &self.dirs;
         let used = self.usable.iter().filter(|u| **u).count();
         if used < config.min_lights {
@@ -224,7 +228,7 @@ impl Pixel {
         let albedo = if rgb { self.rgb_albedo(n) } else { DVec3::splat(len) };
         let residual = self.relative_residual(g);
         let confidence = (used as f64 / lights.len() as f64) / (1.0 + (residual / 0.1).powi(2));
-        Some((n.as_vec3(), albedo.as_vec3(), confidence as f32, used))
+        Some(((n.as_vec3(), albedo.as_vec3(), confidence as f32, used), residual))
     }
 
     /// Fills directions and intensity-divided readings; marks saturated or non-finite readings.
@@ -253,8 +257,10 @@ impl Pixel {
 
     /// Drops readings under the absolute or the pixel-relative shadow threshold.
     fn drop_shadows(&mut self, config: &SolveConfig) {
-        let brightest = self.value.iter().zip(&self.usable).filter(|(_, u)| **u).map(|(v, _)| *v).fold(0.0, f64::max);
-        let floor = readings::shadow_floor(config, brightest);
+        let mut usable: Vec<f32> =
+            self.value.iter().zip(&self.usable).filter(|(_, u)| **u).map(|(v, _)| *v as f32).collect();
+        // The rule's reference reading in f32, as the directional solve and the robust fit take it.
+        let floor = readings::shadow_floor(config.shadows(), readings::shadow_reference(&mut usable) as f64);
         for (u, v) in self.usable.iter_mut().zip(&self.value) {
             *u &= *v >= floor;
         }

@@ -1,8 +1,9 @@
 //! The rules both solvers, distant ([`crate::solve`]) and near ([`crate::near`]), apply to a
-//! pixel's readings, kept in one place: which readings are dropped (shadowed or saturated), how
-//! RGB readings combine into the one the normal comes from ([`LUMA`]), which `|g|` still defines
-//! a normal ([`MIN_ALBEDO`]), how the condition number of a set of lights is measured
-//! ([`condition_of`]) and how per-band counts are merged ([`SolveStats`]).
+//! pixel's readings, kept in one place: which readings are dropped (shadowed, by the one rule
+//! of [`Shadows`], or saturated), how RGB readings combine into the one the normal comes from
+//! ([`LUMA`]), which `|g|` still defines a normal ([`MIN_ALBEDO`]), how the condition number of
+//! a set of lights is measured ([`condition_of`]) and how per-band counts are merged
+//! ([`SolveStats`]).
 //!
 //! The distant solver's vectorised kernels (`solve/fused.rs`) apply the same rules with the
 //! same operations, lane by lane; its unit tests compare them bitwise with the scalar paths
@@ -26,14 +27,61 @@ pub(crate) fn defines_normal<F: Into<f64>>(len: F) -> bool {
     len > MIN_ALBEDO as f64 && len < f64::INFINITY
 }
 
-/// The shadow threshold of a pixel whose brightest reading is `brightest`: a reading below
-/// `max(shadow_abs, shadow_rel * brightest)` is shadowed (below the absolute floor and also far
-/// below the pixel's own brightest reading). In f64; for f32 readings the result cast back to f32
-/// is bit for bit `shadow_abs.max(shadow_rel * brightest)` in f32 (the product of two f32 values
-/// is exact in f64, so it is rounded once either way), and a NaN `brightest` gives `shadow_abs`.
+/// Default absolute shadow floor ([`Shadows::abs`]).
+pub const SHADOW_ABS: f32 = 0.005;
+/// Default relative shadow threshold ([`Shadows::rel`]).
+pub const SHADOW_REL: f32 = 0.1;
+
+/// The one shadow rule of every solver (least squares aside): a reading `r_i` is shadowed when
+/// `r_i < max(abs, rel * q90)`, below an absolute floor and also far below the pixel's own
+/// reference reading `q90`, the 90th percentile of its usable (finite, unsaturated) readings
+/// ([`shadow_reference`]). The 90th percentile rather than the brightest, so that a few
+/// highlights do not raise the threshold; with up to 9 usable readings the two are the same.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shadows {
+    /// Absolute floor, as a fraction of full scale after ambient subtraction and division by the
+    /// light's intensity.
+    pub abs: f32,
+    /// Fraction of the pixel's reference reading.
+    pub rel: f32,
+}
+
+impl Default for Shadows {
+    fn default() -> Self {
+        Shadows { abs: SHADOW_ABS, rel: SHADOW_REL }
+    }
+}
+
+/// 0-based ascending rank, among `usable` readings, of the reference reading of the relative
+/// shadow threshold (the 90th percentile, rounded up: the brightest for up to 9 readings).
 #[inline(always)]
-pub(crate) fn shadow_floor(config: &SolveConfig, brightest: f64) -> f64 {
-    (config.shadow_abs as f64).max(config.shadow_rel as f64 * brightest)
+pub(crate) fn reference_rank(usable: usize) -> usize {
+    (usable * 9).div_ceil(10).saturating_sub(1)
+}
+
+/// Whether the reference reading of up to `k` usable readings is always the brightest.
+#[inline(always)]
+pub(crate) fn reference_is_brightest(k: usize) -> bool {
+    (1..=k).all(|m| reference_rank(m) == m - 1)
+}
+
+/// The reference reading of a pixel whose usable readings are `values` (reordered in place):
+/// the one at [`reference_rank`]; negative infinity when there are none.
+pub(crate) fn shadow_reference(values: &mut [f32]) -> f32 {
+    if values.is_empty() {
+        return f32::NEG_INFINITY;
+    }
+    let rank = reference_rank(values.len());
+    *values.select_nth_unstable_by(rank, f32::total_cmp).1
+}
+
+/// The shadow threshold of a pixel whose reference reading is `reference`:
+/// `max(abs, rel * reference)`. In f64; for f32 readings the result cast back to f32 is bit for
+/// bit `abs.max(rel * reference)` in f32 (the product of two f32 values is exact in f64, so it is
+/// rounded once either way), and a NaN or negative infinite `reference` gives `abs`.
+#[inline(always)]
+pub(crate) fn shadow_floor(shadows: Shadows, reference: f64) -> f64 {
+    (shadows.abs as f64).max(shadows.rel as f64 * reference)
 }
 
 /// The raw stored value at or above which a reading is saturated, for samples of `full_scale`

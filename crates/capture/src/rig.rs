@@ -40,7 +40,7 @@
 //! cannot determine a normal and a large condition number amplifies noise. For k lights evenly on
 //! a ring at angle theta from the camera axis the rms tilt error of a flat patch is
 //! `(sigma / albedo) sqrt(4 / (k sin^2 theta))`, and the condition number is 1 at
-//! theta = 54.74 deg (REFERENCE.md, capture).
+//! theta = 54.74 deg (docs/references.md, capture).
 
 use std::path::{Path, PathBuf};
 

@@ -1,4 +1,4 @@
-//! Rig conditioning against the closed forms of REFERENCE.md and a Monte Carlo oracle.
+//! Rig conditioning against the closed forms of docs/references.md and a Monte Carlo oracle.
 
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -39,7 +39,7 @@ fn tilt_error_matches_reference_formula() {
             assert!((c.noise_amplification - trace.sqrt()).abs() < 1e-5 * trace.sqrt());
         }
     }
-    // REFERENCE.md: at 1% noise and k = 8, 0.57 deg at 45, 0.50 deg at 54.74, 1.9 deg at 12.5.
+    // docs/references.md: at 1% noise and k = 8, 0.57 deg at 45, 0.50 deg at 54.74, 1.9 deg at 12.5.
     // The quoted values are rounded: allow half a unit of their last digit.
     for (theta, deg, half_unit) in [(45.0, 0.57, 0.005), (MAGIC, 0.50, 0.005), (12.5, 1.9, 0.05)] {
         let got = (0.01 * ring(8, theta).conditioning().tilt_amplification).to_degrees();

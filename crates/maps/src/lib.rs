@@ -15,6 +15,7 @@
 
 pub mod encoding;
 pub mod error;
+mod exr_write;
 pub mod grid;
 pub mod io;
 pub mod normal;

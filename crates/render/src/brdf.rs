@@ -8,7 +8,7 @@
 //!
 //! Numerical safety: a negative lobe base gives exactly 0 (the power of a negative number would
 //! be NaN), and a lobe value is capped at [`LOBE_CEILING`] so that a base slightly above 1 raised
-//! to a huge exponent (n = 10000) stays finite. The same rules are in `shaders/base.wgsl`.
+//! to a huge exponent (n = 10000) stays finite. The same rules are in `src/pass/base.wgsl`.
 
 use glam::Vec3;
 
@@ -66,7 +66,7 @@ pub fn lobe_power(base: f32, n: f32) -> f32 {
 
 impl Lafortune {
     /// The 3-lobe skin set (pbrt-v1's skin material, from the Cornell skin measurements), as
-    /// tabulated in REFERENCE.md "Rendering". Lobe 0 has negative Cz: a grazing lobe that relies
+    /// tabulated in docs/references.md, "Rendering". Lobe 0 has negative Cz: a grazing lobe that relies
     /// on the clamp of negative bases.
     #[allow(clippy::excessive_precision)] // The table's digits, verbatim (f32 rounds them).
     pub fn skin() -> Self {

@@ -4,9 +4,10 @@
 //! Geometry side: [`scene`] (TOML scenes), [`mesh`] (OBJ and glTF loading), [`frames`] (the
 //! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
 //! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
-//! (device, offscreen targets, the base pass); [`load`] turns a scene into what the passes draw
-//! and plans the passes and resources it needs; [`highlight`] measures how much of a render's
-//! highlights the specular lobes make.
+//! (device, resources, pipelines, readback, timing) and [`pass`] (one module per pass of the
+//! graph, each with its WGSL); [`load`] turns a scene into what the passes draw and plans the
+//! passes and resources it needs; [`highlight`] measures how much of a render's highlights the
+//! specular lobes make.
 
 pub mod brdf;
 pub mod effect;
@@ -18,6 +19,7 @@ pub mod highlight;
 pub mod label;
 pub mod load;
 pub mod mesh;
+pub mod pass;
 pub mod passes;
 pub mod scene;
 pub mod shading;

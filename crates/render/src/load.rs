@@ -418,12 +418,6 @@ fn resources(
             bytes,
         }
     };
-    let table = |name: &str, w: u32, h: u32, what: &str| Resource {
-        name: name.into(),
-        detail: format!("{w}x{h} Rgba32Float, {what}; built on the CPU, cached by its parameters"),
-        bytes: 16 * w as u64 * h as u64,
-    };
-    let resource = |name: &str, detail: String, bytes: u64| Resource { name: name.into(), detail, bytes };
     let n_vertices = inputs.vertices.len() as u64;
     let mut out = vec![
         resource("vertices", format!("{n_vertices} vertices x 48 B (position, normal, tangent, uv)"), 48 * n_vertices),
@@ -436,6 +430,34 @@ fn resources(
         texture("normal map", &inputs.normal_map),
         texture("albedo", &inputs.albedo),
     ];
+    out.extend(effect_resources(scene, graph, n_vertices));
+    let (target_name, bytes_per_pixel) = match format {
+        TargetFormat::Hdr16 => ("Rgba16Float", 8),
+        TargetFormat::Hdr32 => ("Rgba32Float", 16),
+        TargetFormat::Srgb8 => ("Rgba8UnormSrgb", 4),
+    };
+    let pixels = width as u64 * height as u64;
+    out.push(resource("colour target", format!("{width}x{height} {target_name}"), bytes_per_pixel * pixels));
+    out.push(resource("depth", format!("{width}x{height} Depth32Float"), 4 * pixels));
+    out
+}
+
+fn resource(name: &str, detail: String, bytes: u64) -> Resource {
+    Resource { name: name.into(), detail, bytes }
+}
+
+/// A table built on the CPU: `w` x `h` Rgba32Float.
+fn table(name: &str, w: u32, h: u32, what: &str) -> Resource {
+    Resource {
+        name: name.into(),
+        detail: format!("{w}x{h} Rgba32Float, {what}; built on the CPU, cached by its parameters"),
+        bytes: 16 * w as u64 * h as u64,
+    }
+}
+
+/// The resources the graph's effects add: curvature, tables, the shadow map, the light maps.
+fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Resource> {
+    let mut out = Vec::new();
     let skin = &scene.skin;
     if graph.vertex_curvature {
         let detail = format!(
@@ -484,13 +506,5 @@ fn resources(
             out.push(resource("kernel map", format!("{} (per-texel blur kernel size)", path.display()), 0));
         }
     }
-    let (target_name, bytes_per_pixel) = match format {
-        TargetFormat::Hdr16 => ("Rgba16Float", 8),
-        TargetFormat::Hdr32 => ("Rgba32Float", 16),
-        TargetFormat::Srgb8 => ("Rgba8UnormSrgb", 4),
-    };
-    let pixels = width as u64 * height as u64;
-    out.push(resource("colour target", format!("{width}x{height} {target_name}"), bytes_per_pixel * pixels));
-    out.push(resource("depth", format!("{width}x{height} Depth32Float"), 4 * pixels));
     out
 }

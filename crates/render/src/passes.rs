@@ -64,7 +64,7 @@ pub struct Features {
 }
 
 impl Features {
-    /// The pipeline-overridable constants of base.wgsl.
+    /// The pipeline-overridable constants of the mesh passes' WGSL (`pass/common.wgsl`).
     pub fn constants(&self) -> [(&'static str, f64); 6] {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         [

@@ -1,5 +1,6 @@
-//! The CPU reference of the base shading in `shaders/base.wgsl` (Haro et al. 2001, section 5):
-//! the same inputs, the same steps, in plain Rust, so GPU renders can be compared per pixel.
+//! The CPU reference of the base shading in `src/pass/base.wgsl` and `common.wgsl` (Haro et al.
+//! 2001, section 5): the same inputs, the same steps, in plain Rust, so GPU renders can be
+//! compared per pixel.
 //!
 //! Per vertex ([`shade_vertex`]): the light and view vectors are computed in object space,
 //! normalised, and taken into the vertex's texture space (tangent, bitangent = cross(N, T) * w,

@@ -125,7 +125,7 @@ fn defaults_fill_everything_optional() {
     assert_eq!((light.light.color, light.light.intensity, light.shadows), (Vec3::ONE, 1.0, false));
     assert_eq!(light.light.kind, LightKind::Directional { toward: Vec3::Z });
     assert_eq!((s.cameras[0].up, s.cameras[0].fov_deg), (Vec3::Y, 30.0));
-    // The skin set exactly as REFERENCE.md tabulates it.
+    // The skin set exactly as docs/references.md tabulates it.
     assert_eq!(s.brdf.diffuse, Vec3::new(0.428425, 0.301341, 0.331054));
     assert_eq!(s.brdf.lobes, Lafortune::skin().lobes);
     let l = &s.brdf.lobes;

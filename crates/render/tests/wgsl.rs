@@ -1,9 +1,11 @@
-//! Every `shaders/*.wgsl` parses and validates with naga (CPU only, no adapter needed).
+//! Every WGSL source parses and validates with naga (CPU only, no adapter needed): the standalone
+//! `shaders/*.wgsl`, and the modules assembled from the passes' files in `src/pass/`, of which
+//! every file must be part.
 
 use std::path::PathBuf;
 
-fn shader_files() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("shaders");
+fn wgsl_files(folder: &str) -> Vec<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(folder);
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
         .map(|entry| entry.unwrap().path())
@@ -22,18 +24,35 @@ fn validate(source: &str) -> Result<naga::Module, String> {
 }
 
 #[test]
-fn every_wgsl_file_validates() {
-    let files = shader_files();
+fn every_standalone_wgsl_file_validates() {
+    let files = wgsl_files("shaders");
     assert!(!files.is_empty(), "no shaders found");
     for path in files {
-        // base.wgsl calls the closed-form fits of skin_fit.wgsl, which gpu.rs prepends.
-        let source = match path.file_name().and_then(|n| n.to_str()) {
-            Some("base.wgsl") => skinkit_render::gpu::BASE_WGSL.to_string(),
-            _ => std::fs::read_to_string(&path).unwrap(),
-        };
-        if let Err(message) = validate(&source) {
+        if let Err(message) = validate(&std::fs::read_to_string(&path).unwrap()) {
             panic!("{}: {message}", path.display());
         }
+    }
+}
+
+#[test]
+fn the_assembled_pass_modules_validate() {
+    for (name, source) in [("BASE_WGSL", skinkit_render::gpu::BASE_WGSL), ("BLUR_WGSL", skinkit_render::gpu::BLUR_WGSL)]
+    {
+        if let Err(message) = validate(source) {
+            panic!("{name}: {message}");
+        }
+    }
+}
+
+#[test]
+fn every_pass_wgsl_file_is_in_an_assembled_module() {
+    // A pass file left out of `pass::BASE_WGSL` would be neither compiled nor validated.
+    let files = wgsl_files("src/pass");
+    assert!(files.len() >= 7, "{files:?}");
+    for path in files {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let assembled = [skinkit_render::gpu::BASE_WGSL, skinkit_render::gpu::BLUR_WGSL];
+        assert!(assembled.iter().any(|m| m.contains(&text)), "{} is in no assembled module", path.display());
     }
 }
 
@@ -54,7 +73,18 @@ fn validator_rejects_a_broken_shader() {
 #[test]
 fn every_uniform_struct_matches_its_wgsl_layout() {
     let layouts = skinkit_render::gpu::uniform_layouts();
-    assert!(layouts.iter().any(|l| l.name == "Globals") && layouts.iter().any(|l| l.name == "Blur"));
+    // One named struct per pass, and the block the mesh passes share.
+    for name in [
+        "Globals",
+        "SceneUniforms",
+        "BaseUniforms",
+        "ShadowUniforms",
+        "PrepassUniforms",
+        "LightMapUniforms",
+        "BlurUniforms",
+    ] {
+        assert!(layouts.iter().any(|l| l.name == name), "no layout for {name}");
+    }
     for layout in layouts {
         let module = validate(layout.source).unwrap();
         let (members, span) = module
@@ -78,10 +108,11 @@ fn every_uniform_struct_matches_its_wgsl_layout() {
 #[test]
 fn the_layout_check_catches_a_moved_member() {
     // The oracle can fail: a WGSL struct with two members swapped does not match.
-    let swapped = "struct Blur { flags: vec4<u32>, params: vec4<f32>, }\n@group(0) @binding(0) var<uniform> b: Blur;\n\
-                   @fragment fn fs() -> @location(0) vec4<f32> { return b.params; }";
+    let swapped = "struct BlurUniforms { inv_size: vec2<f32>, b: f32, a: f32, dilate: u32, pad0: u32, pad1: u32, \
+                   pad2: u32, }\n@group(0) @binding(0) var<uniform> u: BlurUniforms;\n\
+                   @fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(u.a); }";
     let module = validate(swapped).unwrap();
-    let blur = skinkit_render::gpu::uniform_layouts().into_iter().find(|l| l.name == "Blur").unwrap();
+    let blur = skinkit_render::gpu::uniform_layouts().into_iter().find(|l| l.name == "BlurUniforms").unwrap();
     let names: Vec<String> = module
         .types
         .iter()

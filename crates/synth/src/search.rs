@@ -2,7 +2,7 @@
 //! dimensions (nalgebra `SymmetricEigen` of the covariance, in f64) and a kiddo kd-tree there.
 //!
 //! Raw neighbourhoods have about 60 dimensions, where an exact kd-tree is no faster than a linear
-//! scan (REFERENCE.md, synthesis); the projected tree returns a few candidates which the caller
+//! scan (docs/references.md, synthesis); the projected tree returns a few candidates which the caller
 //! re-scores in the full space.
 //!
 //! [`KCoherenceSets`] (Tong et al. 2002, "Synthesis of bidirectional texture functions on arbitrary

@@ -259,8 +259,11 @@ fn assert_tiles(name: &str, map: &Grid<Vec3>, bounds: &Tiling) {
 const MIN_RMS_SLOPE_RATIO: f64 = 0.55;
 
 /// Tileability bounds of every normal output but forehead edge. Measured seam ratio 0.98 to 1.71,
-/// seam line over the median line at most 2.55 (captured cheek, rows).
-const NORMAL_TILING: Tiling = Tiling { ratio: 3.0, line: 3.0 };
+/// seam line over the median line at most 3.33 (captured cheek, rows). The cheek's figure was 2.55
+/// with the capture's earlier shadow rule; the one rule of issue 12 (shadowed below 0.1 of the
+/// pixel's 90th percentile) changed its captured exemplar, and with 0.05 it measured under 3.0 again
+/// but cat's error with 8 lights rose from 6.34 to 6.99 deg, so the capture keeps 0.1.
+const NORMAL_TILING: Tiling = Tiling { ratio: 3.0, line: 3.5 };
 /// Colour: seam ratio 0.81 to 1.39, line at most 3.16 (photo forehead, rows; the row seam grew
 /// with the occurrence penalty, whose counts are highest when the last rows are chosen).
 const COLOUR_TILING: Tiling = Tiling { ratio: 3.0, line: 4.0 };

@@ -9,8 +9,9 @@
 //! with, in three steps:
 //!
 //! 1. **Shadows and a rank-trimmed start.** Saturated and non-finite readings never count;
-//!    readings under `max(shadow_abs, shadow_rel * q90)` (`q90` the pixel's 90th-percentile
-//!    reading, above a few highlights) are shadowed and never count either. Of the lit ones,
+//!    readings under `max(abs, rel * q90)` (`q90` the pixel's 90th-percentile reading, above a
+//!    few highlights: [`readings::Shadows`], the rule every solver shares) are shadowed and never
+//!    count either. Of the lit ones,
 //!    sorted, the darkest [`RobustConfig::trim_dark`] (10 %) and the brightest
 //!    [`RobustConfig::trim_bright`] (40 %: highlights and inter-reflections only add light) are
 //!    left out, and least squares on the rest gives the first `g`. The thresholds are ranks of
@@ -37,6 +38,7 @@ mod linalg;
 
 use glam::Vec3;
 
+use crate::readings::{self, Shadows};
 use crate::solve::MAX_LIGHTS;
 use crate::{Error, Result};
 use linalg::Normal3;
@@ -73,11 +75,9 @@ pub enum Estimator {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RobustConfig {
     pub estimator: Estimator,
-    /// Readings below `max(shadow_abs, shadow_rel * q90)` are shadowed and never used (`q90`:
-    /// the pixel's 90th-percentile usable reading), in the units of the readings.
-    pub shadow_abs: f32,
-    /// See [`Self::shadow_abs`].
-    pub shadow_rel: f32,
+    /// Which readings are shadowed and never used: the rule every solver shares
+    /// ([`readings::Shadows`]); the solve passes its own [`crate::solve::SolveConfig::shadows`].
+    pub shadows: Shadows,
     /// Fraction of a pixel's usable readings, darkest first, left out of the starting fit.
     pub trim_dark: f32,
     /// Fraction of a pixel's usable readings, brightest first, left out of the starting fit.
@@ -96,8 +96,7 @@ impl Default for RobustConfig {
     fn default() -> Self {
         RobustConfig {
             estimator: Estimator::Trimmed,
-            shadow_abs: 0.005,
-            shadow_rel: 0.1,
+            shadows: Shadows::default(),
             trim_dark: 0.1,
             trim_bright: 0.4,
             iterations: 12,
@@ -117,11 +116,11 @@ impl RobustConfig {
         let bad = |field: &str, value: String, want: &str| {
             Err(Error::InvalidInput(format!("robust config: {field} = {value} must be {want}")))
         };
-        if !(0.0..1.0).contains(&self.shadow_abs) {
-            return bad("shadow_abs", self.shadow_abs.to_string(), "in [0, 1)");
+        if !(0.0..1.0).contains(&self.shadows.abs) {
+            return bad("shadows.abs", self.shadows.abs.to_string(), "in [0, 1)");
         }
-        if !(0.0..1.0).contains(&self.shadow_rel) {
-            return bad("shadow_rel", self.shadow_rel.to_string(), "in [0, 1)");
+        if !(0.0..1.0).contains(&self.shadows.rel) {
+            return bad("shadows.rel", self.shadows.rel.to_string(), "in [0, 1)");
         }
         if !(0.0..0.5).contains(&self.trim_dark) {
             return bad("trim_dark", self.trim_dark.to_string(), "in [0, 0.5)");
@@ -229,6 +228,21 @@ pub fn fit_pixel(readings: &[f32], saturated: &[bool], lights: &Lights, config: 
     fit_directions(readings, saturated, &lights.directions, lights.condition, config)
 }
 
+/// [`fit_pixel`] taking the condition number of a set of lights (bit `i` for light `i`) from
+/// `condition` when it knows it (the solve's cached subsets), instead of computing it (the
+/// closed-form eigenvalues are a sixth of the fit's time at 8 lights).
+pub(crate) fn fit_pixel_cached(
+    readings: &[f32],
+    saturated: &[bool],
+    lights: &Lights,
+    config: &RobustConfig,
+    condition: &dyn Fn(u128) -> Option<f64>,
+) -> PixelFit {
+    let k = lights.len();
+    let all = condition(if k == 128 { u128::MAX } else { (1u128 << k) - 1 }).unwrap_or(lights.condition);
+    fit_with(readings, saturated, &lights.directions, all, config, condition)
+}
+
 /// [`fit_pixel`] with the pixel's own unit light `directions` (near lights turn across the
 /// mold) and the condition number of all of them, which the confidence compares against.
 ///
@@ -240,6 +254,18 @@ pub fn fit_directions(
     directions: &[Vec3],
     condition_all: f64,
     config: &RobustConfig,
+) -> PixelFit {
+    fit_with(readings, saturated, directions, condition_all, config, &|_| None)
+}
+
+/// The fit of [`fit_directions`], with known condition numbers from `condition`.
+fn fit_with(
+    readings: &[f32],
+    saturated: &[bool],
+    directions: &[Vec3],
+    condition_all: f64,
+    config: &RobustConfig,
+    condition: &dyn Fn(u128) -> Option<f64>,
 ) -> PixelFit {
     let k = directions.len();
     assert!(readings.len() == k && saturated.len() == k && k <= MAX_LIGHTS, "one reading per light");
@@ -253,7 +279,7 @@ pub fn fit_directions(
     if config.estimator != Estimator::Trimmed {
         g = px.reweight(g, config);
     }
-    px.refit(g, condition_all, config)
+    px.refit(g, condition_all, config, condition)
 }
 
 impl<'a> Pixel<'a> {
@@ -274,15 +300,15 @@ impl<'a> Pixel<'a> {
     }
 
     /// Sorts the usable readings, drops those below the pixel's shadow threshold
-    /// `max(shadow_abs, shadow_rel * q90)` (`q90` its 90th-percentile reading, above any few
+    /// `max(abs, rel * q90)` (`q90` its 90th-percentile reading, above any few
     /// highlights) and solves least squares on the remaining ones ranked between the trimmed
     /// fractions. The usable set keeps only the lit readings, in ascending order.
     fn trimmed_start(&mut self, config: &RobustConfig) -> Option<Vec3> {
-        let r = self.r;
+        let r = &self.r;
         let order = &mut self.usable[..self.count];
         order.sort_unstable_by(|&a, &b| r[a as usize].total_cmp(&r[b as usize]).then(a.cmp(&b)));
-        let q90 = r[order[(self.count * 9).div_ceil(10) - 1] as usize];
-        let threshold = config.shadow_abs.max(config.shadow_rel * q90);
+        let q90 = r[order[readings::reference_rank(self.count)] as usize];
+        let threshold = readings::shadow_floor(config.shadows, q90 as f64) as f32;
         let dark = order.iter().take_while(|&&i| r[i as usize] < threshold).count();
         order.copy_within(dark.., 0);
         self.count -= dark;
@@ -362,7 +388,13 @@ impl<'a> Pixel<'a> {
     }
 
     /// The final least-squares refit on the inliers of `g`, with its confidence.
-    fn refit(&self, g: Vec3, condition_all: f64, config: &RobustConfig) -> PixelFit {
+    fn refit(
+        &self,
+        g: Vec3,
+        condition_all: f64,
+        config: &RobustConfig,
+        known: &dyn Fn(u128) -> Option<f64>,
+    ) -> PixelFit {
         let s = self.scale(g, config.scale_floor);
         let mut eq = Normal3::default();
         let (mut inliers, mut rr) = (0u128, 0.0f32);
@@ -376,7 +408,10 @@ impl<'a> Pixel<'a> {
             }
         }
         let used = inliers.count_ones() as usize;
-        let condition = eq.condition();
+        if used < config.min_lights {
+            return PixelFit::INVALID;
+        }
+        let condition = known(inliers).unwrap_or_else(|| eq.condition());
         if used < config.min_lights || !(condition <= config.max_condition) {
             return PixelFit::INVALID;
         }

@@ -1,5 +1,6 @@
 //! What a solve is asked to do: [`Method`], [`SolveConfig`] and progress reports.
 
+use crate::readings::{SHADOW_ABS, SHADOW_REL, Shadows};
 use crate::{Error, Result};
 
 /// Which per-pixel solve to run.
@@ -7,14 +8,16 @@ use crate::{Error, Result};
 pub enum Method {
     /// One least-squares solve over all lights (the paper).
     LeastSquares,
-    /// Least squares where it explains the readings; elsewhere the rank-trimmed fit of
-    /// [`crate::robust`] (shadow threshold from the pixel's own readings, the brightest 40 % and
-    /// darkest 10 % of the lit readings left out of the start, every light that agrees refitted).
+    /// Drops shadowed and saturated readings as [`Method::Threshold`] does and keeps least squares
+    /// on the rest where it explains them (relative residual within 2 %); elsewhere the
+    /// rank-trimmed fit of [`crate::robust`] (the brightest 40 % and darkest 10 % of the lit
+    /// readings left out of the start, every light that agrees refitted).
     #[default]
     Robust,
     /// The earlier robust solve: drop readings under the shadow thresholds (`shadow_abs`,
-    /// `shadow_rel` of the brightest) or saturated, least squares on the rest. Less accurate than
-    /// [`Method::Robust`] on every case measured, kept for speed on shadowed photos.
+    /// `shadow_rel` of the pixel's 90th-percentile reading) or saturated, least squares on the
+    /// rest, no fit. Less accurate than [`Method::Robust`] on every case measured; faster only
+    /// where pixels need the fit (highlights, inter-reflections).
     Threshold,
 }
 
@@ -30,9 +33,10 @@ impl Method {
 pub struct SolveConfig {
     pub method: Method,
     /// Absolute shadow floor, as a fraction of full scale after ambient subtraction and division
-    /// by the light's intensity.
+    /// by the light's intensity ([`Shadows::abs`]).
     pub shadow_abs: f32,
-    /// Shadow threshold relative to the pixel's own brightest (intensity-divided) reading.
+    /// Shadow threshold relative to the pixel's own 90th-percentile usable reading
+    /// ([`Shadows::rel`]); the robust fit, the threshold solve and the near-light solve all use it.
     pub shadow_rel: f32,
     /// Fraction of full scale at or above which a raw reading is saturated.
     pub saturation: f32,
@@ -48,8 +52,8 @@ impl Default for SolveConfig {
     fn default() -> Self {
         SolveConfig {
             method: Method::Robust,
-            shadow_abs: 0.005,
-            shadow_rel: 0.05,
+            shadow_abs: SHADOW_ABS,
+            shadow_rel: SHADOW_REL,
             saturation: 0.995,
             min_lights: 3,
             max_condition: 50.0,
@@ -59,6 +63,11 @@ impl Default for SolveConfig {
 }
 
 impl SolveConfig {
+    /// The shadow rule of [`Self::shadow_abs`] and [`Self::shadow_rel`].
+    pub fn shadows(&self) -> Shadows {
+        Shadows { abs: self.shadow_abs, rel: self.shadow_rel }
+    }
+
     /// Checks every field's range.
     ///
     /// # Errors

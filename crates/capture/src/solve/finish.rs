@@ -1,10 +1,13 @@
-//! The robust paths of pixels that drop readings: one pixel at a time, or grouped by subset.
+//! The shadow thresholds, and the paths of pixels that drop readings: one pixel at a time,
+//! grouped by subset, or a fused step of one subset.
 
 use std::collections::HashMap;
 
 use glam::Vec3;
 
 use super::chunk::residual_factor;
+#[cfg(target_arch = "x86_64")]
+use super::fused;
 use super::plan::{Out, Plan, Scratch};
 use super::solution::AlbedoTexel;
 use super::subsets::{SubsetSolve, Subsets};
@@ -12,19 +15,11 @@ use super::{CHUNK, SolveStats};
 use crate::readings;
 
 impl Plan<'_> {
-    /// Counts, per pixel, the readings that are shadowed or saturated (`s.dropped`).
+    /// Counts, per pixel, the readings that are shadowed or saturated (`s.dropped`), after
+    /// [`Self::shadow_thresholds`].
     #[inline(always)]
     pub(super) fn count_dropped(&self, n: usize, s: &mut Scratch) {
-        s.top[..n].fill(f32::NEG_INFINITY);
-        for i in 0..self.k {
-            for (t, &v) in s.top[..n].iter_mut().zip(&s.r[i * CHUNK..i * CHUNK + n]) {
-                *t = t.max(v);
-            }
-        }
-        for t in &mut s.top[..n] {
-            // In f32 bit for bit (see `shadow_floor`).
-            *t = readings::shadow_floor(self.config, *t as f64) as f32;
-        }
+        self.shadow_thresholds(n, s);
         s.dropped[..n].fill(0);
         for i in 0..self.k {
             let r = &s.r[i * CHUNK..i * CHUNK + n];
@@ -46,6 +41,93 @@ impl Plan<'_> {
         }
     }
 
+    /// The shadow threshold of each pixel (`s.top`): [`readings::shadow_floor`] of its
+    /// reference reading, the brightest usable (finite, unsaturated) one when the rig has at most
+    /// 9 lights (a vectorised maximum; the fused kernel takes the same), else the 90th percentile
+    /// by selection ([`readings::shadow_reference`]).
+    #[inline(always)]
+    pub(super) fn shadow_thresholds(&self, n: usize, s: &mut Scratch) {
+        let top = &mut s.top[..n];
+        if readings::reference_is_brightest(self.k) {
+            top.fill(f32::NEG_INFINITY);
+            for i in 0..self.k {
+                let (r, sat) = (&s.r[i * CHUNK..i * CHUNK + n], &s.sat[i * CHUNK..i * CHUNK + n]);
+                for ((t, &v), &q) in top.iter_mut().zip(r).zip(sat) {
+                    *t = t.max(if q == 0 && v.is_finite() { v } else { f32::NEG_INFINITY });
+                }
+            }
+        } else {
+            let mut usable = [0.0f32; super::MAX_LIGHTS];
+            for (j, t) in top.iter_mut().enumerate() {
+                let mut m = 0;
+                for i in 0..self.k {
+                    let v = s.r[i * CHUNK + j];
+                    if s.sat[i * CHUNK + j] == 0 && v.is_finite() {
+                        usable[m] = v;
+                        m += 1;
+                    }
+                }
+                *t = readings::shadow_reference(&mut usable[..m]);
+            }
+        }
+        let shadows = self.config.shadows();
+        for t in top {
+            // In f32 bit for bit (see `shadow_floor`).
+            *t = readings::shadow_floor(shadows, *t as f64) as f32;
+        }
+    }
+
+    /// A fused step whose [`fused::STEP`] pixels at `p` all use the lights `bits`, solved in
+    /// registers with that subset's columns ([`fused::subset_step`]) into `out`. Returns false,
+    /// having counted nothing, when the chunk path must solve the step instead: with
+    /// [`Method::Robust`](super::Method::Robust), when a pixel's subset fit does not agree ([`super::fit::Fit::agrees`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn solve_step_subset<T: fused::Lanes>(
+        &self,
+        bits: u32,
+        rows: &[&[T]],
+        p: usize,
+        out: &mut Out<f32>,
+        scratch: &mut Scratch,
+        subsets: &Subsets,
+        stats: &mut SolveStats,
+    ) -> bool {
+        let used = bits.count_ones() as usize;
+        let subset = if used < self.config.min_lights {
+            None
+        } else {
+            Some(subsets.get(bits as u128, &mut scratch.cache)).filter(|s| s.usable)
+        };
+        let Some(subset) = subset else {
+            if self.fit.is_some() {
+                return false;
+            }
+            out.normals.fill(Vec3::ZERO);
+            out.albedo.fill(0.0);
+            out.confidence.fill(0.0);
+            stats.lights_used[used] += fused::STEP;
+            stats.invalid_count += fused::STEP;
+            return true;
+        };
+        let sk = fused::SubsetKernel {
+            bits,
+            cols: &subset.cols,
+            gains: &self.gray_scales,
+            gram: subset.gram,
+            weight: self.subset_weight(used, subset),
+            gate: self.fit.as_ref().map_or(0.0, |f| f.gate),
+        };
+        let (invalid, disagree) = fused::subset_step(&sk, rows, p, out.normals, out.albedo, out.confidence);
+        if self.fit.is_some() && disagree != 0 {
+            return false;
+        }
+        stats.lights_used[used] += fused::STEP;
+        stats.invalid_count += invalid as usize;
+        true
+    }
+
     /// The bitmask of usable lights of pixel `j` (robust mode, after [`Self::count_dropped`]).
     pub(super) fn usable_bits(&self, j: usize, s: &Scratch) -> u128 {
         let threshold = s.top[j];
@@ -55,15 +137,16 @@ impl Plan<'_> {
         })
     }
 
-    /// Normal, albedo, confidence and lights used for pixel `j`, solved from its usable lights.
+    /// Normal, albedo, confidence and lights used for pixel `j`, solved from its usable lights,
+    /// and the residual factor of that fit (0 when invalid) that [`super::fit::Fit::agrees`] tests.
     pub(super) fn finish_subset(
         &self,
         j: usize,
         s: &Scratch,
         subsets: &Subsets,
         local: &mut HashMap<u128, SubsetSolve>,
-    ) -> (Vec3, Vec3, f32, usize) {
-        let invalid = |used| (Vec3::ZERO, Vec3::ZERO, 0.0, used);
+    ) -> ((Vec3, Vec3, f32, usize), f32) {
+        let invalid = |used| ((Vec3::ZERO, Vec3::ZERO, 0.0, used), 0.0);
         let bits = self.usable_bits(j, s);
         let used = bits.count_ones() as usize;
         if used < self.config.min_lights {
@@ -79,16 +162,19 @@ impl Plan<'_> {
             return invalid(used);
         }
         let normal = Vec3::from(g) / len;
-        let confidence = self.subset_weight(used, subset) * residual_factor(rr, subset.fitted_sq(g));
+        let factor = residual_factor(rr, subset.fitted_sq(g));
+        let confidence = self.subset_weight(used, subset) * factor;
         let albedo = if self.rgb { self.rgb_albedo(j, bits, normal, s) } else { Vec3::splat(len) };
-        (normal, albedo, confidence, used)
+        ((normal, albedo, confidence, used), factor)
     }
 
     /// [`Self::finish_subset`] for the `count` pixels listed in `s.pending` (robust, at most
     /// [`DENSE_MAX_LIGHTS`](super::DENSE_MAX_LIGHTS) lights, `s.bits` filled), written to `out`: the pixels are grouped by
     /// their subset (usually one or two per chunk, as shadows are coherent) and each group is
     /// solved with that subset's columns in registers, in the same operations and order as
-    /// [`Self::solve_subset`], so the bits match the per-pixel path.
+    /// [`Self::solve_subset`], so the bits match the per-pixel path. With
+    /// [`Method::Robust`](super::Method::Robust), the pixels whose subset fit
+    /// [`super::fit::Fit::agrees`] rejects are then fitted one at a time.
     pub(super) fn finish_subsets<A: AlbedoTexel>(
         &self,
         mut count: usize,
@@ -113,13 +199,24 @@ impl Plan<'_> {
                     rest += 1;
                 }
             }
+            let refits = s.refits;
             self.solve_group(bits, grouped, s, subsets, local, out);
-            stats.lights_used[bits.count_ones() as usize] += grouped;
+            stats.lights_used[bits.count_ones() as usize] += grouped - (s.refits - refits);
             count = rest;
+        }
+        let Some(fit) = &self.fit else { return };
+        for t in 0..std::mem::take(&mut s.refits) {
+            let j = s.refit[t] as usize;
+            let (normal, albedo, confidence, used) = self.finish_fit(fit, j, s, subsets);
+            stats.lights_used[used] += 1;
+            out.normals[j] = normal;
+            out.albedo[j] = A::rgb(albedo);
+            out.confidence[j] = confidence;
         }
     }
 
-    /// Solves the `m` pixels of `s.group`, whose usable lights are `bits`, into `out`.
+    /// Solves the `m` pixels of `s.group`, whose usable lights are `bits`, into `out`; with a
+    /// robust fit, lists those whose fit does not agree in `s.refit`.
     pub(super) fn solve_group<A: AlbedoTexel>(
         &self,
         bits: u32,
@@ -132,9 +229,13 @@ impl Plan<'_> {
         let used = bits.count_ones() as usize;
         let subset = if used < self.config.min_lights { None } else { Some(subsets.get(bits as u128, local)) };
         let Some(subset) = subset.filter(|s| s.usable) else {
-            for &j in &s.group[..m] {
-                let j = j as usize;
+            for t in 0..m {
+                let j = s.group[t] as usize;
                 (out.normals[j], out.albedo[j], out.confidence[j]) = (Vec3::ZERO, A::ZERO, 0.0);
+                if self.fit.is_some() {
+                    s.refit[s.refits] = j as u8;
+                    s.refits += 1;
+                }
             }
             return;
         };
@@ -159,21 +260,23 @@ impl Plan<'_> {
                 }
             }
         }
-        let s: &Scratch = s;
-        let (group, gx, gy, gz, rr) = (&s.group[..m], &s.bx[..m], &s.by[..m], &s.bz[..m], &s.brr[..m]);
         let weight = self.subset_weight(used, subset);
         for t in 0..m {
-            let j = group[t] as usize;
-            let g = [gx[t], gy[t], gz[t]];
+            let j = s.group[t] as usize;
+            let g = [s.bx[t], s.by[t], s.bz[t]];
             let len = Vec3::from(g).length();
-            let (normal, albedo, confidence) = if readings::defines_normal(len) {
+            let (normal, albedo, confidence, factor) = if readings::defines_normal(len) {
                 let normal = Vec3::from(g) / len;
-                let confidence = weight * residual_factor(rr[t], subset.fitted_sq(g));
+                let factor = residual_factor(s.brr[t], subset.fitted_sq(g));
                 let albedo = if self.rgb { self.rgb_albedo(j, bits as u128, normal, s) } else { Vec3::splat(len) };
-                (normal, albedo, confidence)
+                (normal, albedo, weight * factor, factor)
             } else {
-                (Vec3::ZERO, Vec3::ZERO, 0.0)
+                (Vec3::ZERO, Vec3::ZERO, 0.0, 0.0)
             };
+            if self.fit.as_ref().is_some_and(|f| !f.agrees(factor)) {
+                s.refit[s.refits] = j as u8;
+                s.refits += 1;
+            }
             out.normals[j] = normal;
             out.albedo[j] = A::rgb(albedo);
             out.confidence[j] = confidence;

@@ -1,9 +1,17 @@
-//! [`Method::Robust`](super::Method::Robust) in the solve: which pixels the all-lights least
-//! squares explains, and the [`crate::robust`] fit of the others.
+//! [`Method::Robust`](super::Method::Robust) in the solve: which pixels least squares on their
+//! lit readings explains, and the [`crate::robust`] fit of the others.
+//!
+//! A pixel is first solved like [`Method::Threshold`](super::Method::Threshold) (least squares
+//! over all lights, or over its lit, unsaturated readings when some are dropped: the cached
+//! subset pseudo-inverses, vectorised). That answer stands when its relative residual is within
+//! [`robust::AGREEMENT`] (its residual factor at least [`Fit::gate`]): the lit readings agree with
+//! one Lambertian normal, so there is nothing left to reject. Only the other pixels (highlights,
+//! inter-reflections, shadows the threshold misses) pay for the per-pixel rank-trimmed fit.
 
 use glam::Vec3;
 
 use super::plan::{Plan, Scratch};
+use super::subsets::Subsets;
 use super::{CHUNK, RESIDUAL_SCALE, SolveConfig};
 use crate::Result;
 use crate::robust::{self, Lights, RobustConfig};
@@ -12,17 +20,17 @@ use crate::robust::{self, Lights, RobustConfig};
 pub(super) struct Fit {
     lights: Lights,
     config: RobustConfig,
-    /// All-lights confidence (its residual factor) below which a pixel is fitted:
-    /// `1 / (1 + (AGREEMENT / RESIDUAL_SCALE)^2)`.
-    gate: f32,
+    /// Residual factor of the confidence (`1 / (1 + (rho / RESIDUAL_SCALE)^2)`) below which a
+    /// pixel is fitted: `1 / (1 + (AGREEMENT / RESIDUAL_SCALE)^2)`.
+    pub(super) gate: f32,
 }
 
 impl Fit {
-    /// The fit for `lights` under `config` (its light-count and conditioning limits, its absolute
-    /// shadow floor; the rest are [`RobustConfig`]'s defaults).
+    /// The fit for `lights` under `config` (its shadow rule, light-count and conditioning
+    /// limits; the rest are [`RobustConfig`]'s defaults).
     pub(super) fn new(lights: &[Vec3], config: &SolveConfig) -> Result<Self> {
         let config = RobustConfig {
-            shadow_abs: config.shadow_abs,
+            shadows: config.shadows(),
             min_lights: config.min_lights,
             max_condition: config.max_condition,
             ..RobustConfig::default()
@@ -32,25 +40,25 @@ impl Fit {
         Ok(Fit { lights: Lights::new(lights)?, config, gate: 1.0 / (1.0 + agreement * agreement) })
     }
 
-    /// Whether a pixel with this all-lights confidence (0 when least squares failed) and this
-    /// many dropped readings needs the fit.
+    /// Whether a least-squares answer with this residual factor (0 when it failed) stands.
     #[inline(always)]
-    pub(super) fn needed(&self, confidence: f32, dropped: u32) -> bool {
-        dropped > 0 || !(confidence >= self.gate)
+    pub(super) fn agrees(&self, factor: f32) -> bool {
+        factor >= self.gate
     }
 }
 
 impl Plan<'_> {
     /// Normal, albedo, confidence and lights used of pixel `j` of the chunk, by the robust fit of
-    /// its loaded readings.
-    pub(super) fn finish_fit(&self, fit: &Fit, j: usize, s: &Scratch) -> (Vec3, Vec3, f32, usize) {
+    /// its loaded readings (condition numbers from the dense subset table when there is one).
+    pub(super) fn finish_fit(&self, fit: &Fit, j: usize, s: &Scratch, subsets: &Subsets) -> (Vec3, Vec3, f32, usize) {
         let mut r = [0.0f32; super::MAX_LIGHTS];
         let mut sat = [false; super::MAX_LIGHTS];
         for i in 0..self.k {
             r[i] = s.r[i * CHUNK + j];
             sat[i] = s.sat[i * CHUNK + j] != 0;
         }
-        let f = robust::fit_pixel(&r[..self.k], &sat[..self.k], &fit.lights, &fit.config);
+        let condition = |bits| subsets.dense_condition(bits);
+        let f = robust::fit_pixel_cached(&r[..self.k], &sat[..self.k], &fit.lights, &fit.config, &condition);
         if f.used() == 0 {
             return (Vec3::ZERO, Vec3::ZERO, 0.0, 0);
         }

@@ -81,7 +81,8 @@ pub(super) struct Kernel<'a> {
     pub shadow_abs: f32,
     pub shadow_rel: f32,
     /// Robust only: whether a step whose pixels all drop readings, the same ones, is
-    /// reported as [`Step::Subset`] (at most 12 lights, so the usable set fits in the lanes).
+    /// reported as [`Step::Subset`] (at most 9 lights, so the usable set fits in the lanes and
+    /// the brightest reading is the shadow rule's reference).
     pub group_subsets: bool,
 }
 
@@ -146,14 +147,19 @@ pub(super) fn step<T: Lanes, const ROBUST: bool>(
     if ROBUST {
         // Some reading is below `max(abs, rel * brightest)` iff the dimmest one is.
         let (abs, rel) = (_mm256_set1_ps(kernel.shadow_abs), _mm256_set1_ps(kernel.shadow_rel));
-        let mut dropped = 0;
+        // The brightest is the shadow rule's reference reading (`readings::Shadows`) only up to
+        // 9 lights and without saturated readings (it excludes them); otherwise the threshold
+        // from the brightest is at least the rule's, so "nothing dropped" still holds exactly,
+        // and any other step is declined to the chunk path.
+        let (mut dropped, mut clipped) = (0, 0);
         let mut threshold = [zero; 2];
         for h in 0..2 {
             threshold[h] = _mm256_max_ps(_mm256_mul_ps(rel, hi[h]), abs);
             let shadowed = _mm256_cmp_ps::<_CMP_LT_OQ>(lo[h], threshold[h]);
             dropped |= _mm256_movemask_ps(_mm256_or_ps(shadowed, saturated[h])) << (8 * h);
+            clipped |= _mm256_movemask_ps(saturated[h]);
         }
-        if dropped == 0xffff && kernel.group_subsets {
+        if dropped == 0xffff && clipped == 0 && kernel.group_subsets {
             return common_usable(kernel, rows, p, threshold).map_or(Step::Declined, Step::Subset);
         }
         if dropped != 0 {
@@ -237,12 +243,15 @@ pub(super) struct SubsetKernel<'a> {
     pub gram: [f32; 6],
     /// Lights-used and conditioning factors of the confidence.
     pub weight: f32,
+    /// Residual factor below which a pixel's fit does not agree (robust; see `Fit::agrees`).
+    pub gate: f32,
 }
 
 /// Solves the [`STEP`] pixels from `p` with one subset of lights (what `finish_subset` does
 /// per pixel, in the same operations: `g = g + c * r` light by light without fusing,
 /// `n = g / |g|`, confidence `weight * residual_factor`), writes them and returns how many
-/// are invalid.
+/// are invalid and the pixels (bit `t` for pixel `t`) that are invalid or whose residual factor
+/// is below `kernel.gate`.
 #[inline(never)]
 #[target_feature(enable = "avx2,fma")]
 pub(super) fn subset_step<T: Lanes>(
@@ -252,7 +261,7 @@ pub(super) fn subset_step<T: Lanes>(
     normals: &mut [Vec3],
     albedo: &mut [f32],
     confidence: &mut [f32],
-) -> u32 {
+) -> (u32, u32) {
     assert!(normals.len() == STEP && albedo.len() == STEP && confidence.len() == STEP);
     let zero = _mm256_setzero_ps();
     let (mut gx, mut gy, mut gz, mut rr) = ([zero; 2], [zero; 2], [zero; 2], [zero; 2]);
@@ -274,7 +283,8 @@ pub(super) fn subset_step<T: Lanes>(
     let one = _mm256_set1_ps(1.0);
     let excess_scale = _mm256_set1_ps(1.0 / (RESIDUAL_SCALE * RESIDUAL_SCALE));
     let weight = _mm256_set1_ps(kernel.weight);
-    let mut invalid = 0;
+    let gate = _mm256_set1_ps(kernel.gate);
+    let (mut invalid, mut disagree) = (0, 0);
     for h in 0..2 {
         let (x, y, z, rr) = (gx[h], gy[h], gz[h], rr[h]);
         let mul = |a, b| _mm256_mul_ps(a, b);
@@ -292,6 +302,8 @@ pub(super) fn subset_step<T: Lanes>(
         let fitted = add(diagonal, mul(_mm256_set1_ps(2.0), cross));
         let excess = mul(_mm256_max_ps(_mm256_sub_ps(rr, fitted), zero), excess_scale);
         let factor = _mm256_blendv_ps(one, _mm256_div_ps(rr, add(rr, excess)), _mm256_cmp_ps::<_CMP_GT_OQ>(rr, zero));
+        let agrees = _mm256_and_ps(ok, _mm256_cmp_ps::<_CMP_GE_OQ>(factor, gate));
+        disagree |= ((!_mm256_movemask_ps(agrees)) as u32 & 0xff) << (8 * h);
         let keep = |v| _mm256_and_ps(ok, v);
         let div = |a| _mm256_div_ps(a, len);
         let (nx, ny, nz) = (keep(div(x)), keep(div(y)), keep(div(z)));
@@ -306,7 +318,7 @@ pub(super) fn subset_step<T: Lanes>(
             _mm256_storeu_ps(confidence.as_mut_ptr().add(8 * h), keep(mul(weight, factor)));
         }
     }
-    invalid
+    (invalid, disagree)
 }
 
 /// `x0 y0 z0 x1 y1 z1 ... x7 y7 z7` from the three vectors, as three vectors.

@@ -17,15 +17,21 @@
 //!   output in registers, the same operations in the same order as the chunk path, so the bits
 //!   still match the portable build. When all lights have the same intensity, the per-light
 //!   scale is taken out of `sum r^2` (one multiplication per reading fewer, in both builds).
-//! * [`Method::Robust`] (the default) runs the detection of [`Method::Threshold`] below and the
-//!   all-lights solve; a pixel that drops a reading or whose relative residual exceeds
-//!   [`crate::robust::AGREEMENT`] is then fitted by [`crate::robust::fit_pixel`] from its loaded
-//!   readings (`fit.rs`; the fused kernel hands such steps to the chunk path).
+//! * [`Method::Robust`] (the default) drops readings exactly as [`Method::Threshold`] below and
+//!   solves least squares on the rest, by the same paths (all lights when nothing is dropped;
+//!   otherwise the cached subset pseudo-inverses, grouped and vectorised). That answer stands
+//!   where its relative residual is within [`crate::robust::AGREEMENT`] (2 %): the lit readings
+//!   agree with one Lambertian normal. Only the other pixels are fitted by
+//!   [`crate::robust::fit_pixel`] from their loaded readings (`fit.rs`; the fused kernel hands
+//!   such steps to the chunk path), so a cast shadow costs what it costs the threshold solve and
+//!   only highlights, inter-reflections and the like pay for the per-pixel fit.
 //! * [`Method::Threshold`] drops, per pixel, the readings that are shadowed or
 //!   saturated and solves from the remaining lights with the pseudo-inverse of that subset.
-//!   A reading is *shadowed* when `r_i < max(shadow_abs, shadow_rel * max_j r_j)`: below an
-//!   absolute floor and also below a fraction of the pixel's own brightest reading (a cast shadow
-//!   on a bright pixel is far above the noise floor but far below its neighbours in the stack). A
+//!   A reading is *shadowed* by the one rule of [`crate::readings::Shadows`]:
+//!   `r_i < max(shadow_abs, shadow_rel * q90)`, `q90` the pixel's 90th-percentile usable reading
+//!   (its brightest for up to 9 lights): below an absolute floor and also far below the pixel's
+//!   own bright readings (a cast shadow on a bright pixel is far above the noise floor but far
+//!   below its neighbours in the stack). A
 //!   reading is *saturated* when its raw stored value is at or above `saturation * full_scale`
 //!   (any channel, before ambient subtraction). Subset pseudo-inverses are cached per bitmask:
 //!   a dense lazily filled table for k <= [`DENSE_MAX_LIGHTS`], a per-worker map capped at
@@ -35,7 +41,8 @@
 //!   fused kernel a step of 16 pixels is solved in registers unless one of its readings is
 //!   dropped (a reading is below the threshold iff the pixel's dimmest one is). Shadows are
 //!   spatially coherent, so a step whose 16 pixels all drop the same readings is solved in
-//!   registers too, with that subset's columns (`fused::subset_step`); other such steps go
+//!   registers too, with that subset's columns (`fused::subset_step`; up to 9 lights, where the
+//!   reference reading is the brightest); other such steps go
 //!   through the chunk path. There, with k <= [`DENSE_MAX_LIGHTS`], the pixels that drop
 //!   readings are grouped by subset and each group is solved with its subset's columns
 //!   (`Plan::finish_subsets`); with more lights, one pixel at a time. All three subset paths

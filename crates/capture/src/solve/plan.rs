@@ -10,8 +10,8 @@ use skinkit_maps::{Channels, Grid, NormalMap, Transfer};
 use super::chunk::{
     accumulate_all, accumulate_rows, fresh_zeroed_vec3, raw_values, residual_factor, take_sized, write_all_lights,
 };
-#[cfg(target_arch = "x86_64")]
 use super::fit::Fit;
+#[cfg(target_arch = "x86_64")]
 use super::fused;
 use super::solution::AlbedoTexel;
 use super::sources::{Linearise, Raw, Source, as_f32, as_u8, as_u16};
@@ -27,8 +27,9 @@ pub(super) struct Plan<'a> {
     pub(super) k: usize,
     pub(super) rgb: bool,
     pub(super) robust: bool,
-    /// [`Method::Robust`]: pixels that drop a reading or whose all-lights residual exceeds
-    /// [`robust::AGREEMENT`] are fitted by [`robust::fit_pixel`] ([`Self::finish_fit`]).
+    /// [`Method::Robust`]: pixels whose least squares over their lit readings (all lights, or
+    /// the subset left after dropping) leaves a relative residual above
+    /// [`crate::robust::AGREEMENT`] are fitted by [`crate::robust::fit_pixel`] ([`Self::finish_fit`]).
     pub(super) fit: Option<Fit>,
     pub(super) config: &'a SolveConfig,
     pub(super) lights: Vec<Vec3>,
@@ -48,9 +49,10 @@ pub(super) struct Plan<'a> {
     pub(super) fast_ls: bool,
     /// Whether the fused kernel applies: linear grey photos without an ambient frame.
     pub(super) fused: bool,
-    /// Robust with at most [`DENSE_MAX_LIGHTS`] lights: a chunk's pixels with dropped readings
-    /// are grouped by subset and solved a group at a time ([`Self::finish_subsets`]); else one
-    /// pixel at a time ([`Self::finish_subset`]). Both give the same bits.
+    /// Threshold or robust with at most [`DENSE_MAX_LIGHTS`] lights: a chunk's pixels with
+    /// dropped readings are grouped by subset and solved a group at a time
+    /// ([`Self::finish_subsets`]); else one pixel at a time ([`Self::finish_subset`]). Both give
+    /// the same bits.
     pub(super) batch_subsets: bool,
     pub(super) mask: Option<&'a [bool]>,
 }
@@ -78,6 +80,9 @@ pub(super) struct Scratch {
     pub(super) by: [f32; CHUNK],
     pub(super) bz: [f32; CHUNK],
     pub(super) brr: [f32; CHUNK],
+    /// Batched subsets, robust: pixels whose subset fit does not agree, to be fitted.
+    pub(super) refit: [u8; CHUNK],
+    pub(super) refits: usize,
     pub(super) cache: HashMap<u128, SubsetSolve>,
 }
 
@@ -102,6 +107,8 @@ impl Scratch {
             by: [0.0; CHUNK],
             bz: [0.0; CHUNK],
             brr: [0.0; CHUNK],
+            refit: [0; CHUNK],
+            refits: 0,
             cache: HashMap::new(),
         }
     }
@@ -169,7 +176,7 @@ impl<'a> Plan<'a> {
             ones: vec![1.0; k],
             fast_ls: !robust && !rgb && first.transfer() == Transfer::Linear,
             fused: !rgb && first.transfer() == Transfer::Linear && stack.ambient().is_none(),
-            batch_subsets: config.method == Method::Threshold && k <= DENSE_MAX_LIGHTS,
+            batch_subsets: robust && k <= DENSE_MAX_LIGHTS,
             mask: stack.mask().map(|m| m.as_slice()),
         })
     }
@@ -310,7 +317,9 @@ impl<'a> Plan<'a> {
             saturated_at: self.sources[0].saturated_at,
             shadow_abs: self.config.shadow_abs,
             shadow_rel: self.config.shadow_rel,
-            group_subsets: self.batch_subsets,
+            // The fused kernel's shadow threshold is from the brightest reading, the reference
+            // reading only up to 9 lights (and without saturation, which `step` checks).
+            group_subsets: self.batch_subsets && readings::reference_is_brightest(self.k),
         };
         let mut stats = SolveStats::empty(self.k);
         let n_px = out.normals.len();
@@ -333,7 +342,7 @@ impl<'a> Plan<'a> {
             match solved {
                 // The robust fit takes over pixels the all-lights solve does not explain.
                 fused::Step::Solved(_)
-                    if self.fit.as_ref().is_some_and(|f| chunk.confidence.iter().any(|&c| f.needed(c, 0))) =>
+                    if self.fit.as_ref().is_some_and(|f| chunk.confidence.iter().any(|&c| !f.agrees(c))) =>
                 {
                     self.solve_chunk(p, chunk, scratch, subsets, &mut stats)
                 }
@@ -342,30 +351,10 @@ impl<'a> Plan<'a> {
                     stats.invalid_count += invalid as usize;
                 }
                 fused::Step::Subset(bits) => {
-                    let used = bits.count_ones() as usize;
-                    stats.lights_used[used] += STEP;
-                    let subset = if used < self.config.min_lights {
-                        None
-                    } else {
-                        Some(subsets.get(bits as u128, &mut scratch.cache)).filter(|s| s.usable)
-                    };
-                    let Some(subset) = subset else {
-                        chunk.normals.fill(Vec3::ZERO);
-                        chunk.albedo.fill(0.0);
-                        chunk.confidence.fill(0.0);
-                        stats.invalid_count += STEP;
-                        j += n;
-                        continue;
-                    };
-                    let sk = fused::SubsetKernel {
-                        bits,
-                        cols: &subset.cols,
-                        gains: &self.gray_scales,
-                        gram: subset.gram,
-                        weight: self.subset_weight(used, subset),
-                    };
-                    let invalid = fused::subset_step(&sk, &rows, p, chunk.normals, chunk.albedo, chunk.confidence);
-                    stats.invalid_count += invalid as usize;
+                    let mut chunk = chunk;
+                    if !self.solve_step_subset(bits, &rows, p, &mut chunk, scratch, subsets, &mut stats) {
+                        self.solve_chunk(p, chunk, scratch, subsets, &mut stats)
+                    }
                 }
                 fused::Step::Declined => self.solve_chunk(p, chunk, scratch, subsets, &mut stats),
             }
@@ -434,7 +423,7 @@ impl<'a> Plan<'a> {
         }
         let invalid = self.normalise_all(n, scratch);
         let any_dropped = match &self.fit {
-            Some(fit) => (0..n).any(|j| fit.needed(scratch.conf[j], scratch.dropped[j])),
+            Some(fit) => (0..n).any(|j| scratch.dropped[j] > 0 || !fit.agrees(scratch.conf[j])),
             None => self.robust && scratch.dropped[..n].iter().any(|&d| d > 0),
         };
         if !self.rgb && inside.is_none() && !any_dropped {
@@ -455,11 +444,16 @@ impl<'a> Plan<'a> {
                 pending += 1;
                 continue;
             }
-            let fitted = self.fit.as_ref().filter(|f| f.needed(scratch.conf[j], scratch.dropped[j]));
-            let (normal, albedo, confidence, used) = if let Some(fit) = fitted {
-                self.finish_fit(fit, j, scratch)
-            } else if self.fit.is_none() && self.robust && scratch.dropped[j] > 0 {
-                self.finish_subset(j, scratch, subsets, &mut local)
+            // All-lights least squares, or (robust) the fit where it does not agree.
+            let refit = self.fit.as_ref().filter(|f| !f.agrees(scratch.conf[j]));
+            let (normal, albedo, confidence, used) = if self.robust && scratch.dropped[j] > 0 {
+                let (texel, factor) = self.finish_subset(j, scratch, subsets, &mut local);
+                match &self.fit {
+                    Some(fit) if !fit.agrees(factor) => self.finish_fit(fit, j, scratch, subsets),
+                    _ => texel,
+                }
+            } else if let Some(fit) = refit {
+                self.finish_fit(fit, j, scratch, subsets)
             } else {
                 let normal = Vec3::new(scratch.gx[j], scratch.gy[j], scratch.gz[j]);
                 let albedo = if self.rgb {

@@ -76,6 +76,12 @@ impl<'a> Subsets<'a> {
         Subsets { lights, max_condition, dense, capacity }
     }
 
+    /// The condition number of subset `bits` when the subsets are in the dense table.
+    pub(super) fn dense_condition(&self, bits: u128) -> Option<f64> {
+        let entry = self.dense.get(bits as usize)?;
+        Some(entry.get_or_init(|| SubsetSolve::new(self.lights, bits, self.max_condition)).condition)
+    }
+
     /// The solve for subset `bits`, from the dense table or the worker's `local` map.
     pub(super) fn get<'s>(&'s self, bits: u128, local: &'s mut HashMap<u128, SubsetSolve>) -> &'s SubsetSolve {
         if !self.dense.is_empty() {

@@ -137,9 +137,16 @@ fn portable_and_vectorised_builds_agree_bitwise() {
 }
 
 /// Pixels with dropped readings solved in groups by subset ([`Plan::finish_subsets`]) get the
-/// same bits as solved one at a time ([`Plan::finish_subset`]), in both builds, grey and RGB.
+/// same bits as solved one at a time ([`Plan::finish_subset`]), in both builds, grey and RGB,
+/// threshold and robust (whose pixels that do not agree are fitted after either).
 #[test]
 fn grouped_subset_solves_match_per_pixel_ones_bitwise() {
+    for method in [Method::Threshold, Method::Robust] {
+        grouped_subset_solves_match(method);
+    }
+}
+
+fn grouped_subset_solves_match(method: Method) {
     for (kind, rgb, masked) in
         [(0, false, false), (0, false, true), (1, true, false), (2, false, false), (3, false, false), (3, true, true)]
     {
@@ -152,7 +159,7 @@ fn grouped_subset_solves_match_per_pixel_ones_bitwise() {
         if masked {
             stack = stack.with_mask(Grid::from_fn(w, h, |x, y| (x * 7 + y * 3) % 29 != 0)).unwrap();
         }
-        let config = SolveConfig { method: Method::Threshold, ..SolveConfig::default() };
+        let config = SolveConfig { method, ..SolveConfig::default() };
         let lights = check_rig(&stack, &rig).unwrap();
         let mut plan = Plan::new(&stack, &rig, &config, lights, None).unwrap();
         assert!(plan.batch_subsets);
@@ -184,7 +191,7 @@ fn grouped_subset_solves_match_per_pixel_ones_bitwise() {
         };
         for vectorised in [false, true] {
             let (a, b) = (run(false, vectorised), run(true, vectorised));
-            let what = format!("samples {kind}, rgb {rgb}, masked {masked}, vectorised {vectorised}");
+            let what = format!("{method:?}, samples {kind}, rgb {rgb}, masked {masked}, vectorised {vectorised}");
             assert_eq!(a, b, "{what}");
             let subset_pixels: usize = a.1.lights_used[..8].iter().sum();
             assert!(subset_pixels > n / 20 && a.1.lights_used[7] > 0, "{what}: {:?}", a.1);

@@ -51,10 +51,11 @@ pub struct SolveArgs {
     /// Side of the low-frequency removal block in pixels (the paper's 50); 0 turns it off.
     #[arg(long, default_value_t = 50, value_name = "PIXELS")]
     pub detrend_block: usize,
-    /// Robust solver: readings below this fraction of full scale count as shadow.
+    /// Robust and threshold solvers: readings below this fraction of full scale count as shadow.
     #[arg(long, value_name = "FRACTION", value_parser = fraction)]
     pub shadow_threshold: Option<f32>,
-    /// Robust solver: readings below this fraction of the pixel's brightest reading count as shadow.
+    /// Robust and threshold solvers: readings below this fraction of the pixel's 90th-percentile
+    /// reading (its brightest with up to 9 lights) count as shadow [default: 0.1].
     #[arg(long, value_name = "FRACTION", value_parser = fraction)]
     pub shadow_relative: Option<f32>,
     /// Readings at or above this fraction of full scale count as saturated.

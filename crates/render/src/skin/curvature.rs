@@ -1,6 +1,6 @@
 //! Per-vertex curvature `1/r` in 1/mm, the second index of the pre-integrated diffuse table
 //! (Penner and Borshukov 2011, section 1.3: "curvature must be smooth", and
-//! `../shared/REFERENCE.md`: the LUT's `1/r` has `r` in millimetres, and per-vertex curvature
+//! `docs/references.md`: the LUT's `1/r` has `r` in millimetres, and per-vertex curvature
 //! precomputed from the mesh is smoother than the per-triangle derivative form).
 //!
 //! # The estimator

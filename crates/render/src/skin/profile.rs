@@ -1,6 +1,6 @@
 //! The skin diffusion profile R(d) as d'Eon and Luebke's sum of six Gaussians (GPU Gems 3,
 //! chapter 14), with the definitions that change every table built from it made explicit
-//! (`../shared/REFERENCE.md`):
+//! (`docs/references.md`):
 //!
 //! - [`Normalisation::TwoD`]: each Gaussian is the radial 2-D density `exp(-d^2 / 2v) / (2 pi v)`,
 //!   so the profile integrates to the channel's weight sum (1) over the plane (d'Eon's definition).

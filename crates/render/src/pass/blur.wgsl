@@ -4,14 +4,21 @@
 // a texel with an unwritten tap (alpha 1, the clear value) takes the tap of smallest kernel size
 // instead, so bilinear fetches across UV seams read lit texels, not black.
 
-struct Blur {
-    // xy: 1 / light-map size; z: a; w: b.
-    params: vec4<f32>,
-    // x: 1 = this pass dilates.
-    flags: vec4<u32>,
+// The blur's uniforms (`BlurUniforms` in src/pass/blur.rs).
+struct BlurUniforms {
+    // 1 / light-map size.
+    inv_size: vec2<f32>,
+    // Kernel radius in texels = a * k + b for the stored kernel size k.
+    a: f32,
+    b: f32,
+    // 1: this pass dilates.
+    dilate: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
-@group(0) @binding(0) var<uniform> blur: Blur;
+@group(0) @binding(0) var<uniform> blur: BlurUniforms;
 @group(0) @binding(1) var source: texture_2d<f32>;
 @group(0) @binding(2) var source_sampler: sampler;
 
@@ -49,7 +56,7 @@ fn vs_full_screen(@builtin(vertex_index) index: u32) -> FullScreen {
 @fragment
 fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
     let centre = textureSampleLevel(source, source_sampler, input.uv, 0.0);
-    let radius = blur.params.xy * (min(centre.a, 0.999) * blur.params.z + blur.params.w);
+    let radius = blur.inv_size * (min(centre.a, 0.999) * blur.a + blur.b);
     var sum = centre.rgb;
     var written_sum = centre.rgb;
     var written = 1.0;
@@ -65,7 +72,7 @@ fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
             smallest = s;
         }
     }
-    if blur.flags.x == 1u {
+    if blur.dilate == 1u {
         if centre.a >= 1.0 {
             // Unwritten texel: copy the nearest-in-kernel written tap (dilation), or stay unwritten.
             return smallest;

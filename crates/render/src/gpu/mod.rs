@@ -1,0 +1,180 @@
+//! Headless wgpu: the machinery the passes of [`crate::pass`] run on. The device and its checks
+//! ([`device`]), buffers, textures and the shared bind group ([`resources`]), the pipeline cache
+//! ([`pipelines`]), a scene's upload and the frame's encoder walking the pass graph ([`frame`]),
+//! readback to linear f32 pixels ([`readback`]) and per-pass GPU timestamps ([`timing`]).
+//!
+//! Without a GPU, Mesa's lavapipe (software Vulkan) runs everything: set `WGPU_BACKEND=vulkan`.
+//! [`Gpu::new`] reads the backends from `WGPU_BACKEND` (default: the native backends compiled in:
+//! Vulkan, Metal, DX12; the GL backend is left out because GL on llvmpipe cannot render to or
+//! filter Rgba32Float) and fails with [`GpuError::NoAdapter`], one sentence with the fix, when
+//! nothing is found.
+//!
+//! Textures (normal map, albedo) are uploaded as Rgba16Float, filterable everywhere without the
+//! `FLOAT32_FILTERABLE` feature, with mip chains built on the CPU by
+//! [`crate::shading::Texture::mip_chain`] (unnormalised averages: the shader renormalises, so
+//! distant skin does not sparkle). A texture larger than the device's `max_texture_dimension_2d`
+//! is an error naming the limit ([`GpuError::TextureTooLarge`]): the caller decides whether to
+//! downscale.
+
+mod device;
+mod frame;
+mod pipelines;
+mod readback;
+mod resources;
+mod timing;
+
+pub use crate::pass::{BASE_WGSL, BLUR_WGSL, UNIFORM_BYTES, UniformLayout, uniform_layouts};
+pub use device::quiet_vulkan_loader;
+pub use frame::PreparedScene;
+pub(crate) use frame::tone_code;
+pub(crate) use pipelines::{MESH_BUFFERS, MeshPipeline, POSITION_BUFFER, PipelineKey, depth_state};
+pub use readback::{Rendered, padded_row_bytes};
+pub(crate) use resources::{
+    DEPTH_FORMAT, LIGHT_MAP_FORMAT, SceneTextures, colour_attachment, depth_attachment, extent,
+};
+
+use std::sync::Mutex;
+
+/// What can go wrong on the GPU side.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GpuError {
+    /// No adapter on the enabled backends.
+    #[error(
+        "no GPU or software Vulkan driver found (backends tried: {backends}): install Mesa's \
+         lavapipe (`apt-get install mesa-vulkan-drivers`) and set WGPU_BACKEND=vulkan"
+    )]
+    NoAdapter {
+        /// The backends that were enabled.
+        backends: String,
+    },
+    /// The adapter refused a device.
+    #[error("the {adapter} adapter refused to create a device: {message}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// Too many lights or lobes for the pass's uniform arrays.
+    #[error("{what}: {count} given, the base pass shades at most {max}")]
+    TooMany {
+        /// "lights" or "Lafortune lobes".
+        what: &'static str,
+        /// How many were given.
+        count: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// An output size of zero or above the device limit.
+    #[error("output size {width}x{height} is not within 1..={limit} (device max_texture_dimension_2d)")]
+    BadOutputSize {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// The device limit.
+        limit: u32,
+    },
+    /// A texture larger than the device allows.
+    #[error(
+        "{name} texture is {width}x{height} but this device allows at most {limit}x{limit} \
+         (max_texture_dimension_2d): downscale it first"
+    )]
+    TextureTooLarge {
+        /// "normal map" or "albedo".
+        name: &'static str,
+        /// Texture width.
+        width: u32,
+        /// Texture height.
+        height: u32,
+        /// The device limit.
+        limit: u32,
+    },
+    /// A texture whose texel count does not match its size.
+    #[error("{name} texture says {width}x{height} but holds {count} texels")]
+    BadTexture {
+        /// "normal map" or "albedo".
+        name: &'static str,
+        /// Stated width.
+        width: u32,
+        /// Stated height.
+        height: u32,
+        /// Texels held.
+        count: usize,
+    },
+    /// A mesh index pointing past the vertices, or no triangles.
+    #[error("mesh has {vertices} vertices and {indices} indices: {problem}")]
+    BadMesh {
+        /// Vertex count.
+        vertices: usize,
+        /// Index count.
+        indices: usize,
+        /// What is wrong.
+        problem: &'static str,
+    },
+    /// wgpu reported a validation or out-of-memory error, or the readback failed.
+    #[error("wgpu error during {stage}: {message}")]
+    Wgpu {
+        /// What was being done.
+        stage: &'static str,
+        /// wgpu's message.
+        message: String,
+    },
+}
+
+/// Result alias for this module.
+pub type Result<T> = std::result::Result<T, GpuError>;
+
+/// The offscreen colour target's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OutputFormat {
+    /// Rgba16Float, linear HDR.
+    Hdr16,
+    /// Rgba32Float, linear HDR (for EXR).
+    #[default]
+    Hdr32,
+    /// Rgba8UnormSrgb: tone-mapped LDR, sRGB-encoded by the target (for PNG).
+    Srgb8,
+}
+
+impl OutputFormat {
+    pub(crate) fn texture_format(self) -> wgpu::TextureFormat {
+        match self {
+            Self::Hdr16 => wgpu::TextureFormat::Rgba16Float,
+            Self::Hdr32 => wgpu::TextureFormat::Rgba32Float,
+            Self::Srgb8 => wgpu::TextureFormat::Rgba8UnormSrgb,
+        }
+    }
+
+    fn bytes_per_pixel(self) -> u32 {
+        match self {
+            Self::Hdr16 => 8,
+            Self::Hdr32 => 16,
+            Self::Srgb8 => 4,
+        }
+    }
+}
+
+/// An offscreen colour target and depth buffer from [`Gpu::create_target`].
+pub struct Target {
+    pub(crate) color: wgpu::Texture,
+    pub(crate) depth: wgpu::Texture,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) format: OutputFormat,
+}
+
+/// A headless device with the shader modules of the passes and a cache of their pipelines.
+pub struct Gpu {
+    adapter: wgpu::Adapter,
+    pub(crate) device: wgpu::Device,
+    queue: wgpu::Queue,
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pub(crate) shader: wgpu::ShaderModule,
+    pub(crate) blur_layout: wgpu::BindGroupLayout,
+    pub(crate) blur_pipeline_layout: wgpu::PipelineLayout,
+    pub(crate) blur_shader: wgpu::ShaderModule,
+    pipelines: Mutex<Vec<(PipelineKey, wgpu::RenderPipeline)>>,
+}

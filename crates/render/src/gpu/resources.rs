@@ -1,0 +1,329 @@
+//! GPU resources: buffers, textures with their mip chains, the tables, and the one bind group the
+//! mesh passes share (its layout, its textures and samplers, placeholders for what a pass does not
+//! read).
+
+use super::Gpu;
+use crate::passes::{SkinSetup, Table};
+use crate::shading::{RenderInputs, Texture};
+use wgpu::util::DeviceExt;
+
+/// Light maps are Rgba16Float: filterable everywhere, HDR irradiance, kernel size in alpha.
+pub(crate) const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Tables (LUTs, zonal factors) are Rgba32Float where the device filters it (lavapipe and desktop
+/// adapters, with `FLOAT32_FILTERABLE`), Rgba16Float elsewhere ([`Gpu::table_format`]).
+const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+impl Gpu {
+    /// Rgba32Float for tables where the device filters it, else Rgba16Float.
+    pub fn table_format(&self) -> wgpu::TextureFormat {
+        if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
+            TABLE_FORMAT
+        } else {
+            wgpu::TextureFormat::Rgba16Float
+        }
+    }
+
+    pub(crate) fn buffer(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+    }
+
+    pub(crate) fn texture(&self, label: &str, width: u32, height: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+        let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        if format != DEPTH_FORMAT {
+            usage |= wgpu::TextureUsages::COPY_SRC;
+        }
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: extent(width, height),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    }
+
+    /// Upload `texture` as Rgba16Float with its full CPU-built mip chain.
+    pub(crate) fn upload_texture(&self, label: &str, texture: &Texture) -> wgpu::Texture {
+        let levels = texture.mip_chain();
+        let data: Vec<u16> = levels
+            .iter()
+            .flat_map(|level| level.texels.iter().flatten())
+            .map(|&v| half::f16::from_f32(v).to_bits())
+            .collect();
+        self.device.create_texture_with_data(
+            &self.queue,
+            &wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent(texture.width, texture.height),
+                mip_level_count: levels.len() as u32,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&data),
+        )
+    }
+
+    pub(crate) fn depth_texture(&self, label: &str, width: u32, height: u32, sampled: bool) -> wgpu::Texture {
+        let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        if sampled {
+            usage |= wgpu::TextureUsages::TEXTURE_BINDING;
+        }
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: extent(width, height),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage,
+            view_formats: &[],
+        })
+    }
+
+    /// An RGB table as an Rgba32Float texture without mips (sampled with `textureSampleLevel`).
+    pub(crate) fn upload_table(&self, label: &str, table: &Table) -> wgpu::Texture {
+        let data: Vec<f32> = table.texels.iter().flat_map(|t| [t[0], t[1], t[2], 1.0]).collect();
+        self.upload_rgba32(label, table.width, table.height, &data)
+    }
+
+    pub(crate) fn upload_rgba32(&self, label: &str, width: u32, height: u32, data: &[f32]) -> wgpu::Texture {
+        let format = self.table_format();
+        let halves: Vec<u16>;
+        let bytes: &[u8] = if format == TABLE_FORMAT {
+            bytemuck::cast_slice(data)
+        } else {
+            halves = data.iter().map(|&v| half::f16::from_f32(v).to_bits()).collect();
+            bytemuck::cast_slice(&halves)
+        };
+        self.device.create_texture_with_data(
+            &self.queue,
+            &wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent(width, height),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytes,
+        )
+    }
+
+    /// Every texture and sampler the base bind group holds; tables a scene does not read are
+    /// 1x1 placeholders (never sampled: their shader branches are compiled out).
+    pub(crate) fn skin_textures(&self, inputs: &RenderInputs, skin: &SkinSetup) -> SceneTextures {
+        let placeholder = || self.upload_rgba32("unused table", 1, 1, &[0.0, 0.0, 0.0, 1.0]);
+        let table = |label, t: &Option<Table>| t.as_ref().map_or_else(placeholder, |t| self.upload_table(label, t));
+        let clamp_sampler = |label, filter, lod_min_clamp| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: filter,
+                min_filter: filter,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                lod_min_clamp,
+                ..Default::default()
+            })
+        };
+        let repeat_sampler = |label, lod_min_clamp: f32| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: wgpu::AddressMode::Repeat,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                lod_min_clamp,
+                ..Default::default()
+            })
+        };
+        let normal = self.upload_texture("normal map", &inputs.normal_map);
+        let blur_mip = skin.blur_mip.clamp(0.0, (normal.mip_level_count() - 1) as f32);
+        SceneTextures {
+            normal,
+            albedo: self.upload_texture("albedo", &inputs.albedo),
+            diffuse_lut: table("diffuse LUT", &skin.diffuse_lut),
+            shadow_lut: table("shadow LUT", &skin.shadow_lut),
+            zonal: table("zonal table", &skin.zonal),
+            kernel: match skin.tsd.as_ref().and_then(|t| t.kernel_map.as_ref()) {
+                Some(map) => self.upload_texture("tsd kernel map", map),
+                None => placeholder(),
+            },
+            light_map: skin
+                .light_map
+                .as_ref()
+                .filter(|_| skin.tsd.is_none())
+                .map(|m| self.upload_texture("light map", m)),
+            shadow_placeholder: self.depth_texture("unused shadow map", 1, 1, true),
+            map_sampler: repeat_sampler("map sampler", 0.0),
+            blurred_sampler: repeat_sampler("blurred normal sampler", blur_mip),
+            lut_sampler: clamp_sampler("table sampler", wgpu::FilterMode::Linear, 0.0),
+            shadow_sampler: self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow compare sampler"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                // Each tap compares bilinearly (a one-texel tent): the box of taps stays a ramp
+                // across a straight edge, without the staircase of nearest compares.
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+            light_map_placeholder: placeholder(),
+            opacity_placeholder: placeholder(),
+        }
+    }
+
+    /// The base bind group; `shadow` and `light_map` are left as placeholders when `None` (the
+    /// shadow pass must not sample the map it writes, nor the TSD passes the map they write).
+    pub(crate) fn create_bind_group(
+        &self,
+        textures: &SceneTextures,
+        uniforms: &wgpu::Buffer,
+        shadow: Option<&wgpu::TextureView>,
+        opacity: Option<&wgpu::TextureView>,
+        light_map: Option<&wgpu::TextureView>,
+    ) -> wgpu::BindGroup {
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let (normal, albedo) = (view(&textures.normal), view(&textures.albedo));
+        let (diffuse_lut, shadow_lut, zonal, kernel) =
+            (view(&textures.diffuse_lut), view(&textures.shadow_lut), view(&textures.zonal), view(&textures.kernel));
+        let shadow_placeholder = view(&textures.shadow_placeholder);
+        let light_map_placeholder = view(&textures.light_map_placeholder);
+        let given_light_map = textures.light_map.as_ref().map(view);
+        let light_map = light_map.or(given_light_map.as_ref()).unwrap_or(&light_map_placeholder);
+        let shadow = shadow.unwrap_or(&shadow_placeholder);
+        let opacity_placeholder = view(&textures.opacity_placeholder);
+        let opacity = opacity.unwrap_or(&opacity_placeholder);
+        let tex = |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
+        let smp =
+            |binding, sampler| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::Sampler(sampler) };
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("base pass bind group"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() },
+                tex(1, &normal),
+                tex(2, &albedo),
+                smp(3, &textures.map_sampler),
+                tex(4, &diffuse_lut),
+                tex(5, &shadow_lut),
+                tex(6, &zonal),
+                tex(7, shadow),
+                smp(8, &textures.shadow_sampler),
+                tex(9, light_map),
+                smp(10, &textures.lut_sampler),
+                smp(11, &textures.blurred_sampler),
+                tex(12, &kernel),
+                tex(13, opacity),
+            ],
+        })
+    }
+}
+
+/// The textures and samplers of a scene's bind groups.
+pub(crate) struct SceneTextures {
+    pub(crate) normal: wgpu::Texture,
+    pub(crate) albedo: wgpu::Texture,
+    pub(crate) diffuse_lut: wgpu::Texture,
+    pub(crate) shadow_lut: wgpu::Texture,
+    pub(crate) zonal: wgpu::Texture,
+    pub(crate) kernel: wgpu::Texture,
+    pub(crate) light_map: Option<wgpu::Texture>,
+    pub(crate) shadow_placeholder: wgpu::Texture,
+    pub(crate) light_map_placeholder: wgpu::Texture,
+    pub(crate) opacity_placeholder: wgpu::Texture,
+    pub(crate) map_sampler: wgpu::Sampler,
+    pub(crate) blurred_sampler: wgpu::Sampler,
+    pub(crate) lut_sampler: wgpu::Sampler,
+    pub(crate) shadow_sampler: wgpu::Sampler,
+}
+
+pub(crate) fn colour_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
+    }
+}
+
+pub(crate) fn depth_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<f32>,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
+    }
+}
+
+pub(crate) fn extent(width: u32, height: u32) -> wgpu::Extent3d {
+    wgpu::Extent3d { width, height, depth_or_array_layers: 1 }
+}
+
+pub(crate) fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let both = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
+    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    let float = wgpu::TextureSampleType::Float { filterable: true };
+    let sampler = |binding, kind| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(kind),
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("base pass bind group layout"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: both,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            texture(1, float),
+            texture(2, float),
+            sampler(3, wgpu::SamplerBindingType::Filtering),
+            texture(4, float),
+            texture(5, float),
+            texture(6, float),
+            texture(7, wgpu::TextureSampleType::Depth),
+            sampler(8, wgpu::SamplerBindingType::Comparison),
+            texture(9, float),
+            sampler(10, wgpu::SamplerBindingType::Filtering),
+            sampler(11, wgpu::SamplerBindingType::Filtering),
+            texture(12, float),
+            texture(13, float),
+        ],
+    })
+}

@@ -1,0 +1,140 @@
+//! The base pass (`base.wgsl`): texture-space per-pixel bump mapping and the Lafortune BRDF into
+//! the target (Haro et al. 2001, section 5), with the skin effects it reads.
+
+use crate::gpu::{
+    Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, PipelineKey, PreparedScene, Target, depth_state, tone_code,
+};
+use crate::pass::uniforms::vec4;
+use crate::passes::{Features, SkinSetup, Table};
+use crate::shading::{MAX_LOBES, RenderInputs, SpecularMode};
+
+/// One Lafortune lobe as the shader reads it (`Lobe` in base.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct LobeRaw {
+    pub(crate) cx: [f32; 4],
+    pub(crate) cy: [f32; 4],
+    pub(crate) cz: [f32; 4],
+    pub(crate) n: [f32; 4],
+}
+
+/// The base pass's uniforms (`BaseUniforms` in base.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct BaseUniforms {
+    pub(crate) diffuse: [f32; 3],
+    pub(crate) lobe_count: u32,
+    pub(crate) normal_blur: [f32; 3],
+    pub(crate) vertex_specular: u32,
+    pub(crate) tone: u32,
+    pub(crate) curvature_scale: f32,
+    pub(crate) lut_scale: f32,
+    pub(crate) lut_offset: f32,
+    pub(crate) zonal_scale: f32,
+    pub(crate) zonal_offset: f32,
+    pub(crate) shadow_lut_scale: f32,
+    pub(crate) shadow_lut_offset: f32,
+    pub(crate) new_penumbra: f32,
+    pub(crate) pad0: f32,
+    pub(crate) pad1: f32,
+    pub(crate) pad2: f32,
+    pub(crate) lobes: [LobeRaw; MAX_LOBES],
+    pub(crate) sh: [[f32; 4]; 9],
+}
+
+/// The base pass's uniforms for `inputs` with the skin settings of `skin`.
+pub(crate) fn uniforms(inputs: &RenderInputs, skin: &SkinSetup) -> BaseUniforms {
+    let mut lobes = [LobeRaw { cx: [0.0; 4], cy: [0.0; 4], cz: [0.0; 4], n: [0.0; 4] }; MAX_LOBES];
+    for (raw, lobe) in lobes.iter_mut().zip(&inputs.brdf.lobes) {
+        *raw = LobeRaw { cx: vec4(lobe.cx, 0.0), cy: vec4(lobe.cy, 0.0), cz: vec4(lobe.cz, 0.0), n: vec4(lobe.n, 0.0) };
+    }
+    let map = |t: &Option<Table>| t.as_ref().map_or((0.0, 0.5), |t| (t.scale, t.offset));
+    let (lut_scale, lut_offset) = map(&skin.diffuse_lut);
+    let (shadow_lut_scale, shadow_lut_offset) = map(&skin.shadow_lut);
+    let (zonal_scale, zonal_offset) = map(&skin.zonal);
+    let mut sh = [[0.0f32; 4]; 9];
+    for (raw, c) in sh.iter_mut().zip(&skin.sh) {
+        *raw = [c[0], c[1], c[2], 0.0];
+    }
+    BaseUniforms {
+        diffuse: inputs.brdf.diffuse.to_array(),
+        lobe_count: inputs.brdf.lobes.len().min(MAX_LOBES) as u32,
+        normal_blur: skin.normal_blur.to_array(),
+        vertex_specular: (inputs.specular == SpecularMode::Vertex) as u32,
+        tone: tone_code(inputs.tone),
+        curvature_scale: skin.curvature_scale,
+        lut_scale,
+        lut_offset,
+        zonal_scale,
+        zonal_offset,
+        shadow_lut_scale,
+        shadow_lut_offset,
+        new_penumbra: skin.shadow.as_ref().map_or(1.0, |s| s.new_penumbra),
+        pad0: 0.0,
+        pad1: 0.0,
+        pad2: 0.0,
+        lobes,
+        sh,
+    }
+}
+
+/// The base pass's pipeline for a target of `format`.
+pub(crate) fn pipeline(format: OutputFormat, features: Features) -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "base pass pipeline",
+        vertex_entry: "vs_main",
+        buffers: &MESH_BUFFERS,
+        fragment_entry: Some("fs_main"),
+        target: Some(format.texture_format()),
+        depth: depth_state(true, wgpu::CompareFunction::Less),
+        features,
+    }
+}
+
+impl Gpu {
+    /// The base pass into `target`.
+    pub(crate) fn encode_base(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        target: &Target,
+        writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let pipeline = self.pipeline(PipelineKey::Base(target.format, scene.features));
+        let mut pass = begin_pass(encoder, &target.color, &target.depth, scene.background, writes);
+        pass.set_pipeline(&pipeline);
+        self.draw_mesh(&mut pass, scene, &scene.bind_group);
+    }
+}
+
+fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &wgpu::Texture,
+    depth: &wgpu::Texture,
+    background: [f32; 4],
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+) -> wgpu::RenderPass<'e> {
+    let target_view = target.create_view(&Default::default());
+    let depth_view = depth.create_view(&Default::default());
+    let [r, g, b, a] = background.map(f64::from);
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("base pass"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &target_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &depth_view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}

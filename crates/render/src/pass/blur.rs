@@ -1,0 +1,146 @@
+//! TSD's blur (`blur.wgsl`): a Poisson disc scaled per texel by the light map's kernel size,
+//! ping-ponged between the two light maps; the first pass also dilates across UV seams.
+
+use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, colour_attachment};
+use crate::pass::light_map::UNWRITTEN_TEXEL;
+use crate::pass::tsd::TsdResources;
+use crate::passes;
+
+/// The blur's uniforms (`BlurUniforms` in blur.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct BlurUniforms {
+    pub(crate) inv_size: [f32; 2],
+    pub(crate) a: f32,
+    pub(crate) b: f32,
+    pub(crate) dilate: u32,
+    pub(crate) pad0: u32,
+    pub(crate) pad1: u32,
+    pub(crate) pad2: u32,
+}
+
+impl Gpu {
+    /// One bind group per blur pass: pass `i` reads `maps[i % 2]`, the first with a nearest
+    /// sampler (it dilates), the others bilinear.
+    pub(crate) fn blur_groups(&self, tsd: &passes::TsdSetup, maps: &[wgpu::Texture; 2]) -> Vec<wgpu::BindGroup> {
+        let sampler = |label, filter| {
+            self.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: filter,
+                min_filter: filter,
+                ..Default::default()
+            })
+        };
+        let nearest = sampler("tsd dilation sampler", wgpu::FilterMode::Nearest);
+        let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
+        let (a, b) = (tsd.kernel_scale[0], tsd.kernel_scale[1]);
+        (0..tsd.passes)
+            .map(|i| {
+                let inv_size = [1.0 / tsd.size as f32; 2];
+                let raw = BlurUniforms { inv_size, a, b, dilate: (i == 0) as u32, pad0: 0, pad1: 0, pad2: 0 };
+                let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
+                let view = maps[(i % 2) as usize].create_view(&Default::default());
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("tsd blur bind group"),
+                    layout: &self.blur_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::Sampler(if i == 0 { &nearest } else { &linear }),
+                        },
+                    ],
+                })
+            })
+            .collect()
+    }
+
+    /// TSD blur `i`: over the whole map, from `maps[i % 2]` into the other (the first also
+    /// dilates into the texels the light map left unwritten).
+    pub(crate) fn encode_blur(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        tsd: &TsdResources,
+        i: usize,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let view = tsd.maps[(i + 1) % 2].create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd blur"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::Blur));
+        pass.set_bind_group(0, &tsd.blur_groups[i], &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+pub(crate) fn blur_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("tsd blur bind group layout"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
+}
+
+/// The blur's pipeline: a full-screen triangle in its own module.
+pub(crate) fn pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
+    gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("tsd blur pipeline"),
+        layout: Some(&gpu.blur_pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &gpu.blur_shader,
+            entry_point: Some("vs_full_screen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &gpu.blur_shader,
+            entry_point: Some("fs_blur"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: LIGHT_MAP_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

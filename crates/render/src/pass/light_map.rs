@@ -1,0 +1,81 @@
+//! TSD's light map (`light_map.wgsl`): every light's diffuse irradiance in texture space, the
+//! blur's kernel size in alpha.
+
+use crate::gpu::{
+    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, colour_attachment, depth_attachment,
+    depth_state,
+};
+use crate::pass::tsd::TsdResources;
+use crate::passes::{self, Features};
+
+/// What the light maps hold where no texel was drawn (the first blur dilates into them).
+pub(crate) const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+
+/// The light map's uniforms (`LightMapUniforms` in light_map.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct LightMapUniforms {
+    pub(crate) size: f32,
+    pub(crate) kernel_mm: f32,
+    pub(crate) curvature_gain: f32,
+    pub(crate) max_radius: f32,
+    pub(crate) kernel_from_map: u32,
+    pub(crate) pad0: u32,
+    pub(crate) pad1: u32,
+    pub(crate) pad2: u32,
+}
+
+/// The light map's uniforms (a unit-sized placeholder without texture-space diffusion).
+pub(crate) fn uniforms(tsd: Option<&passes::TsdSetup>) -> LightMapUniforms {
+    let (size, kernel_mm, curvature_gain, max_radius, from_map) = match tsd {
+        Some(t) => (t.size as f32, t.kernel_mm, t.curvature_gain, passes::MAX_KERNEL_TEXELS, t.kernel_map.is_some()),
+        None => (1.0, 0.0, 0.0, 1.0, false),
+    };
+    LightMapUniforms {
+        size,
+        kernel_mm,
+        curvature_gain,
+        max_radius,
+        kernel_from_map: from_map as u32,
+        pad0: 0,
+        pad1: 0,
+        pad2: 0,
+    }
+}
+
+/// The light map's pipeline: depth test "equal" against the pre-pass, so only kept texels shade.
+pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "tsd light map pipeline",
+        vertex_entry: "vs_texture_space",
+        buffers: &MESH_BUFFERS,
+        fragment_entry: Some("fs_light_map"),
+        target: Some(LIGHT_MAP_FORMAT),
+        depth: depth_state(false, wgpu::CompareFunction::Equal),
+        features,
+    }
+}
+
+impl Gpu {
+    /// TSD's light map (depth "equal": only texels the pre-pass kept).
+    pub(crate) fn encode_light_map(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        tsd: &TsdResources,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let depth_view = tsd.depth.create_view(&Default::default());
+        let view = tsd.maps[0].create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tsd light map"),
+            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            depth_stencil_attachment: Some(depth_attachment(&depth_view, wgpu::LoadOp::Load)),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::LightMap(scene.features)));
+        self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+    }
+}

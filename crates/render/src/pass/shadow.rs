@@ -1,0 +1,136 @@
+//! The key light's shadow map (`shadow.wgsl`): the mesh's depth seen from the light, and the
+//! filtered lookup the base and light-map passes read it with.
+
+use crate::gpu::{
+    Gpu, LIGHT_MAP_FORMAT, MeshPipeline, POSITION_BUFFER, PipelineKey, PreparedScene, SceneTextures, depth_state,
+    extent,
+};
+use crate::pass::translucent::CasterBuffers;
+use crate::passes::{self, Features};
+
+/// The key light's shadow map and the bind group its pass draws with (one that does not sample
+/// the map being written).
+pub(crate) struct ShadowResources {
+    pub(crate) depth: wgpu::Texture,
+    pub(crate) bind_group: wgpu::BindGroup,
+    /// Summed opacity of the translucent casters (with their buffers), when there are any.
+    pub(crate) opacity: Option<wgpu::Texture>,
+    pub(crate) casters: Vec<CasterBuffers>,
+}
+
+/// The shadow map's uniforms (`ShadowUniforms` in shadow.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ShadowUniforms {
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) inv_size: f32,
+    pub(crate) taps: f32,
+    pub(crate) texel: f32,
+    pub(crate) normal_offset: f32,
+}
+
+/// The shadow map's uniforms; an identity placeholder without one (never read: the shadow
+/// branches are compiled out).
+pub(crate) fn uniforms(shadow: Option<&passes::ShadowSetup>) -> ShadowUniforms {
+    match shadow {
+        Some(s) => ShadowUniforms {
+            view_proj: s.view_proj.to_cols_array_2d(),
+            inv_size: 1.0 / s.map_size.max(1) as f32,
+            taps: s.filter as f32,
+            texel: s.texel,
+            normal_offset: s.bias,
+        },
+        None => ShadowUniforms {
+            view_proj: glam::Mat4::IDENTITY.to_cols_array_2d(),
+            inv_size: 1.0,
+            taps: 1.0,
+            texel: 0.0,
+            normal_offset: 0.0,
+        },
+    }
+}
+
+/// The shadow map's pipeline: positions only, depth only.
+pub(crate) fn pipeline() -> MeshPipeline<'static> {
+    MeshPipeline {
+        label: "shadow map pipeline",
+        vertex_entry: "vs_shadow",
+        buffers: &POSITION_BUFFER,
+        fragment_entry: None,
+        target: None,
+        depth: depth_state(true, wgpu::CompareFunction::Less),
+        features: Features::default(),
+    }
+}
+
+impl Gpu {
+    pub(crate) fn shadow_resources(
+        &self,
+        s: &passes::ShadowSetup,
+        textures: &SceneTextures,
+        uniforms: &wgpu::Buffer,
+    ) -> ShadowResources {
+        let depth = self.depth_texture("shadow map", s.map_size, s.map_size, true);
+        let bind_group = self.create_bind_group(textures, uniforms, None, None, None);
+        let opacity = (!s.translucent.is_empty()).then(|| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("shadow opacity"),
+                size: extent(s.map_size, s.map_size),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: LIGHT_MAP_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        });
+        let casters = s
+            .translucent
+            .iter()
+            .filter(|c| !c.indices.is_empty() && c.indices.iter().all(|&i| (i as usize) < c.positions.len()))
+            .map(|c| CasterBuffers {
+                positions: self.buffer(
+                    "translucent positions",
+                    bytemuck::cast_slice(&c.positions),
+                    wgpu::BufferUsages::VERTEX,
+                ),
+                opacity: self.buffer(
+                    "translucent opacity",
+                    bytemuck::cast_slice(&vec![c.opacity; c.positions.len()]),
+                    wgpu::BufferUsages::VERTEX,
+                ),
+                indices: self.buffer(
+                    "translucent indices",
+                    bytemuck::cast_slice(&c.indices),
+                    wgpu::BufferUsages::INDEX,
+                ),
+                count: c.indices.len() as u32,
+            })
+            .collect();
+        ShadowResources { depth, bind_group, opacity, casters }
+    }
+
+    pub(crate) fn encode_shadow(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &PreparedScene,
+        shadow: &ShadowResources,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let view = shadow.depth.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow map pass"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline(PipelineKey::Shadow));
+        self.draw_mesh(&mut pass, scene, &shadow.bind_group);
+    }
+}

@@ -1,0 +1,70 @@
+// The key light's shadow map: the depth pass (vs_shadow) and the filtered lookup the base and
+// light-map passes read it with. Part of the module that src/pass/mod.rs assembles.
+
+// The shadow map's uniforms (`ShadowUniforms` in src/pass/shadow.rs).
+struct ShadowUniforms {
+    // The key light's view-projection.
+    view_proj: mat4x4<f32>,
+    // 1 / shadow map side.
+    inv_size: f32,
+    // Filter taps per side.
+    taps: f32,
+    // One shadow-map texel in mesh units.
+    texel: f32,
+    // Normal offset in texels.
+    normal_offset: f32,
+}
+
+// The key light's shadow map coordinates of `world`: uv (row 0 at the top) and depth.
+fn shadow_coords(world: vec3<f32>) -> vec3<f32> {
+    let clip = globals.shadow.view_proj * vec4<f32>(world, 1.0);
+    let ndc = clip.xyz / clip.w;
+    return vec3<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, ndc.z);
+}
+
+// Box-filtered shadow test (filter x filter taps, nearest compare): across a straight edge this
+// is a linear ramp, the representative penumbra the shadow LUT inverts. The lookup point is pushed
+// along the geometric normal by `shadow.w` texels (normal-offset bias), and each tap compares
+// against the receiver's own plane at that tap (receiver-plane depth bias: the depth gradient of
+// the surface in shadow-map space, from its tangent frame), so a wide filter does not shadow a
+// sloped receiver with itself.
+fn shadow_visibility(world: vec3<f32>, geo_n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> f32 {
+    let origin = world + geo_n * (globals.shadow.texel * globals.shadow.normal_offset);
+    let p = shadow_coords(origin);
+    if p.z <= 0.0 || p.z >= 1.0 || p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0 {
+        return 1.0;
+    }
+    let step = globals.shadow.texel;
+    let pt = shadow_coords(origin + t * step) - p;
+    let pb = shadow_coords(origin + b * step) - p;
+    // Solve [pt.xy pb.xy] * (a, c) = offset for the depth change dz = a pt.z + c pb.z.
+    let det = pt.x * pb.y - pt.y * pb.x;
+    var gradient = vec2<f32>(0.0);
+    if abs(det) > 1e-12 {
+        gradient = vec2<f32>(pb.y * pt.z - pt.y * pb.z, pt.x * pb.z - pb.x * pt.z) / det;
+    }
+    // At grazing angles the plane is nearly edge-on: cap the slope (the light's N.L is near 0
+    // there anyway).
+    let cap = 8.0 * length(vec2<f32>(pt.z, pb.z)) / max(length(pt.xy), 1e-12);
+    let g_len = length(gradient);
+    if g_len > cap {
+        gradient = gradient * (cap / g_len);
+    }
+    let taps = i32(globals.shadow.taps);
+    let h = (taps - 1) / 2;
+    let epsilon = 2.0 * globals.shadow.inv_size * abs(pt.z) / max(length(pt.xy), 1e-12) + 1e-6;
+    var sum = 0.0;
+    for (var j = -h; j <= h; j++) {
+        for (var i = -h; i <= h; i++) {
+            let offset = vec2<f32>(f32(i), f32(j)) * globals.shadow.inv_size;
+            let depth = p.z + dot(gradient, offset) - epsilon;
+            sum += textureSampleCompareLevel(shadow_map, shadow_sampler, p.xy + offset, depth);
+        }
+    }
+    return sum / f32(taps * taps);
+}
+
+@vertex
+fn vs_shadow(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
+    return globals.shadow.view_proj * vec4<f32>(position, 1.0);
+}

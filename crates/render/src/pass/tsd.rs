@@ -1,0 +1,76 @@
+//! Texture-space diffusion (Gosselin et al. 2004): the resources its three passes share (the
+//! texture-space depth, the two light maps of the ping-pong blur, their bind groups), and the
+//! culling that decides whether they run this frame. The vertex stage of the pre-pass and the
+//! light-map pass is `tsd.wgsl`.
+
+use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PreparedScene, SceneTextures, Target, extent};
+use crate::passes;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Texture-space diffusion: the UV-space depth of the culling pre-pass, two light maps for the
+/// ping-pong blur, and the bind groups of each pass.
+pub(crate) struct TsdResources {
+    pub(crate) passes: u32,
+    pub(crate) reuse_below_px: f32,
+    pub(crate) depth: wgpu::Texture,
+    pub(crate) maps: [wgpu::Texture; 2],
+    /// The base bind group's layout, for the texture-space passes (no light map bound).
+    pub(crate) bind_group: wgpu::BindGroup,
+    /// Blur pass i reads `maps[i % 2]` and writes `maps[(i + 1) % 2]`.
+    pub(crate) blur_groups: Vec<wgpu::BindGroup>,
+    /// Whether a light map from an earlier frame exists (distance culling reuses it).
+    pub(crate) ready: AtomicBool,
+}
+
+impl Gpu {
+    /// The light maps, their depth and bind groups for `tsd`, reading the shadow map (and the
+    /// translucent casters' opacity) when there is one.
+    pub(crate) fn tsd_resources(
+        &self,
+        tsd: &passes::TsdSetup,
+        textures: &SceneTextures,
+        uniforms: &wgpu::Buffer,
+        shadow: Option<&wgpu::TextureView>,
+        opacity: Option<&wgpu::TextureView>,
+    ) -> TsdResources {
+        let size = tsd.size;
+        let depth = self.depth_texture("tsd texture-space depth", size, size, false);
+        let map = |label| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent(size, size),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: LIGHT_MAP_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let maps = [map("tsd light map A"), map("tsd light map B")];
+        let bind_group = self.create_bind_group(textures, uniforms, shadow, opacity, None);
+        let blur_groups = self.blur_groups(tsd, &maps);
+        TsdResources {
+            passes: tsd.passes,
+            reuse_below_px: tsd.reuse_below_px,
+            depth,
+            maps,
+            bind_group,
+            blur_groups,
+            ready: AtomicBool::new(false),
+        }
+    }
+
+    /// Whether texture-space diffusion runs this frame: the head is in the frustum, and it is
+    /// not so small on screen that an earlier frame's light map is reused.
+    pub(crate) fn tsd_runs(&self, scene: &PreparedScene, tsd: &TsdResources, target: &Target) -> bool {
+        let camera = glam::Mat4::from_cols_array_2d(&scene.globals.scene.view_proj);
+        let eye = glam::Vec3::from_array(scene.globals.scene.eye);
+        let (centre, radius) = scene.bounds;
+        let visible = passes::sphere_in_frustum(camera, centre, radius);
+        let small = passes::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;
+        visible && !(small && tsd.ready.load(Ordering::Relaxed))
+    }
+}
