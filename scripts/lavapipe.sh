@@ -24,3 +24,11 @@ ensure_vulkan_driver() {
 
 ensure_vulkan_driver
 export WGPU_BACKEND="${WGPU_BACKEND:-vulkan}"
+
+# The Vulkan loader prints "error: XDG_RUNTIME_DIR is invalid or not set" once per device when
+# the variable is unset (CI, containers). The skinkit binary points it at a private folder itself;
+# the library test processes do not, so give them the same private folder here.
+if [ -z "${XDG_RUNTIME_DIR:-}" ] || [ ! -d "$XDG_RUNTIME_DIR" ]; then
+    XDG_RUNTIME_DIR="${TMPDIR:-/tmp}/skinkit-runtime-$(id -u)"
+    mkdir -p -m 0700 "$XDG_RUNTIME_DIR" && export XDG_RUNTIME_DIR || unset XDG_RUNTIME_DIR
+fi

@@ -368,7 +368,7 @@ pub fn compare_with_truth(normals: &NormalMap, mut truth: NormalMap, block: usiz
 
 /// Angles of the valid normals from +Z.
 fn tilt_stats(normals: &NormalMap) -> AngularStats {
-    AngularStats::from_par_iter(normals.as_slice().par_iter().filter(|n| **n != Vec3::ZERO).map(|&n| tilt_degrees(n)))
+    AngularStats::from_slice(normals.as_slice(), |&n| (n != Vec3::ZERO).then(|| tilt_degrees(n)))
 }
 
 /// Angle of a unit vector from +Z in degrees (atan2 form: exact near zero, unlike acos).

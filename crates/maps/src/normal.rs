@@ -157,10 +157,10 @@ impl AngularStats {
     }
 }
 
-/// Histogram step of [`AngularStats::from_par_iter`], in degrees.
+/// Histogram step of [`AngularStats::from_slice`], in degrees.
 pub const ANGLE_BIN_DEGREES: f32 = 0.01;
 
-/// Running sums and a histogram of angles, for [`AngularStats::from_par_iter`].
+/// Running sums and a histogram of angles, for [`AngularStats::from_slice`].
 struct AngleHistogram {
     bins: Vec<u32>,
     count: usize,
@@ -205,13 +205,21 @@ impl AngleHistogram {
     }
 }
 
+/// Items per chunk of [`AngularStats::from_slice`]: the chunks, not the thread count, fix the order
+/// in which the sums are added, so the statistics have the same bits on any number of threads.
+const STATS_CHUNK: usize = 1 << 18;
+
 impl AngularStats {
-    /// Statistics of angles in `[0, 180]` degrees streamed from a parallel iterator, without
-    /// storing them: count, mean, rms and max are exact, median and p95 are rounded to
-    /// [`ANGLE_BIN_DEGREES`]. For 16-megapixel maps, where sorting or selecting would dominate.
-    pub fn from_par_iter(angles: impl ParallelIterator<Item = f32>) -> Self {
-        let h =
-            angles.fold(AngleHistogram::new, AngleHistogram::add).reduce(AngleHistogram::new, AngleHistogram::merge);
+    /// Statistics of the angles `angle` gives for `items` (`None` skips an item), in `[0, 180]`
+    /// degrees, computed in parallel without storing the angles: count, mean, rms and max are
+    /// exact, median and p95 are rounded to [`ANGLE_BIN_DEGREES`]. For 16-megapixel maps, where
+    /// sorting or selecting would dominate. Deterministic: fixed chunks merged in order.
+    pub fn from_slice<T: Sync>(items: &[T], angle: impl Fn(&T) -> Option<f32> + Sync) -> Self {
+        let parts: Vec<AngleHistogram> = items
+            .par_chunks(STATS_CHUNK)
+            .map(|chunk| chunk.iter().filter_map(&angle).fold(AngleHistogram::new(), AngleHistogram::add))
+            .collect();
+        let h = parts.into_iter().fold(AngleHistogram::new(), AngleHistogram::merge);
         if h.count == 0 {
             return AngularStats::default();
         }
@@ -249,14 +257,32 @@ mod tests {
     fn streamed_stats_agree_with_exact_ones() {
         let degrees: Vec<f32> = (0..10_000).map(|i| ((i * 7919) % 10_000) as f32 * 0.0123).collect();
         let exact = AngularStats::from_degrees(degrees.clone());
-        let streamed = AngularStats::from_par_iter(degrees.into_par_iter());
+        let streamed = AngularStats::from_slice(&degrees, |&d| Some(d));
         assert_eq!(streamed.count, exact.count);
         assert!((streamed.mean - exact.mean).abs() < 1e-3);
         assert!((streamed.rms - exact.rms).abs() < 1e-3);
         assert_eq!(streamed.max, exact.max);
         assert!((streamed.median - exact.median).abs() <= ANGLE_BIN_DEGREES);
         assert!((streamed.p95 - exact.p95).abs() <= ANGLE_BIN_DEGREES);
-        assert_eq!(AngularStats::from_par_iter(Vec::<f32>::new().into_par_iter()), AngularStats::default());
+        assert_eq!(AngularStats::from_slice(&[] as &[f32], |&d| Some(d)), AngularStats::default());
+    }
+
+    #[test]
+    fn streamed_stats_have_the_same_bits_on_any_thread_count() {
+        // Several chunks of values whose f64 sums depend on the order they are added in.
+        let degrees: Vec<f32> =
+            (0..3 * STATS_CHUNK + 12_345).map(|i| ((i as f64 * 0.618_034).fract() * 179.0) as f32).collect();
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| AngularStats::from_slice(&degrees, |&d| (d > 1.0).then_some(d)))
+        };
+        let one = on(1);
+        assert!(one.count > 2 * STATS_CHUNK && one.count < degrees.len() && one.mean.is_finite());
+        for threads in [2, 3, 8] {
+            let many = on(threads);
+            assert_eq!((many.mean.to_bits(), many.rms.to_bits()), (one.mean.to_bits(), one.rms.to_bits()), "{threads}");
+            assert_eq!(many, one, "{threads} threads");
+        }
     }
 
     #[test]
