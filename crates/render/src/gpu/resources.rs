@@ -35,6 +35,18 @@ impl Gpu {
         if format != DEPTH_FORMAT {
             usage |= wgpu::TextureUsages::COPY_SRC;
         }
+        self.attachment(label, width, height, format, usage)
+    }
+
+    /// A single-level 2-D texture that a pass draws into.
+    fn attachment(
+        &self,
+        label: &str,
+        width: u32,
+        height: u32,
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
         self.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: extent(width, height),
@@ -77,16 +89,7 @@ impl Gpu {
         if sampled {
             usage |= wgpu::TextureUsages::TEXTURE_BINDING;
         }
-        self.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: extent(width, height),
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage,
-            view_formats: &[],
-        })
+        self.attachment(label, width, height, DEPTH_FORMAT, usage)
     }
 
     /// An RGB table as an Rgba32Float texture without mips (sampled with `textureSampleLevel`).
