@@ -333,7 +333,7 @@ fn diligent_style_folder_uses_filenames_txt_order_and_gives_rgb_albedo() {
     // Names sort in reverse light order; filenames.txt restores it, as in DiLiGenT.
     let listing: Vec<String> = (0..dirs.len()).map(|i| format!("img_{:03}.png", 100 - i)).collect();
     std::fs::write(dir.join("filenames.txt"), listing.join("\n") + "\n").unwrap();
-    skinkit_maps::io::write_png(&dir.join("Normal_gt.png"), 6, 5, skinkit_maps::io::PngLayout::Rgb8, &vec![128; 90])
+    skinkit_maps::io::write_png(&dir.join("Normal_gt.png"), 6, 5, skinkit_maps::io::PngLayout::Rgb8, &[128; 90])
         .unwrap();
     let out = tmp.path().join("out");
     let report = capture_session_json(&dir, &out, &["--detrend-block", "0"]);

@@ -19,7 +19,7 @@ fn diligent_good_input() {
     let rig =
         parse_diligent(DIRS.as_bytes(), "light_directions.txt", INTS.as_bytes(), "light_intensities.txt").unwrap();
     assert_eq!(rig.lights().len(), 3);
-    let d = Vec3::new(-0.06059872, -0.44839055, 0.89179861);
+    let d = Vec3::new(-0.06059872, -0.44839055, 0.891_798_6);
     assert!((rig.lights()[0].direction() - d.normalize()).length() < 1e-6);
     assert!((rig.lights()[1].direction() - Vec3::new(0.1, 0.2, 0.97).normalize()).length() < 1e-6);
     assert_eq!(rig.lights()[0].intensity(), Vec3::new(2.05, 1.99, 1.97));

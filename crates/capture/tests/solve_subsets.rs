@@ -27,7 +27,7 @@ fn ring() -> Rig {
 /// ripple, zero in shadowed runs (two opposite lights), full scale in saturated runs (light 1).
 fn sample(rig: &Rig, x: usize, y: usize, i: usize) -> u16 {
     let run = x / 16 + y;
-    if y % 3 != 0 && (run + i) % 4 == 0 {
+    if !y.is_multiple_of(3) && (run + i).is_multiple_of(4) {
         return 0;
     }
     if run % 5 == 1 && i == 1 {

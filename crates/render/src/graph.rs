@@ -133,7 +133,7 @@ impl PassGraph {
         let derivative = diffuse.reads_curvature() && pre.curvature == CurvatureSource::Derivative;
         let zonal_table = sh_ambient && diffuse.reads_curvature();
         let tsd = (diffuse == DiffuseMode::LightMap)
-            .then(|| TsdPlan { size: scene.skin.tsd.size, blurs: scene.skin.tsd.passes });
+            .then_some(TsdPlan { size: scene.skin.tsd.size, blurs: scene.skin.tsd.passes });
         let vertex_curvature = (diffuse.reads_curvature() && !derivative) || zonal_table || tsd.is_some();
         let shadow = key_light.map(|light| {
             let options = &scene.skin.shadow;

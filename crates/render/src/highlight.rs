@@ -64,7 +64,7 @@ pub fn luminance(rgb: &[f32]) -> f64 {
 /// # Errors
 /// When the sizes differ or no pixel of `with` is lit.
 pub fn specular_share(with: &[f32], without: &[f32], width: usize) -> Result<SpecularShare, ShareError> {
-    if with.len() != without.len() || width == 0 || with.len() % (3 * width) != 0 {
+    if with.len() != without.len() || width == 0 || !with.len().is_multiple_of(3 * width) {
         return Err(ShareError::Size { with: with.len(), without: without.len() });
     }
     let lum: Vec<f64> = with.chunks_exact(3).map(luminance).collect();

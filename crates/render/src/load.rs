@@ -309,7 +309,7 @@ fn names(list: &[&str]) -> Vec<String> {
 
 /// The light map a TSD graph's base pass reads (the blurs ping-pong between A and B).
 fn last_light_map(blurs: u32) -> &'static str {
-    if blurs % 2 == 0 { "light map A" } else { "light map B" }
+    if blurs.is_multiple_of(2) { "light map A" } else { "light map B" }
 }
 
 /// What pass `kind` does, reads and writes.

@@ -216,7 +216,7 @@ fn bad_values_are_refused_with_file_and_field() {
     invalid(&format!("{MINIMAL}\n[output]\nsize = [0, 10]\n"), "output.size");
     invalid(&format!("{MINIMAL}\n[output]\npath = \"x.jpg\"\n"), "output.path");
     invalid(&lobe("[1,1,1], cx = [1,1,1]"), "brdf.lobes[0].cxy");
-    let five_lobes = vec!["{ cxy = [1,1,1], cz = [1,1,1], n = [1,1,1] }"; 5].join(", ");
+    let five_lobes = ["{ cxy = [1,1,1], cz = [1,1,1], n = [1,1,1] }"; 5].join(", ");
     let e = invalid(&format!("{MINIMAL}\n[brdf]\nlobes = [{five_lobes}]\n"), "brdf.lobes");
     assert!(e.contains("5 lobes") && e.contains("at most 4"), "{e}");
     let no_camera = MINIMAL.split("[[camera]]").next().unwrap();

@@ -64,10 +64,12 @@ fn sides() -> Vec<usize> {
 
 /// Timed peer runs at an output side (it takes about 1 s per 256x256 output on 2 cores).
 fn peer_runs(side: usize) -> usize {
-    match side {
-        ..=256 => 3,
-        ..=512 => 2,
-        _ => 1,
+    if side <= 256 {
+        3
+    } else if side <= 512 {
+        2
+    } else {
+        1
     }
 }
 

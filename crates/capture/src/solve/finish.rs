@@ -253,10 +253,10 @@ impl Plan<'_> {
                 for t in 0..m {
                     // `& (CHUNK - 1)`: a no-op (pixels index a chunk) that drops the bounds check.
                     let v = row[group[t] as usize & (CHUNK - 1)];
-                    gx[t] = gx[t] + c[0] * v;
-                    gy[t] = gy[t] + c[1] * v;
-                    gz[t] = gz[t] + c[2] * v;
-                    rr[t] = rr[t] + v * v;
+                    gx[t] += c[0] * v;
+                    gy[t] += c[1] * v;
+                    gz[t] += c[2] * v;
+                    rr[t] += v * v;
                 }
             }
         }

@@ -77,7 +77,7 @@ fn block_shadowed<T: From<u8>>(i: usize, p: usize, lit: T, saturated: T) -> T {
     let run = p / 16;
     match run % 6 {
         0 => lit,
-        1 | 2 if (run + i) % 5 == 0 => T::from(0),
+        1 | 2 if (run + i).is_multiple_of(5) => T::from(0),
         3 if i == 2 => saturated,
         4 if i < 6 => T::from(0),
         _ => lit,

@@ -201,7 +201,7 @@ pub fn render(job: &Job, gpu: &Gpu, out: &Output) -> Result<RenderReport> {
             if !(16..=8192).contains(&size) {
                 bail!("--reference: {size} is outside 16..=8192 texels");
             }
-            out.note(&format!("baking and scattering the {size}x{size} reference light map on the CPU"));
+            out.note(format!("baking and scattering the {size}x{size} reference light map on the CPU"));
             skin::compare::Method::Reference { size }.setup(&scene, &loaded)?
         }
     };

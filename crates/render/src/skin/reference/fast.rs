@@ -280,7 +280,7 @@ fn source(bake: &ReferenceBake, kernel: &Kernel, i: usize) -> Source {
     let first_midpoint = kernel.gaussians.iter().position(|g| a.max(b) < MIDPOINT_RATIO * g.sigma).unwrap_or(GAUSSIANS);
     let half_diagonal = 0.5 * a.hypot(b);
     // The widest Gaussian the narrow pass takes for this source.
-    let widest = first_midpoint.max(FIRST_WIDE).min(GAUSSIANS) - 1;
+    let widest = first_midpoint.clamp(FIRST_WIDE, GAUSSIANS) - 1;
     let reach = (kernel.gaussians[widest].reach2 as f64).sqrt() + half_diagonal;
     Source {
         position: bake.position_mm[i],
