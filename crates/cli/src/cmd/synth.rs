@@ -16,13 +16,15 @@ use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits, PngLayout};
-use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
+use skinkit_maps::{
+    Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, OutputSet, Samples, Transfer, Vec3,
+};
 use skinkit_synth::config::UPSAMPLED_LEVELS;
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Search, SynthConfig};
 
 use crate::output::Output;
-use crate::pipeline;
+use crate::{guard, pipeline};
 
 /// The largest exemplar side a 16-bit coordinate map can address.
 pub const MAX_COORD_SIDE: usize = u16::MAX as usize;
@@ -195,11 +197,13 @@ impl MapArgs {
         Ok(Map::Color(color))
     }
 
-    fn write(&self, path: &Path, map: &Map) -> Result<()> {
-        match map {
-            Map::Normal(n) => io::write_normal_map(path, n, self.encoding()?, 16),
-            Map::Color(c) => io::write_color_map(path, c, 16),
-        }
+    /// Adds `path` to the output set and writes `map` there.
+    fn write(&self, set: &mut OutputSet, path: &Path, map: &Map) -> Result<()> {
+        let encoding = self.encoding()?;
+        set.write_file(path, |p| match map {
+            Map::Normal(n) => io::write_normal_map(p, n, encoding, 16),
+            Map::Color(c) => io::write_color_map(p, c, 16),
+        })
         .with_context(|| format!("cannot write {}", path.display()))
     }
 }
@@ -351,6 +355,10 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     {
         bail!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
     }
+    let mut outputs = vec![("--out", out_path.as_path())];
+    outputs.extend(args.coords.as_deref().map(|p| ("--coords", p)));
+    outputs.extend(args.report.as_deref().map(|p| ("--report", p)));
+    guard::output_files(&outputs, &[("the exemplar".into(), exemplar_path.clone())])?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
     if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
@@ -379,9 +387,11 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         out.warn(w);
     }
     let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap);
-    args.map.write(out_path, &output)?;
+    // One set: the map, the coordinates and the report appear together or not at all.
+    let mut set = OutputSet::files();
+    args.map.write(&mut set, out_path, &output)?;
     if let Some(path) = &args.coords {
-        write_coords(path, &coords)?;
+        set.write_file(path, |p| encode_coords(p, &coords)).with_context(|| coords_context(path))?;
     }
     let report = SynthReport {
         exemplar: exemplar_path.display().to_string(),
@@ -397,8 +407,9 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         quality,
     };
     if let Some(path) = &args.report {
-        pipeline::write_json(path, &report)?;
+        pipeline::write_json_file(&mut set, path, &report)?;
     }
+    out.swept(&set.commit().with_context(|| format!("cannot write {}", out_path.display()))?);
     out.result(&report, || human(&report));
     Ok(0)
 }
@@ -495,6 +506,14 @@ fn human(r: &SynthReport) -> String {
 
 /// Writes a coordinate map: 16-bit RGB PNG, R = exemplar x, G = exemplar y, B = 0.
 pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
+    encode_coords(path, coords).with_context(|| coords_context(path))
+}
+
+fn coords_context(path: &Path) -> String {
+    format!("cannot write coordinate map {}", path.display())
+}
+
+fn encode_coords(path: &Path, coords: &Grid<[u32; 2]>) -> skinkit_maps::Result<()> {
     let (w, h) = coords.size();
     io::write_png_rows(path, w, h, PngLayout::Rgb16, |y, row| {
         for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
@@ -502,7 +521,6 @@ pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
             px.copy_from_slice(&[c[0] as u16, c[1] as u16, 0]);
         }
     })
-    .with_context(|| format!("cannot write coordinate map {}", path.display()))
 }
 
 /// Reads a coordinate map written by [`write_coords`].
@@ -536,6 +554,8 @@ pub struct ReplayReport {
 fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let start = Instant::now();
     check_map_extension(&args.out)?;
+    let inputs = [("the coordinate map".into(), args.coords.clone()), ("the source map".into(), args.source.clone())];
+    guard::output_files(&[("--out", &args.out)], &inputs)?;
     let coords = read_coords(&args.coords)?;
     let source = args.map.read(&args.source)?;
     let (sw, sh) = source.size();
@@ -553,7 +573,9 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
         }
         Map::Color(c) => Map::Color(skinkit_synth::replay(&coords, c).with_context(context)?),
     };
-    args.map.write(&args.out, &replayed)?;
+    let mut set = OutputSet::files();
+    args.map.write(&mut set, &args.out, &replayed)?;
+    out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
     let (width, height) = coords.size();
     let report = ReplayReport {
         coords: args.coords.display().to_string(),
