@@ -159,7 +159,8 @@ fn d4_interrupting_a_40_session_batch_leaves_complete_sessions_or_none() {
                 let e = stderr(&o);
                 assert!(e.contains("interrupted by SIG") && e.lines().count() == 1, "{when}: {e}");
                 let report = json(&out.join("batch-report.json"));
-                assert_eq!(report["interrupted"], true, "{when}");
+                // A signal in the last microseconds, after the final report, finds nothing to stop.
+                assert!(report["interrupted"] == true || done.len() == 40, "{when}");
                 for o in report["outcomes"].as_array().unwrap().iter().filter(|o| o["ok"] == true) {
                     assert!(done.contains(&o["session"].as_str().unwrap().to_owned()), "{when}: {o}");
                 }

@@ -23,6 +23,7 @@
 
 use std::sync::Mutex;
 
+#[cfg(unix)]
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
 /// What runs after the outputs were abandoned, before the exit.
@@ -30,10 +31,14 @@ type Hook = Box<dyn Fn() + Send>;
 
 static HOOKS: Mutex<Vec<(u64, Hook)>> = Mutex::new(Vec::new());
 
-/// Starts the thread that handles the signals. Without it (an error registering them) the
-/// signals keep their default action, and a re-run still removes what was left.
+/// Starts the thread that handles the signals. A signal that arrived ignored stays ignored (a
+/// script's background job ignores SIGINT so that Ctrl-C stops only the script's foreground).
+/// Without the thread (an error registering) the signals keep their default action, and a re-run
+/// still removes what was left.
+#[cfg(unix)]
 pub fn install() {
-    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+    let wanted: Vec<i32> = [SIGINT, SIGTERM, SIGHUP].into_iter().filter(|&s| !ignored(s)).collect();
+    let Ok(mut signals) = signal_hook::iterator::Signals::new(wanted) else {
         return;
     };
     let spawned = std::thread::Builder::new().name("signals".into()).spawn(move || {
@@ -44,6 +49,22 @@ pub fn install() {
     drop(spawned);
 }
 
+/// Elsewhere signals keep their default action; a re-run removes what an interrupted run left.
+#[cfg(not(unix))]
+pub fn install() {}
+
+/// Whether `signal`'s disposition is "ignore" (inherited from the parent).
+#[cfg(unix)]
+fn ignored(signal: i32) -> bool {
+    // SAFETY: sigaction with a null new action only reads the current one into `old`, a plain C
+    // struct for which all-zero bytes are a valid value.
+    unsafe {
+        let mut old: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(signal, std::ptr::null(), &mut old) == 0 && old.sa_sigaction == libc::SIG_IGN
+    }
+}
+
+#[cfg(unix)]
 fn stop(signal: i32) -> ! {
     let removed = skinkit_maps::output_set::abandon_all();
     let hooks = HOOKS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());

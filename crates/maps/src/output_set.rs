@@ -282,10 +282,10 @@ impl Drop for OutputSet {
     /// Not committed: removes the staging folders and the folders created for them.
     fn drop(&mut self) {
         let mut live = live();
-        if !self.done {
-            if let Some(paths) = live.get(&self.id) {
-                remove_all(paths);
-            }
+        if !self.done
+            && let Some(paths) = live.get(&self.id)
+        {
+            remove_all(paths);
         }
         live.remove(&self.id);
     }

@@ -85,7 +85,7 @@ fn import_rig(args: ImportArgs, out: &Output) -> Result<i32> {
         (_, Some(path)) => vec![("the light file".to_owned(), path.clone())],
         _ => Vec::new(),
     };
-    guard::output_files(&[("--out", &args.out)], &inputs)?;
+    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let rig = match (&args.diligent, &args.uw) {
         (Some(dir), _) => import::diligent(dir)?,
         (_, Some(path)) => import::uw_lights(path)?,
@@ -98,7 +98,7 @@ fn from_sphere(args: FromSphereArgs, out: &Output) -> Result<i32> {
     let photos = args.photos.iter().map(|p| ("a mirror-sphere photo".to_owned(), p.clone()));
     let inputs: Vec<_> =
         photos.chain(args.matte.iter().map(|p| ("a matte-sphere photo".to_owned(), p.clone()))).collect();
-    guard::output_files(&[("--out", &args.out)], &inputs)?;
+    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let limits = skinkit_maps::Limits::default();
     let read = |paths: &[PathBuf]| -> Result<Vec<_>> {
         paths

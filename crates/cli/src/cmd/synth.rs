@@ -555,7 +555,7 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let start = Instant::now();
     check_map_extension(&args.out)?;
     let inputs = [("the coordinate map".into(), args.coords.clone()), ("the source map".into(), args.source.clone())];
-    guard::output_files(&[("--out", &args.out)], &inputs)?;
+    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let coords = read_coords(&args.coords)?;
     let source = args.map.read(&args.source)?;
     let (sw, sh) = source.size();
