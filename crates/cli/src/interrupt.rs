@@ -22,6 +22,7 @@
 //! shell's code for SIGINT; SIGTERM and SIGHUP exit with it too, so scripts test one code.
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 #[cfg(unix)]
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
@@ -30,6 +31,15 @@ use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 type Hook = Box<dyn Fn() + Send>;
 
 static HOOKS: Mutex<Vec<(u64, Hook)>> = Mutex::new(Vec::new());
+
+/// Set first when a signal arrives: work that fails after it failed because its staging folder
+/// was removed, not because of its input.
+static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// Whether a signal is stopping the run.
+pub fn requested() -> bool {
+    REQUESTED.load(Ordering::SeqCst)
+}
 
 /// Starts the thread that handles the signals. A signal that arrived ignored stays ignored (a
 /// script's background job ignores SIGINT so that Ctrl-C stops only the script's foreground).
@@ -66,6 +76,7 @@ fn ignored(signal: i32) -> bool {
 
 #[cfg(unix)]
 fn stop(signal: i32) -> ! {
+    REQUESTED.store(true, Ordering::SeqCst);
     let removed = skinkit_maps::output_set::abandon_all();
     let hooks = HOOKS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     for (_, hook) in hooks.iter() {
@@ -83,7 +94,7 @@ fn stop(signal: i32) -> ! {
 /// Runs `hook` if the run is interrupted while the returned guard lives.
 pub fn on_interrupt(hook: impl Fn() + Send + 'static) -> HookGuard {
     static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let id = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let id = NEXT.fetch_add(1, Ordering::Relaxed);
     HOOKS.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).push((id, Box::new(hook)));
     HookGuard(id)
 }

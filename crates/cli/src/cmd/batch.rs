@@ -144,6 +144,10 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let bar = out.progress(dirs.len() as u64, "batch");
     dirs.par_iter().for_each(|dir| {
         let outcome = outcome(dir, &args.out, &options, &swept);
+        if interrupt::requested() && !outcome.ok {
+            // Failed because the interrupt removed its staging folder: unfinished, not failed.
+            return;
+        }
         if let Some(e) = &outcome.error {
             bar.suspend(|| out.warn(format!("{}: {e}", dir.display())));
         }
