@@ -112,6 +112,9 @@ impl OutputSet {
         };
         let path = staging.join(relative);
         if let Some(parent) = path.parent() {
+            // Under the registry's lock: after an interrupt removed the staging folder,
+            // `create_dir_all` would make it again; this waits for the exit instead.
+            let _live = live();
             std::fs::create_dir_all(parent).map_err(|e| Error::io(self.unstage(parent), e))?;
         }
         Ok(path)
@@ -245,6 +248,8 @@ impl OutputSet {
                 None => break,
             }
         }
+        // Created and listed under the registry's lock, so an interrupt sees both or neither.
+        let mut live = live();
         for dir in missing.into_iter().rev() {
             match std::fs::create_dir(&dir) {
                 Ok(()) => {}
@@ -253,7 +258,7 @@ impl OutputSet {
                 Err(e) => return Err(Error::io(&dir, e)),
             }
             // Listed with the set's staging folders: removed, if empty, when the set is dropped.
-            live().entry(self.id).or_default().push(dir);
+            live.entry(self.id).or_default().push(dir);
         }
         Ok(())
     }
@@ -261,13 +266,15 @@ impl OutputSet {
     /// Creates `.<label>.staging.<pid>.<n>` in `parent` for the destination `dest`.
     fn new_staging(&mut self, parent: &Path, label: &str, dest: &Path) -> Result<PathBuf> {
         let pid = std::process::id();
+        // Created and registered under the registry's lock, so an interrupt (which takes the
+        // lock for good) either removes it or comes before it exists.
+        let mut live = live();
         loop {
             let n = NEXT.fetch_add(1, Ordering::Relaxed);
             let dir = parent.join(format!(".{label}{STAGING}{pid}.{n}"));
-            // Registered before it exists, so an interrupt between the two still removes it.
-            live().entry(self.id).or_default().push(dir.clone());
             match std::fs::create_dir(&dir) {
                 Ok(()) => {
+                    live.entry(self.id).or_default().push(dir.clone());
                     self.stagings.push((dir.clone(), dest.to_owned()));
                     return Ok(dir);
                 }
