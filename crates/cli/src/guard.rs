@@ -76,6 +76,11 @@ pub fn output_files(outputs: &[(&str, &Path)], inputs: &[(String, PathBuf)]) -> 
     not_an_input(outputs, inputs)
 }
 
+/// The outputs whose flag was given.
+pub fn given<'a>(outputs: &[(&'a str, Option<&'a PathBuf>)]) -> Vec<(&'a str, &'a Path)> {
+    outputs.iter().filter_map(|(flag, path)| path.map(|p| (*flag, p.as_path()))).collect()
+}
+
 /// Refuses two outputs at one path.
 pub fn distinct(outputs: &[(&str, &Path)]) -> Result<()> {
     for (i, (flag, out)) in outputs.iter().enumerate() {

@@ -136,9 +136,8 @@ pub fn run_stitch(args: StitchArgs, out: &Output) -> Result<i32> {
     if let Some(labels) = &args.labels {
         check_extension(labels, &["png"])?;
     }
-    let mut outputs = vec![("--out", args.out.as_path())];
-    outputs.extend(args.labels.as_deref().map(|p| ("--labels", p)));
-    outputs.extend(args.report.as_deref().map(|p| ("--report", p)));
+    let given = [("--out", Some(&args.out)), ("--labels", args.labels.as_ref()), ("--report", args.report.as_ref())];
+    let outputs = guard::given(&given);
     for (flag, path) in &outputs {
         guard::out_file(flag, path)?;
     }

@@ -15,10 +15,9 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::Serialize;
+use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, Limits, PngLayout};
-use skinkit_maps::{
-    Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, OutputSet, Samples, Transfer, Vec3,
-};
+use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
 use skinkit_synth::config::UPSAMPLED_LEVELS;
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Search, SynthConfig};
@@ -355,10 +354,8 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     {
         bail!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
     }
-    let mut outputs = vec![("--out", out_path.as_path())];
-    outputs.extend(args.coords.as_deref().map(|p| ("--coords", p)));
-    outputs.extend(args.report.as_deref().map(|p| ("--report", p)));
-    guard::output_files(&outputs, &[("the exemplar".into(), exemplar_path.clone())])?;
+    let outputs = [("--out", Some(out_path)), ("--coords", args.coords.as_ref()), ("--report", args.report.as_ref())];
+    guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.clone())])?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
     if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
@@ -391,7 +388,8 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
     if let Some(path) = &args.coords {
-        set.write_file(path, |p| encode_coords(p, &coords)).with_context(|| coords_context(path))?;
+        let context = || format!("cannot write coordinate map {}", path.display());
+        set.write_file(path, |p| encode_coords(p, &coords)).with_context(context)?;
     }
     let report = SynthReport {
         exemplar: exemplar_path.display().to_string(),
@@ -506,11 +504,7 @@ fn human(r: &SynthReport) -> String {
 
 /// Writes a coordinate map: 16-bit RGB PNG, R = exemplar x, G = exemplar y, B = 0.
 pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
-    encode_coords(path, coords).with_context(|| coords_context(path))
-}
-
-fn coords_context(path: &Path) -> String {
-    format!("cannot write coordinate map {}", path.display())
+    encode_coords(path, coords).with_context(|| format!("cannot write coordinate map {}", path.display()))
 }
 
 fn encode_coords(path: &Path, coords: &Grid<[u32; 2]>) -> skinkit_maps::Result<()> {
