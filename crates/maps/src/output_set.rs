@@ -203,8 +203,8 @@ impl OutputSet {
             None => self.commit_files()?,
         }
         for (staging, _) in &self.stagings {
-            // Empty by now, or already renamed into place.
-            let _ = std::fs::remove_dir(staging);
+            // Holds only empty sub-folders by now, or was renamed into place.
+            let _ = std::fs::remove_dir_all(staging);
         }
         self.done = true;
         drop(guard);

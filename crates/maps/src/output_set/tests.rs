@@ -71,6 +71,7 @@ fn d3_failed_rewrite_keeps_the_previous_set() {
     assert_eq!(read(&target.join("sub/b.txt")), "3");
     assert_eq!(read(&target.join("report.json")), "r3");
     assert_eq!(names(&target), ["a.txt", "report.json", "sub", "user.txt"]);
+    assert_eq!(names(tmp.path()), ["out"], "staging folder left after a merge");
 }
 
 #[test]
