@@ -2,9 +2,12 @@
 //!
 //! This crate only parses arguments, turns them into validated library configs, draws progress on
 //! stderr and prints results; the work itself lives in the library crates. Exit codes: 0 when all
-//! went well, 1 when an input failed (a bad photo, rig or session), 2 for a usage error.
+//! went well, 1 when an input failed (a bad photo, rig or session), 2 for a usage error, 130 when
+//! interrupted (SIGINT, SIGTERM or SIGHUP; see `interrupt`).
 
 mod cmd;
+mod guard;
+mod interrupt;
 mod output;
 mod pipeline;
 
@@ -57,6 +60,7 @@ fn main() {
     // SAFETY: the first statement of `main`, before any thread is started.
     unsafe { skinkit_render::gpu::quiet_vulkan_loader() };
     let cli = Cli::parse();
+    interrupt::install();
     let out = output::Output::new(&cli.global);
     let result = match cli.command {
         Command::Capture(args) => cmd::capture::run(args, &out),
@@ -76,7 +80,7 @@ fn main() {
         Ok(code) => std::process::exit(code),
         Err(error) => {
             out.error(&error);
-            std::process::exit(1);
+            std::process::exit(output::exit_code(&error));
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Where results and messages go: results to stdout (text or `--json`), progress and messages
 //! to stderr, nothing but errors with `--quiet`.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -71,6 +72,15 @@ impl Output {
         eprintln!("error: {}", one_line(error));
     }
 
+    /// One line on stderr when a run removed what an interrupted or killed run had left (not an
+    /// error: the outputs it finds are replaced anyway).
+    pub fn swept(&self, paths: &[PathBuf]) {
+        if let Some(first) = paths.first() {
+            let more = if paths.len() > 1 { format!(" and {} more", paths.len() - 1) } else { String::new() };
+            self.note(format!("removed leftovers of an interrupted run: {}{more}", first.display()));
+        }
+    }
+
     /// Prints a result: as JSON with `--json`, else as the text `human` gives, on stdout.
     pub fn result<T: Serialize>(&self, value: &T, human: impl FnOnce() -> String) {
         if self.json {
@@ -96,4 +106,22 @@ fn one_line(error: &anyhow::Error) -> String {
         line.push_str(&text);
     }
     line
+}
+
+/// A command line that asks for something impossible (an `--out` that is an input, a folder where
+/// a file goes): refused before any work, exit 2 like clap's own usage errors.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// The exit code of a failed run: 2 for a [`UsageError`] anywhere in the chain, else 1.
+pub fn exit_code(error: &anyhow::Error) -> i32 {
+    if error.chain().any(|cause| cause.is::<UsageError>()) { 2 } else { 1 }
 }

@@ -1,8 +1,8 @@
 //! Writing a capture: the maps of a [`Captured`] session (`skinkit_capture::session`, which
-//! reads, solves and measures) into a folder, each file atomically and all in parallel, timing
-//! each file; shared by `capture`, `batch` and `demo`.
+//! reads, solves and measures) into a folder as one [`OutputSet`] (all files or none, the report
+//! last), the maps in parallel, timing each file; shared by `capture`, `batch` and `demo`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -10,20 +10,39 @@ use rayon::prelude::*;
 use serde::Serialize;
 use skinkit_capture::session::{CaptureOptions, Captured};
 use skinkit_capture::solve::AlbedoMap;
-use skinkit_maps::io;
+use skinkit_maps::{OutputSet, io};
 
 /// An output file's name and the function that writes it to a path.
 type WriteJob<'a> = (&'a str, Box<dyn Fn(&Path) -> skinkit_maps::Result<()> + Sync + 'a>);
 
-/// Writes `normal.exr`, `normal.png`, `albedo.png`, `confidence.png` and `report.json` into `dir`
-/// (created if needed), each atomically, the four maps concurrently. Adds the write time and the
-/// peak memory to the report.
+/// The files of a capture folder; the report is written last and marks a complete set.
+pub const CAPTURE_FILES: [&str; 5] = ["normal.exr", "normal.png", "albedo.png", "confidence.png", CAPTURE_MARKER];
+/// The file whose presence marks a complete capture folder.
+pub const CAPTURE_MARKER: &str = "report.json";
+
+/// The staged output set of a capture into `dir` (made before the capture, so an interrupt
+/// during the solve removes its staging folder too).
 ///
 /// # Errors
-/// When the folder cannot be created or a file cannot be written.
-pub fn write_outputs(dir: &Path, captured: &mut Captured, options: &CaptureOptions) -> Result<()> {
+/// When `dir` is a file or its staging folder cannot be created.
+pub fn capture_set(dir: &Path) -> Result<OutputSet> {
+    OutputSet::folder(dir, CAPTURE_MARKER).with_context(|| format!("cannot write output folder {}", dir.display()))
+}
+
+/// Writes `normal.exr`, `normal.png`, `albedo.png`, `confidence.png` and `report.json` into the
+/// folder set `set` (from [`capture_set`]), the four maps concurrently, and commits it: the folder
+/// gets the whole set or keeps what it had. Adds the write time and the peak memory to the report.
+/// Returns what the commit cleaned up from killed runs.
+///
+/// # Errors
+/// When a file cannot be written or the set cannot be moved into place; `dir` names the folder.
+pub fn write_outputs(
+    set: OutputSet,
+    dir: &Path,
+    captured: &mut Captured,
+    options: &CaptureOptions,
+) -> Result<Vec<PathBuf>> {
     let t = Instant::now();
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let s = &captured.solution;
     let jobs: [WriteJob; 4] = [
         ("normal.exr", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 32))),
@@ -35,7 +54,7 @@ pub fn write_outputs(dir: &Path, captured: &mut Captured, options: &CaptureOptio
         .par_iter()
         .map(|(name, job)| {
             let t = Instant::now();
-            job(&dir.join(name)).with_context(|| format!("cannot write {}", dir.join(name).display()))?;
+            set.write(name, |p| job(p)).with_context(|| format!("cannot write {}", dir.join(name).display()))?;
             Ok((name.to_string(), t.elapsed().as_secs_f64()))
         })
         .collect::<Result<_>>()?;
@@ -44,7 +63,8 @@ pub fn write_outputs(dir: &Path, captured: &mut Captured, options: &CaptureOptio
     report.timings_s.write = t.elapsed().as_secs_f64();
     report.timings_s.total += report.timings_s.write;
     report.peak_memory_mib = peak_memory_mib();
-    write_json(&dir.join("report.json"), report)
+    write_json_in(&set, CAPTURE_MARKER, &dir.join(CAPTURE_MARKER), report)?;
+    set.commit().with_context(|| format!("cannot write output folder {}", dir.display()))
 }
 
 /// Albedo as 16-bit linear PNG: grey for grey photos, RGB for colour ones.
@@ -55,14 +75,33 @@ fn write_albedo(path: &Path, albedo: &AlbedoMap) -> skinkit_maps::Result<()> {
     }
 }
 
-/// Writes a value as pretty JSON, atomically.
-pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
+/// Writes a value as pretty JSON as `relative` of the folder set `set`; `shown` names it in errors.
+///
+/// # Errors
+/// When it cannot be written.
+pub fn write_json_in<T: Serialize>(set: &OutputSet, relative: &str, shown: &Path, value: &T) -> Result<()> {
+    set.write(relative, |p| json_atomic(p, value)).with_context(|| format!("cannot write {}", shown.display()))
+}
+
+/// Adds the loose file `path` to `set` and writes a value there as pretty JSON.
+///
+/// # Errors
+/// When it cannot be written.
+pub fn write_json_file<T: Serialize>(set: &mut OutputSet, path: &Path, value: &T) -> Result<()> {
+    set.write_file(path, |p| json_atomic(p, value)).with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn json_atomic<T: Serialize>(path: &Path, value: &T) -> skinkit_maps::Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| skinkit_maps::Error::InvalidParameter(e.to_string()))?;
     io::write_atomic(path, |w| {
         use std::io::Write;
         w.write_all(text.as_bytes()).map_err(|e| skinkit_maps::Error::Io { path: path.to_owned(), source: e })
     })
-    .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes a value as pretty JSON, atomically.
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    json_atomic(path, value).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// The process's peak resident set (VmHWM) in MiB, where /proc exposes it.

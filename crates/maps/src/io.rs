@@ -179,6 +179,8 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> Re
         write(&mut writer)?;
         writer.flush().map_err(|e| Error::io(path, e))?;
     }
+    let written = tmp.as_file().metadata().map_err(|e| Error::io(path, e))?.len();
+    crate::output_set::charge_write(path, written)?;
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }

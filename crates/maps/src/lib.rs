@@ -7,7 +7,8 @@
 //!   ([`encoding`]).
 //! * [`Photo`] is a decoded photograph kept in its native sample type (8-bit, 16-bit or float), so
 //!   a stack of large 16-bit photos costs two bytes a sample, not four.
-//! * [`io`] reads PNG, TIFF and EXR under [`Limits`] and writes every output atomically.
+//! * [`io`] reads PNG, TIFF and EXR under [`Limits`] and writes every output atomically;
+//!   [`OutputSet`] makes a command's several outputs appear all together or not at all.
 //!
 //! Image rows grow downward, against +y: row 0 is the top of the picture. UV origin: skinkit puts
 //! texture coordinate (0, 0) at the top-left texel (as glTF and wgpu do); loaders of bottom-left
@@ -19,6 +20,7 @@ mod exr_write;
 pub mod grid;
 pub mod io;
 pub mod normal;
+pub mod output_set;
 pub mod photo;
 pub mod pyramid;
 pub mod resample;
@@ -29,4 +31,5 @@ pub use glam::Vec3;
 pub use grid::{ColorMap, Grid, ScalarMap};
 pub use io::Limits;
 pub use normal::NormalMap;
+pub use output_set::OutputSet;
 pub use photo::{Channels, Photo, Samples, Transfer};

@@ -4,18 +4,25 @@
 //! A session folder is read by `skinkit_capture::session::Session::from_dir`: `rig.toml`, the
 //! photos (sorted by name), and optionally `mask.png`, `ambient.png` and `truth.png` (a
 //! ground-truth normal map).
+//!
+//! Each session's folder is one output set (all its files or none, `report.json` last), so after
+//! a failure or an interrupt every session folder is either complete or absent (issue 15, D3/D4);
+//! an interrupt still writes `batch-report.json` of the sessions that finished.
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use skinkit_capture::session::{self, CaptureOptions, CaptureReport, Session};
+use skinkit_maps::OutputSet;
 
 use super::capture::SolveArgs;
+use crate::interrupt::{self, HookGuard};
 use crate::output::Output;
-use crate::pipeline;
+use crate::{guard, pipeline};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -30,7 +37,7 @@ pub struct Args {
 }
 
 /// One line of the batch summary.
-#[derive(Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct SessionOutcome {
     pub session: String,
     pub ok: bool,
@@ -47,6 +54,9 @@ pub struct BatchReport {
     pub sessions: usize,
     pub succeeded: usize,
     pub failed: usize,
+    /// True when a signal stopped the batch: `outcomes` lists the sessions that finished (their
+    /// folders are complete); the others have no folder.
+    pub interrupted: bool,
     pub outcomes: Vec<SessionOutcome>,
 }
 
@@ -61,52 +71,97 @@ fn session_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
-fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions) -> Result<CaptureReport> {
+fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions) -> Result<(CaptureReport, Vec<PathBuf>)> {
+    // Staged from the start, so an interrupt during the solve removes this session's folder too.
+    let set = pipeline::capture_set(out_dir)?;
     let files = Session::from_dir(dir)?;
     let mut captured = session::capture(&files, options, &|_| {})?;
-    pipeline::write_outputs(out_dir, &mut captured, options)?;
-    Ok(captured.report)
+    let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
+    Ok((captured.report, swept))
+}
+
+/// One session's outcome; `swept` collects what its commit cleaned up from killed runs.
+fn outcome(dir: &Path, out_dir: &Path, options: &CaptureOptions, swept: &Mutex<Vec<PathBuf>>) -> SessionOutcome {
+    let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    match run_session(dir, &out_dir.join(&name), options) {
+        Ok((report, cleaned)) => {
+            lock(swept).extend(cleaned);
+            SessionOutcome {
+                session: name,
+                ok: true,
+                error: None,
+                invalid_pixels: Some(report.invalid_pixels),
+                seconds: Some(report.timings_s.total),
+            }
+        }
+        Err(e) => SessionOutcome {
+            session: name,
+            ok: false,
+            error: Some(format!("{e:#}")),
+            invalid_pixels: None,
+            seconds: None,
+        },
+    }
+}
+
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+impl BatchReport {
+    fn new(sessions: usize, mut outcomes: Vec<SessionOutcome>, interrupted: bool) -> Self {
+        outcomes.sort_by(|a, b| a.session.cmp(&b.session));
+        let failed = outcomes.iter().filter(|o| !o.ok).count();
+        BatchReport { sessions, succeeded: outcomes.len() - failed, failed, interrupted, outcomes }
+    }
+}
+
+/// On an interrupt: `batch-report.json` of the sessions that finished, marked interrupted.
+fn report_on_interrupt(path: PathBuf, sessions: usize, finished: Arc<Mutex<Vec<SessionOutcome>>>) -> HookGuard {
+    interrupt::on_interrupt(move || {
+        let report = BatchReport::new(sessions, lock(&finished).clone(), true);
+        // Written by the signal thread itself, whole (atomically), before the exit.
+        if let Err(e) = pipeline::write_json(&path, &report) {
+            eprintln!("error: {e:#}");
+        }
+    })
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     let options = args.solve.options()?;
+    guard::out_folder("--out", &args.out)?;
+    guard::not_in_input_folder("--out", &args.out, "the sessions folder", &args.sessions)?;
     let dirs = session_dirs(&args.sessions)?;
     if dirs.is_empty() {
         anyhow::bail!("{}: no session sub-folders", args.sessions.display());
     }
-    let bar = out.progress(dirs.len() as u64, "batch");
-    let outcomes: Vec<SessionOutcome> = dirs
-        .par_iter()
-        .map(|dir| {
-            let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let result = run_session(dir, &args.out.join(&name), &options);
-            bar.inc(1);
-            match result {
-                Ok(report) => SessionOutcome {
-                    session: name,
-                    ok: true,
-                    error: None,
-                    invalid_pixels: Some(report.invalid_pixels),
-                    seconds: Some(report.timings_s.total),
-                },
-                Err(e) => {
-                    bar.suspend(|| out.warn(format!("{}: {e:#}", dir.display())));
-                    SessionOutcome {
-                        session: name,
-                        ok: false,
-                        error: Some(format!("{e:#}")),
-                        invalid_pixels: None,
-                        seconds: None,
-                    }
-                }
-            }
-        })
-        .collect();
-    bar.finish_and_clear();
-    let failed = outcomes.iter().filter(|o| !o.ok).count();
-    let report = BatchReport { sessions: outcomes.len(), succeeded: outcomes.len() - failed, failed, outcomes };
+    // Made here, not by the sessions' output sets: one session's failure must not remove it.
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    pipeline::write_json(&args.out.join("batch-report.json"), &report)?;
+    let report_path = args.out.join("batch-report.json");
+    let finished = Arc::new(Mutex::new(Vec::new()));
+    let hook = report_on_interrupt(report_path.clone(), dirs.len(), Arc::clone(&finished));
+    let swept = Mutex::new(Vec::new());
+    let bar = out.progress(dirs.len() as u64, "batch");
+    dirs.par_iter().for_each(|dir| {
+        let outcome = outcome(dir, &args.out, &options, &swept);
+        if interrupt::requested() && !outcome.ok {
+            // Failed because the interrupt removed its staging folder: unfinished, not failed.
+            return;
+        }
+        if let Some(e) = &outcome.error {
+            bar.suspend(|| out.warn(format!("{}: {e}", dir.display())));
+        }
+        lock(&finished).push(outcome);
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    out.swept(&lock(&swept));
+    let report = BatchReport::new(dirs.len(), lock(&finished).clone(), false);
+    let mut set = OutputSet::files();
+    pipeline::write_json_file(&mut set, &report_path, &report)?;
+    set.commit().with_context(|| format!("cannot write {}", report_path.display()))?;
+    drop(hook);
+    let failed = report.failed;
     out.result(&report, || {
         let mut s = format!("{} sessions: {} succeeded, {} failed", report.sessions, report.succeeded, report.failed);
         for o in report.outcomes.iter().filter(|o| !o.ok) {

@@ -1,6 +1,6 @@
 //! `skinkit capture`: photos of a mold under a known rig -> normal, albedo and confidence maps.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use skinkit_capture::session::{self, CaptureOptions, Session};
@@ -8,7 +8,7 @@ use skinkit_capture::solve::{Method, SolveConfig};
 use skinkit_maps::{GreenAxis, Limits, NormalEncoding, Transfer};
 
 use crate::output::Output;
-use crate::pipeline;
+use crate::{guard, pipeline};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -109,6 +109,34 @@ impl SolveArgs {
     }
 }
 
+/// Refuses, before any work, an `--out` that is a file, the folder holding the photos (the maps
+/// would be taken for photos by the next run from that folder: refusing is clearer than a photo
+/// discovery that guesses which files are skinkit's, and keeps a session folder a session), or
+/// whose files would replace an input. A sub-folder of the photo folder is fine: photos are files.
+pub fn check_out(out: &Path, photos_from: Option<&Path>, files: &Session) -> Result<()> {
+    guard::out_folder("--out", out)?;
+    let photo_folders = files.photos.iter().map(|p| p.parent().filter(|d| !d.as_os_str().is_empty()));
+    let folders = photos_from.into_iter().chain(photo_folders.map(|d| d.unwrap_or(Path::new("."))));
+    for folder in folders {
+        if guard::resolve(folder) == guard::resolve(out) {
+            return Err(guard::usage(format!(
+                "--out {} is the folder of the photos: the maps would be taken for photos by the next run; choose another folder",
+                out.display()
+            )));
+        }
+    }
+    let mut inputs = vec![("the rig".to_owned(), files.rig.clone())];
+    inputs.extend(files.photos.iter().enumerate().map(|(i, p)| (format!("photo {}", i + 1), p.clone())));
+    for (what, path) in
+        [("the mask", &files.mask), ("the ambient frame", &files.ambient), ("the truth map", &files.truth)]
+    {
+        inputs.extend(path.iter().map(|p| (what.to_owned(), p.clone())));
+    }
+    let outputs: Vec<PathBuf> = pipeline::CAPTURE_FILES.iter().map(|f| out.join(f)).collect();
+    let flags: Vec<(&str, &Path)> = outputs.iter().map(|p| ("--out", p.as_path())).collect();
+    guard::not_an_input(&flags, &inputs)
+}
+
 /// A number in `[0, 1]`, for the threshold flags.
 fn fraction(text: &str) -> Result<f32, String> {
     match text.parse::<f32>() {
@@ -124,14 +152,17 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         None => args.photos.clone(),
     };
     let files = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth };
+    check_out(&args.out, args.photos_from.as_deref(), &files)?;
+    let set = pipeline::capture_set(&args.out)?;
     let bar = out.progress(4, "capture");
     let mut captured = session::capture(&files, &options, &|stage| {
         bar.set_message(stage.name());
         bar.inc(1);
     })?;
     bar.set_message("write");
-    pipeline::write_outputs(&args.out, &mut captured, &options)?;
+    let swept = pipeline::write_outputs(set, &args.out, &mut captured, &options)?;
     bar.finish_and_clear();
+    out.swept(&swept);
     for w in &captured.report.warnings {
         out.warn(w);
     }

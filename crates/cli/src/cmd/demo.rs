@@ -108,7 +108,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             let options = options(solver)?;
             let mut captured = session::capture(&files, &options, &|_| {})?;
             let target = args.out.join("capture").join(&region).join(solver);
-            pipeline::write_outputs(&target, &mut captured, &options)?;
+            pipeline::write_outputs(pipeline::capture_set(&target)?, &target, &mut captured, &options)?;
             let r = &captured.report;
             let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
             molds.push(MoldResult {

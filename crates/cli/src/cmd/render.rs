@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
+use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, PngLayout};
 use skinkit_render::gpu::{Gpu, Rendered};
 use skinkit_render::graph::PassGraph;
@@ -19,6 +20,7 @@ use skinkit_render::scene::{self, Scene};
 use skinkit_render::skin;
 
 use super::synth::parse_size;
+use crate::guard;
 use crate::output::Output;
 
 /// Largest texture side assumed by `--explain` when no adapter is present (WebGPU's default).
@@ -109,12 +111,48 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         out.result(&explained, || explain_text(&explained));
         return Ok(0);
     }
-    let report = render(&job, &Gpu::new()?, out)?;
+    // Checked before the adapter opens: a wrong `--out` is a usage error whatever the GPU.
+    let resolved = resolve(&job)?;
+    check_outputs(&job, &resolved.scene, &resolved.path, args.report.as_deref())?;
+    // One set: every image and the report appear together or not at all.
+    let mut set = OutputSet::files();
+    let report = render_into(&job, &Gpu::new()?, out, &mut set, args.report.as_deref())?;
     if let Some(path) = &args.report {
-        crate::pipeline::write_json(path, &report)?;
+        crate::pipeline::write_json_file(&mut set, path, &report)?;
     }
+    let first = report.images.first().map(|i| i.path.clone()).unwrap_or_default();
+    out.swept(&set.commit().with_context(|| format!("cannot write {first}"))?);
     out.result(&report, || human(&report));
     Ok(0)
+}
+
+/// Refuses, before any work, an image or report path that is a folder, one of the scene's
+/// inputs or another output. Images are named as [`numbered`] names them.
+fn check_outputs(job: &Job, scene: &Scene, path: &Path, report: Option<&Path>) -> Result<()> {
+    let mut inputs =
+        vec![("the scene".to_owned(), job.scene.clone()), ("the scene's mesh".to_owned(), scene.mesh.clone())];
+    if let Some(scene::Albedo::Map(p)) = &scene.albedo {
+        inputs.push(("the scene's albedo".to_owned(), p.clone()));
+    }
+    inputs.extend(scene.normal_map.iter().map(|n| ("the scene's normal map".to_owned(), n.path.clone())));
+    inputs.extend(scene.translucent.iter().map(|t| ("a translucent mesh of the scene".to_owned(), t.mesh.clone())));
+    let cameras = scene.cameras.len();
+    let frames = job.frames.unwrap_or(1);
+    let images: Vec<PathBuf> = (0..cameras)
+        .flat_map(|c| (0..frames).map(move |f| (c, f)))
+        .map(|(c, f)| numbered(path, (cameras > 1).then_some(c), job.frames.map(|_| f)))
+        .collect();
+    let mut outputs: Vec<(&str, &Path)> = images.iter().map(|p| ("--out", p.as_path())).collect();
+    outputs.extend(report.map(|p| ("--report", p)));
+    guard::output_files(&outputs, &inputs)
+}
+
+/// Renders every image of a job on `gpu` and writes them, all or none (see [`render_into`]).
+pub fn render(job: &Job, gpu: &Gpu, out: &Output) -> Result<RenderReport> {
+    let mut set = OutputSet::files();
+    let report = render_into(job, gpu, out, &mut set, None)?;
+    set.commit().with_context(|| format!("cannot write the images of {}", job.scene.display()))?;
+    Ok(report)
 }
 
 /// One `skinkit render` invocation (also what `skinkit demo` renders its figures with).
@@ -178,10 +216,12 @@ fn explain(job: &Job) -> Result<Explained> {
 }
 
 /// Renders every image of a job on `gpu` (a session: its shaders, pipelines and tables are
-/// reused by the next job) and writes them.
-pub fn render(job: &Job, gpu: &Gpu, out: &Output) -> Result<RenderReport> {
+/// reused by the next job) and stages them in `set`; `report` is where the caller will write the
+/// report (checked with the images before any work).
+fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: Option<&Path>) -> Result<RenderReport> {
     let start = Instant::now();
     let Resolved { scene, width, height, path, format } = resolve(job)?;
+    check_outputs(job, &scene, &path, report)?;
     let (target_format, tone) = load::target_for(format);
     let t = Instant::now();
     let mut loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
@@ -224,7 +264,8 @@ pub fn render(job: &Job, gpu: &Gpu, out: &Output) -> Result<RenderReport> {
         let render_seconds = t.elapsed().as_secs_f64();
         let file = numbered(&path, (scene.cameras.len() > 1).then_some(c), job.frames.map(|_| f));
         let t = Instant::now();
-        write_image(&file, &rendered, format).with_context(|| format!("cannot write {}", file.display()))?;
+        set.write_file(&file, |p| write_image(p, &rendered, format))
+            .with_context(|| format!("cannot write {}", file.display()))?;
         images.push(Image {
             path: file.display().to_string(),
             camera: c,
@@ -305,7 +346,7 @@ fn numbered(path: &Path, camera: Option<usize>, frame: Option<usize>) -> PathBuf
 }
 
 /// Writes a rendered image atomically: PNG as 8-bit sRGB RGB, EXR as linear float RGB.
-pub fn write_image(path: &Path, image: &Rendered, format: scene::OutputFormat) -> Result<()> {
+pub fn write_image(path: &Path, image: &Rendered, format: scene::OutputFormat) -> skinkit_maps::Result<()> {
     let (w, h) = (image.width as usize, image.height as usize);
     match format {
         scene::OutputFormat::Png => {

@@ -7,6 +7,7 @@ use serde::Serialize;
 use skinkit_capture::{Rig, import, sphere};
 use skinkit_maps::io;
 
+use crate::guard;
 use crate::output::Output;
 
 #[derive(clap::Subcommand, Debug)]
@@ -77,6 +78,14 @@ pub fn run(command: Command, out: &Output) -> Result<i32> {
 }
 
 fn import_rig(args: ImportArgs, out: &Output) -> Result<i32> {
+    let inputs: Vec<(String, PathBuf)> = match (&args.diligent, &args.uw) {
+        (Some(dir), _) => [import::DILIGENT_DIRECTIONS, import::DILIGENT_INTENSITIES, "filenames.txt"]
+            .map(|f| (format!("the DiLiGenT file {f}"), dir.join(f)))
+            .into(),
+        (_, Some(path)) => vec![("the light file".to_owned(), path.clone())],
+        _ => Vec::new(),
+    };
+    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let rig = match (&args.diligent, &args.uw) {
         (Some(dir), _) => import::diligent(dir)?,
         (_, Some(path)) => import::uw_lights(path)?,
@@ -86,6 +95,10 @@ fn import_rig(args: ImportArgs, out: &Output) -> Result<i32> {
 }
 
 fn from_sphere(args: FromSphereArgs, out: &Output) -> Result<i32> {
+    let photos = args.photos.iter().map(|p| ("a mirror-sphere photo".to_owned(), p.clone()));
+    let inputs: Vec<_> =
+        photos.chain(args.matte.iter().map(|p| ("a matte-sphere photo".to_owned(), p.clone()))).collect();
+    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let limits = skinkit_maps::Limits::default();
     let read = |paths: &[PathBuf]| -> Result<Vec<_>> {
         paths

@@ -13,7 +13,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits, PngLayout};
-use skinkit_maps::{Grid, NormalEncoding, NormalMap};
+use skinkit_maps::{Grid, NormalEncoding, NormalMap, OutputSet};
 use skinkit_stitch::compose::{ComposeSeconds, NO_REGION, RegionReport};
 use skinkit_stitch::curve::CurveParams;
 use skinkit_stitch::layout::{ExemplarSource, Layout};
@@ -26,7 +26,7 @@ use skinkit_capture::session::{self, Session};
 use super::capture::SolveArgs;
 use super::synth::parse_size;
 use crate::output::Output;
-use crate::pipeline;
+use crate::{guard, pipeline};
 
 /// Options shared by `stitch` and `face`.
 #[derive(clap::Args, Debug, Clone)]
@@ -136,16 +136,26 @@ pub fn run_stitch(args: StitchArgs, out: &Output) -> Result<i32> {
     if let Some(labels) = &args.labels {
         check_extension(labels, &["png"])?;
     }
-    let face = build(&args.options, &mut CaptureCache::new(), out)?;
+    let given = [("--out", Some(&args.out)), ("--labels", args.labels.as_ref()), ("--report", args.report.as_ref())];
+    let outputs = guard::given(&given);
+    for (flag, path) in &outputs {
+        guard::out_file(flag, path)?;
+    }
+    let check = |layout: &Layout| guard::not_an_input(&outputs, &layout_inputs(layout));
+    let face = build(&args.options, &mut CaptureCache::new(), out, &check)?;
     let t = Instant::now();
-    write_map(&args.out, &face.composed.normals)?;
+    // One set: the map, the labels and the report appear together or not at all.
+    let mut set = OutputSet::files();
+    let written = |path: &Path| format!("cannot write {}", path.display());
+    set.write_file(&args.out, |p| encode_map(p, &face.composed.normals)).with_context(|| written(&args.out))?;
     if let Some(path) = &args.labels {
-        write_labels(path, &face.composed.labels)?;
+        set.write_file(path, |p| encode_labels(p, &face.composed.labels)).with_context(|| written(path))?;
     }
     let report = report(&args.options, &face, &args.out, t.elapsed().as_secs_f64(), start);
     if let Some(path) = &args.report {
-        pipeline::write_json(path, &report)?;
+        pipeline::write_json_file(&mut set, path, &report)?;
     }
+    out.swept(&set.commit().with_context(|| written(&args.out))?);
     out.result(&report, || human(&report));
     Ok(0)
 }
@@ -157,8 +167,33 @@ pub fn run_face(args: FaceArgs, out: &Output) -> Result<i32> {
     Ok(0)
 }
 
+/// The files a layout reads, named for messages.
+fn layout_inputs(layout: &Layout) -> Vec<(String, PathBuf)> {
+    let mut inputs = vec![("the layout".to_owned(), layout.origin.clone())];
+    inputs.extend(layout.coverage.iter().map(|p| ("the coverage mask".to_owned(), p.clone())));
+    for region in &layout.regions {
+        if let ExemplarSource::NormalMap(path) = &region.exemplar {
+            inputs.push((format!("region `{}`'s exemplar", region.name), path.clone()));
+        }
+    }
+    inputs
+}
+
+/// `face --out`: refused when a file it writes is an input or it lies in a session folder.
+fn check_face_out(dir: &Path, layout: &Layout) -> Result<()> {
+    for region in &layout.regions {
+        if let ExemplarSource::Session(session) = &region.exemplar {
+            guard::not_in_input_folder("--out", dir, &format!("region `{}`'s session folder", region.name), session)?;
+        }
+    }
+    let mut files: Vec<PathBuf> = ["normal.png", "normal.exr", "labels.png", "report.json"].map(|f| dir.join(f)).into();
+    files.extend(layout.regions.iter().map(|r| dir.join("exemplars").join(format!("{}.png", r.name))));
+    let outputs: Vec<(&str, &Path)> = files.iter().map(|f| ("--out", f.as_path())).collect();
+    guard::not_an_input(&outputs, &layout_inputs(layout))
+}
+
 /// Builds a face and writes its folder: normal.png (16-bit), normal.exr, labels.png,
-/// exemplars/<region>.png and report.json.
+/// exemplars/<region>.png and report.json, as one output set (all or nothing, report last).
 pub fn face_to_dir(
     options: &StitchOptions,
     dir: &Path,
@@ -166,27 +201,48 @@ pub fn face_to_dir(
     out: &Output,
     start: Instant,
 ) -> Result<FaceReport> {
-    let face = build(options, cache, out)?;
+    guard::out_folder("--out", dir)?;
+    // Staged before the work, so an interrupt during it removes the staging folder.
+    let set = OutputSet::folder(dir, "report.json").with_context(|| format!("cannot write {}", dir.display()))?;
+    let face = build(options, cache, out, &|layout: &Layout| check_face_out(dir, layout))?;
     let t = Instant::now();
-    std::fs::create_dir_all(dir.join("exemplars"))
-        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
-    let normal = dir.join("normal.png");
     let map = &face.composed.normals;
-    let (png, exr) = rayon::join(|| write_map(&normal, map), || write_map(&dir.join("normal.exr"), map));
+    let (png, exr) = rayon::join(
+        || write_in(&set, dir, "normal.png", |p| encode_map(p, map)),
+        || write_in(&set, dir, "normal.exr", |p| encode_map(p, map)),
+    );
     png?;
     exr?;
-    write_labels(&dir.join("labels.png"), &face.composed.labels)?;
+    write_in(&set, dir, "labels.png", |p| encode_labels(p, &face.composed.labels))?;
     for (region, ex) in face.layout.regions.iter().zip(&face.exemplars) {
-        write_map(&dir.join("exemplars").join(format!("{}.png", region.name)), ex)?;
+        write_in(&set, dir, &format!("exemplars/{}.png", region.name), |p| encode_map(p, ex))?;
     }
-    let report = report(options, &face, &normal, t.elapsed().as_secs_f64(), start);
-    pipeline::write_json(&dir.join("report.json"), &report)?;
+    let report = report(options, &face, &dir.join("normal.png"), t.elapsed().as_secs_f64(), start);
+    pipeline::write_json_in(&set, "report.json", &dir.join("report.json"), &report)?;
+    out.swept(&set.commit().with_context(|| format!("cannot write {}", dir.display()))?);
     Ok(report)
 }
 
-/// Loads the layout, reads or captures every exemplar and stitches.
-pub fn build(options: &StitchOptions, cache: &mut CaptureCache, out: &Output) -> Result<Face> {
+/// Writes `name` of the folder set `set` (destined for `dir`), naming the final path in errors.
+fn write_in(
+    set: &OutputSet,
+    dir: &Path,
+    name: &str,
+    write: impl FnOnce(&Path) -> skinkit_maps::Result<()>,
+) -> Result<()> {
+    set.write(name, write).with_context(|| format!("cannot write {}", dir.join(name).display()))
+}
+
+/// Loads the layout, runs `check` on it (outputs against inputs, before any work), reads or
+/// captures every exemplar and stitches.
+pub fn build(
+    options: &StitchOptions,
+    cache: &mut CaptureCache,
+    out: &Output,
+    check: &dyn Fn(&Layout) -> Result<()>,
+) -> Result<Face> {
     let mut layout = Layout::load(&options.layout)?;
+    check(&layout)?;
     if let Some((w, h)) = options.size {
         layout = layout.with_size(w, h)?;
     }
@@ -323,10 +379,10 @@ fn check_extension(path: &Path, allowed: &[&str]) -> Result<()> {
     Ok(())
 }
 
-fn write_map(path: &Path, map: &NormalMap) -> Result<()> {
+/// A normal map as 16-bit PNG or, for `.exr`, float EXR.
+fn encode_map(path: &Path, map: &NormalMap) -> skinkit_maps::Result<()> {
     let bits = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) { 32 } else { 16 };
     io::write_normal_map(path, map, NormalEncoding::default(), bits)
-        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// A distinct, stable colour per region index (golden-angle hues); black for no region.
@@ -343,14 +399,13 @@ fn label_colour(label: u16) -> [u16; 3] {
     [f(5.0), f(3.0), f(1.0)]
 }
 
-fn write_labels(path: &Path, labels: &Grid<u16>) -> Result<()> {
+fn encode_labels(path: &Path, labels: &Grid<u16>) -> skinkit_maps::Result<()> {
     let (w, h) = labels.size();
     io::write_png_rows(path, w, h, PngLayout::Rgb8, |y, row| {
         for (px, &l) in row.chunks_exact_mut(3).zip(labels.row(y)) {
             px.copy_from_slice(&label_colour(l));
         }
     })
-    .with_context(|| format!("cannot write {}", path.display()))
 }
 
 #[cfg(test)]

@@ -15,6 +15,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::Serialize;
+use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
 use skinkit_synth::config::UPSAMPLED_LEVELS;
@@ -22,7 +23,7 @@ use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Search, SynthConfig};
 
 use crate::output::Output;
-use crate::pipeline;
+use crate::{guard, pipeline};
 
 /// The largest exemplar side a 16-bit coordinate map can address.
 pub const MAX_COORD_SIDE: usize = u16::MAX as usize;
@@ -195,11 +196,13 @@ impl MapArgs {
         Ok(Map::Color(color))
     }
 
-    fn write(&self, path: &Path, map: &Map) -> Result<()> {
-        match map {
-            Map::Normal(n) => io::write_normal_map(path, n, self.encoding()?, 16),
-            Map::Color(c) => io::write_color_map(path, c, 16),
-        }
+    /// Adds `path` to the output set and writes `map` there.
+    fn write(&self, set: &mut OutputSet, path: &Path, map: &Map) -> Result<()> {
+        let encoding = self.encoding()?;
+        set.write_file(path, |p| match map {
+            Map::Normal(n) => io::write_normal_map(p, n, encoding, 16),
+            Map::Color(c) => io::write_color_map(p, c, 16),
+        })
         .with_context(|| format!("cannot write {}", path.display()))
     }
 }
@@ -351,6 +354,8 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     {
         bail!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
     }
+    let outputs = [("--out", Some(out_path)), ("--coords", args.coords.as_ref()), ("--report", args.report.as_ref())];
+    guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.clone())])?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
     if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
@@ -379,9 +384,12 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         out.warn(w);
     }
     let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap);
-    args.map.write(out_path, &output)?;
+    // One set: the map, the coordinates and the report appear together or not at all.
+    let mut set = OutputSet::files();
+    args.map.write(&mut set, out_path, &output)?;
     if let Some(path) = &args.coords {
-        write_coords(path, &coords)?;
+        let context = || format!("cannot write coordinate map {}", path.display());
+        set.write_file(path, |p| encode_coords(p, &coords)).with_context(context)?;
     }
     let report = SynthReport {
         exemplar: exemplar_path.display().to_string(),
@@ -397,8 +405,9 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         quality,
     };
     if let Some(path) = &args.report {
-        pipeline::write_json(path, &report)?;
+        pipeline::write_json_file(&mut set, path, &report)?;
     }
+    out.swept(&set.commit().with_context(|| format!("cannot write {}", out_path.display()))?);
     out.result(&report, || human(&report));
     Ok(0)
 }
@@ -495,6 +504,10 @@ fn human(r: &SynthReport) -> String {
 
 /// Writes a coordinate map: 16-bit RGB PNG, R = exemplar x, G = exemplar y, B = 0.
 pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
+    encode_coords(path, coords).with_context(|| format!("cannot write coordinate map {}", path.display()))
+}
+
+fn encode_coords(path: &Path, coords: &Grid<[u32; 2]>) -> skinkit_maps::Result<()> {
     let (w, h) = coords.size();
     io::write_png_rows(path, w, h, PngLayout::Rgb16, |y, row| {
         for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
@@ -502,7 +515,6 @@ pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
             px.copy_from_slice(&[c[0] as u16, c[1] as u16, 0]);
         }
     })
-    .with_context(|| format!("cannot write coordinate map {}", path.display()))
 }
 
 /// Reads a coordinate map written by [`write_coords`].
@@ -536,6 +548,8 @@ pub struct ReplayReport {
 fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let start = Instant::now();
     check_map_extension(&args.out)?;
+    let inputs = [("the coordinate map".into(), args.coords.clone()), ("the source map".into(), args.source.clone())];
+    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let coords = read_coords(&args.coords)?;
     let source = args.map.read(&args.source)?;
     let (sw, sh) = source.size();
@@ -553,7 +567,9 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
         }
         Map::Color(c) => Map::Color(skinkit_synth::replay(&coords, c).with_context(context)?),
     };
-    args.map.write(&args.out, &replayed)?;
+    let mut set = OutputSet::files();
+    args.map.write(&mut set, &args.out, &replayed)?;
+    out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
     let (width, height) = coords.size();
     let report = ReplayReport {
         coords: args.coords.display().to_string(),

@@ -1,0 +1,151 @@
+//! Output paths checked before any work (issue 15, D5 and D14): an `--out` that is one of the
+//! command's inputs (or a folder of inputs it would write among) is refused, and so is a folder
+//! where a file is written or a file where a folder is. All are usage errors (exit 2).
+//!
+//! Paths are compared canonicalized (symbolic links, `..` and relative forms resolved); an output
+//! that does not exist yet is resolved through its deepest existing ancestor.
+
+use std::path::{Component, Path, PathBuf};
+
+use anyhow::Result;
+
+use crate::output::UsageError;
+
+/// `path` made absolute with links resolved as far as it exists.
+pub fn resolve(path: &Path) -> PathBuf {
+    let absolute = std::env::current_dir().map(|cwd| cwd.join(path)).unwrap_or_else(|_| path.to_owned());
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(canonical) = existing.canonicalize() {
+            return rest.iter().rev().fold(canonical, |p, name| p.join(name));
+        }
+        match (existing.parent(), existing.components().next_back()) {
+            (Some(parent), Some(Component::Normal(name))) => {
+                rest.push(name.to_owned());
+                existing = parent;
+            }
+            _ => return absolute,
+        }
+    }
+}
+
+/// A [`UsageError`] as an `anyhow::Error`.
+pub fn usage(message: String) -> anyhow::Error {
+    anyhow::Error::new(UsageError(message))
+}
+
+/// Refuses an existing folder as the output file `path` of `flag`.
+pub fn out_file(flag: &str, path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(usage(format!("{flag} {}: is a folder, but a file is written there", path.display())));
+    }
+    Ok(())
+}
+
+/// Refuses an existing file (not a folder) as the output folder `path` of `flag`.
+pub fn out_folder(flag: &str, path: &Path) -> Result<()> {
+    if path.exists() && !path.is_dir() {
+        return Err(usage(format!("{flag} {}: is a file, but a folder of outputs is written there", path.display())));
+    }
+    Ok(())
+}
+
+/// Refuses an output (`flag`, path) equal to an input (what it is, path). Inputs name what they
+/// are: `the exemplar`, `the scene's normal map`.
+pub fn not_an_input(outputs: &[(&str, &Path)], inputs: &[(String, PathBuf)]) -> Result<()> {
+    for (flag, out) in outputs {
+        let resolved = resolve(out);
+        if let Some((what, input)) = inputs.iter().find(|(_, input)| resolve(input) == resolved) {
+            return Err(usage(format!(
+                "{flag} {} is {what} {}: writing it would destroy the input; choose another output path",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    distinct(outputs)
+}
+
+/// The checks of output files: none is an existing folder ([`out_file`]), an input
+/// ([`not_an_input`]) or another output.
+pub fn output_files(outputs: &[(&str, &Path)], inputs: &[(String, PathBuf)]) -> Result<()> {
+    for (flag, path) in outputs {
+        out_file(flag, path)?;
+    }
+    not_an_input(outputs, inputs)
+}
+
+/// The outputs whose flag was given.
+pub fn given<'a>(outputs: &[(&'a str, Option<&'a PathBuf>)]) -> Vec<(&'a str, &'a Path)> {
+    outputs.iter().filter_map(|(flag, path)| path.map(|p| (*flag, p.as_path()))).collect()
+}
+
+/// Refuses two outputs at one path.
+pub fn distinct(outputs: &[(&str, &Path)]) -> Result<()> {
+    for (i, (flag, out)) in outputs.iter().enumerate() {
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, o)| resolve(o) == resolve(out)) {
+            return Err(usage(format!("{other} and {flag} are both {}: give each output its own path", out.display())));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses an output folder `out` (of `flag`) that is the input folder `dir` (what it is) or lies
+/// inside it: the outputs would land among the inputs and be taken for inputs by the next run.
+pub fn not_in_input_folder(flag: &str, out: &Path, what: &str, dir: &Path) -> Result<()> {
+    if resolve(out).starts_with(resolve(dir)) {
+        return Err(usage(format!(
+            "{flag} {} is inside {what} {}: outputs would be mixed with the inputs; choose a folder outside it",
+            out.display(),
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn d5_paths_are_compared_canonicalized() {
+        let tmp = tempfile::tempdir().unwrap();
+        let input = tmp.path().join("in.png");
+        std::fs::write(&input, "x").unwrap();
+        std::fs::create_dir(tmp.path().join("sub")).unwrap();
+        let roundabout = tmp.path().join("sub/../in.png");
+        let inputs = [("the exemplar".to_owned(), input.clone())];
+        let e = not_an_input(&[("--out", &roundabout)], &inputs).unwrap_err();
+        assert_eq!(crate::output::exit_code(&e), 2);
+        let text = e.to_string();
+        assert!(text.contains("--out") && text.contains("the exemplar") && text.contains("in.png"), "{text}");
+        #[cfg(unix)]
+        {
+            let link = tmp.path().join("link");
+            std::os::unix::fs::symlink(tmp.path().join("sub"), &link).unwrap();
+            assert_eq!(resolve(&link.join("new/x.png")), resolve(&tmp.path().join("sub/new/x.png")));
+        }
+        assert!(not_an_input(&[("--out", &tmp.path().join("other.png"))], &inputs).is_ok());
+        let e = distinct(&[("--out", &tmp.path().join("a.png")), ("--report", &tmp.path().join("sub/../a.png"))]);
+        assert!(e.unwrap_err().to_string().contains("--out and --report"));
+    }
+
+    #[test]
+    fn d5_an_output_folder_inside_the_input_folder_is_refused() {
+        let tmp = tempfile::tempdir().unwrap();
+        let e = not_in_input_folder("--out", &tmp.path().join("a/b"), "the sessions folder", tmp.path());
+        assert!(e.unwrap_err().to_string().contains("inside the sessions folder"));
+        assert!(not_in_input_folder("--out", tmp.path(), "x", &tmp.path().join("a")).is_ok());
+    }
+
+    #[test]
+    fn d14_wrong_kinds_of_output_are_usage_errors() {
+        let tmp = tempfile::tempdir().unwrap();
+        let file = tmp.path().join("f.txt");
+        std::fs::write(&file, "x").unwrap();
+        assert_eq!(crate::output::exit_code(&out_file("--out", tmp.path()).unwrap_err()), 2);
+        assert_eq!(crate::output::exit_code(&out_folder("--out", &file).unwrap_err()), 2);
+        assert!(out_file("--out", &file).is_ok() && out_folder("--out", tmp.path()).is_ok());
+    }
+}
