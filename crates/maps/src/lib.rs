@@ -8,6 +8,8 @@
 //! * [`Photo`] is a decoded photograph kept in its native sample type (8-bit, 16-bit or float), so
 //!   a stack of large 16-bit photos costs two bytes a sample, not four.
 //! * [`io`] reads PNG, TIFF and EXR under [`Limits`] and writes every output atomically.
+//! * [`limits`] states every resource limit (image sizes, lights, frames, threads, memory) and
+//!   checks them from headers and arithmetic before anything is allocated.
 //!
 //! Image rows grow downward, against +y: row 0 is the top of the picture. UV origin: skinkit puts
 //! texture coordinate (0, 0) at the top-left texel (as glTF and wgpu do); loaders of bottom-left
@@ -18,6 +20,7 @@ pub mod error;
 mod exr_write;
 pub mod grid;
 pub mod io;
+pub mod limits;
 pub mod normal;
 pub mod photo;
 pub mod pyramid;
