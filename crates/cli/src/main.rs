@@ -5,6 +5,7 @@
 //! went well, 1 when an input failed (a bad photo, rig or session), 2 for a usage error.
 
 mod cmd;
+mod flags;
 mod output;
 mod pipeline;
 

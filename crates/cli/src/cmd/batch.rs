@@ -8,10 +8,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use rayon::prelude::*;
 use serde::Serialize;
 
+use skinkit_capture::Rig;
 use skinkit_capture::session::{self, CaptureOptions, CaptureReport, Session};
+use skinkit_maps::limits::{self, MemoryGate};
 
 use super::capture::SolveArgs;
 use crate::output::Output;
@@ -47,6 +48,10 @@ pub struct BatchReport {
     pub sessions: usize,
     pub succeeded: usize,
     pub failed: usize,
+    /// The memory limit the sessions running at once had to fit together (`--memory-limit`).
+    pub memory_limit_mib: u64,
+    /// The most sessions that ran at once.
+    pub most_at_once: usize,
     pub outcomes: Vec<SessionOutcome>,
 }
 
@@ -61,25 +66,35 @@ fn session_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
-fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions) -> Result<CaptureReport> {
+/// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
+/// session that could never fit fails at once with its estimate and the limit.
+fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions, gate: &MemoryGate) -> Result<CaptureReport> {
     let files = Session::from_dir(dir)?;
+    // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
+    let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
+    let ambient = files.ambient.clone().or(rig_ambient);
+    let estimate = session::memory_estimate(&files, ambient.as_deref(), options)?;
+    limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, gate.budget())?;
+    let _admitted = gate.acquire(estimate);
     let mut captured = session::capture(&files, options, &|_| {})?;
     pipeline::write_outputs(out_dir, &mut captured, options)?;
     Ok(captured.report)
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
-    let options = args.solve.options()?;
+    let options = args.solve.options(out)?;
     let dirs = session_dirs(&args.sessions)?;
     if dirs.is_empty() {
         anyhow::bail!("{}: no session sub-folders", args.sessions.display());
     }
     let bar = out.progress(dirs.len() as u64, "batch");
-    let outcomes: Vec<SessionOutcome> = dirs
-        .par_iter()
-        .map(|dir| {
+    // As many sessions at once as there are workers, fewer when their estimates do not fit the
+    // memory limit together.
+    let gate = MemoryGate::new(options.memory_limit);
+    let outcomes: Vec<SessionOutcome> =
+        limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
             let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let result = run_session(dir, &args.out.join(&name), &options);
+            let result = run_session(dir, &args.out.join(&name), &options, &gate);
             bar.inc(1);
             match result {
                 Ok(report) => SessionOutcome {
@@ -100,11 +115,17 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                     }
                 }
             }
-        })
-        .collect();
+        });
     bar.finish_and_clear();
     let failed = outcomes.iter().filter(|o| !o.ok).count();
-    let report = BatchReport { sessions: outcomes.len(), succeeded: outcomes.len() - failed, failed, outcomes };
+    let report = BatchReport {
+        sessions: outcomes.len(),
+        succeeded: outcomes.len() - failed,
+        failed,
+        memory_limit_mib: gate.budget() >> 20,
+        most_at_once: gate.peaks().0,
+        outcomes,
+    };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     pipeline::write_json(&args.out.join("batch-report.json"), &report)?;
     out.result(&report, || {

@@ -135,3 +135,23 @@ fn d9_gate_never_admits_more_than_its_budget() {
     // Released: the whole budget is free again.
     drop(gate.acquire(10));
 }
+
+#[test]
+fn d9_queued_jobs_keep_their_order_and_fit_the_gate() {
+    let gate = MemoryGate::new(8);
+    let in_use = AtomicUsize::new(0);
+    let peak = AtomicUsize::new(0);
+    let sizes: Vec<u64> = (0..40).map(|i| 1 + (i * 7 % 8)).collect();
+    let results = run_queued(&sizes, 6, |&bytes| {
+        let _admitted = gate.acquire(bytes);
+        let now = in_use.fetch_add(bytes as usize, Ordering::SeqCst) + bytes as usize;
+        peak.fetch_max(now, Ordering::SeqCst);
+        std::thread::sleep(std::time::Duration::from_millis(2));
+        in_use.fetch_sub(bytes as usize, Ordering::SeqCst);
+        bytes * 10
+    });
+    assert_eq!(results, sizes.iter().map(|b| b * 10).collect::<Vec<_>>());
+    assert!(peak.load(Ordering::SeqCst) <= 8, "{}", peak.load(Ordering::SeqCst));
+    assert!(gate.peaks().0 >= 2, "small jobs ran side by side: {:?}", gate.peaks());
+    assert!(run_queued(&[] as &[u8], 4, |_| 0).is_empty());
+}
