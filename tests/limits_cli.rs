@@ -98,7 +98,11 @@ fn d1_huge_exemplar_scale_is_refused_before_allocating() {
 fn d2_orbit_frames_are_bounded_by_the_flag_parser() {
     // Parsing fails before the scene is read, so no scene or GPU is needed.
     for frames in ["100000000000", "3601", "0"] {
-        assert_usage_error(&["render", "scene.toml", "--out", "x.png", "--orbit", "--frames", frames], "--frames", frames);
+        assert_usage_error(
+            &["render", "scene.toml", "--out", "x.png", "--orbit", "--frames", frames],
+            "--frames",
+            frames,
+        );
     }
     assert_usage_error(&["render", "scene.toml", "--size", "20000x20000"], "--size", "20000x20000");
     assert_usage_error(&["render", "scene.toml", "--reference", "0"], "--reference", "0");
@@ -127,7 +131,11 @@ fn d6_a_layout_at_the_size_limit_is_refused_before_reading_exemplars() {
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(e.contains("big.toml") && e.contains("32768x32768 face map needs an estimated 28672 MiB"), "{e}");
     assert!(e.contains("memory limit of 8192 MiB"), "{e}");
-    assert_usage_error(&["stitch", "--layout", "l.toml", "--out", "o.png", "--size", "32769x32768"], "--size", "32769x32768");
+    assert_usage_error(
+        &["stitch", "--layout", "l.toml", "--out", "o.png", "--size", "32769x32768"],
+        "--size",
+        "32769x32768",
+    );
 }
 
 /// An 8-light rig file near the plane y = 0: condition number about 70.
@@ -172,12 +180,19 @@ fn d7_rig_check_refuses_what_capture_refuses() {
         assert_eq!(captured.status.success(), ok, "{limit:?}: {}", stderr(&captured));
         if !ok {
             for e in [stderr(&checked), stderr(&captured)] {
-                assert!(e.contains("flat.toml") && e.contains("exceeds max_condition") && e.contains("--max-condition"), "{e}");
+                assert!(
+                    e.contains("flat.toml") && e.contains("exceeds max_condition") && e.contains("--max-condition"),
+                    "{e}"
+                );
             }
         }
     }
     assert_usage_error(&["rig", "check", "--max-condition", "0.5", s(&rig)], "--max-condition", "0.5");
-    assert_usage_error(&["capture", "--max-condition", "nan", "--rig", "r", "--out", "o", "p.png"], "--max-condition", "nan");
+    assert_usage_error(
+        &["capture", "--max-condition", "nan", "--rig", "r", "--out", "o", "p.png"],
+        "--max-condition",
+        "nan",
+    );
 }
 
 #[test]
@@ -274,12 +289,8 @@ fn batch(sessions: &Path, out: &Path, limit: &str) -> (Output, serde_json::Value
 fn d9_batch_runs_fewer_sessions_at_once_rather_than_failing() {
     let tmp = tempfile::tempdir().unwrap();
     let dirs = sessions(&tmp.path().join("s"), &["cheek", "nose", "forehead"]);
-    let estimate = session::memory_estimate(
-        &Session::from_dir(&dirs[0]).unwrap(),
-        None,
-        &CaptureOptions::default(),
-    )
-    .unwrap();
+    let estimate =
+        session::memory_estimate(&Session::from_dir(&dirs[0]).unwrap(), None, &CaptureOptions::default()).unwrap();
     // Room for one session at a time, not two.
     let one = format!("{}", estimate * 3 / 2);
     let (o, report) = batch(&tmp.path().join("s"), &tmp.path().join("out1"), &one);
@@ -305,7 +316,10 @@ fn d9_a_session_over_the_limit_alone_fails_and_the_batch_goes_on() {
     let big_outcome = &report["outcomes"][0];
     assert_eq!(big_outcome["session"], "big");
     let e = big_outcome["error"].as_str().unwrap();
-    assert!(e.contains("big") && e.contains("needs an estimated 8192 MiB") && e.contains("memory limit of 64 MiB"), "{e}");
+    assert!(
+        e.contains("big") && e.contains("needs an estimated 8192 MiB") && e.contains("memory limit of 64 MiB"),
+        "{e}"
+    );
     assert!(tmp.path().join("out/cheek/report.json").is_file() && !tmp.path().join("out/big").exists());
 }
 

@@ -364,7 +364,7 @@ pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &Capt
         let h = header(path, what)?;
         if (h.width, h.height) != (head.width, head.height) {
             return Err(Error::InvalidInput(format!(
-                "{what} {} is {}x{} but photo 1 ({}) is {}x{}",
+                "{what} ({}) is {}x{} but photo 1 ({}) is {}x{}",
                 path.display(),
                 h.width,
                 h.height,

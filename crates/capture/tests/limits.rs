@@ -141,7 +141,10 @@ fn d9_the_estimate_bounds_what_a_capture_holds() {
     assert_eq!(estimate, 20 * px + 12 * px + (16 * px).max(12 * px));
     let (captured, peak) = peak_during(|| session::capture(&files, &options, &|_| {}).unwrap());
     drop(captured);
-    eprintln!("cheek 256x256: estimate {estimate} bytes, heap peak {peak} bytes ({:.2})", peak as f64 / estimate as f64);
+    eprintln!(
+        "cheek 256x256: estimate {estimate} bytes, heap peak {peak} bytes ({:.2})",
+        peak as f64 / estimate as f64
+    );
     // Decoder buffers, thread-local scratch and the report ride on top of the large arrays.
     assert!(peak <= estimate + estimate / 4, "peak {peak} above the estimate {estimate}");
     assert!(peak >= estimate / 2, "peak {peak}: the estimate {estimate} is not about this capture");

@@ -78,7 +78,9 @@ pub fn default_memory_limit() -> u64 {
 /// # Errors
 /// A message (for the flag parser) when the text is not such a size.
 pub fn parse_bytes(text: &str) -> std::result::Result<u64, String> {
-    let bad = || format!("`{text}` is not a memory size: give bytes, a size such as 800M or 12G, or a percentage such as 50%");
+    let bad = || {
+        format!("`{text}` is not a memory size: give bytes, a size such as 800M or 12G, or a percentage such as 50%")
+    };
     let t = text.trim();
     let bytes = if let Some(percent) = t.strip_suffix('%') {
         let p: f64 = percent.trim().parse().map_err(|_| bad())?;
@@ -189,9 +191,8 @@ fn read_header(path: &Path) -> Result<ImageHeader> {
 fn raster_header(path: &Path) -> Result<ImageHeader> {
     use image::ImageDecoder;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = image::ImageReader::new(std::io::BufReader::new(file))
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?;
+    let reader =
+        image::ImageReader::new(std::io::BufReader::new(file)).with_guessed_format().map_err(|e| Error::io(path, e))?;
     if reader.format().is_none() {
         return Err(Error::decode(path, "unrecognised file signature (expected PNG, TIFF or EXR)"));
     }

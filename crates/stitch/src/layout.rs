@@ -33,8 +33,8 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use skinkit_maps::{Grid, limits};
 use skinkit_maps::io::{Limits, read_scalar_map};
+use skinkit_maps::{Grid, limits};
 
 use crate::partition::SeedPoint;
 use crate::{Error, Result};

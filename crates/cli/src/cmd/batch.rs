@@ -91,31 +91,30 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     // As many sessions at once as there are workers, fewer when their estimates do not fit the
     // memory limit together.
     let gate = MemoryGate::new(options.memory_limit);
-    let outcomes: Vec<SessionOutcome> =
-        limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
-            let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let result = run_session(dir, &args.out.join(&name), &options, &gate);
-            bar.inc(1);
-            match result {
-                Ok(report) => SessionOutcome {
+    let outcomes: Vec<SessionOutcome> = limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
+        let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let result = run_session(dir, &args.out.join(&name), &options, &gate);
+        bar.inc(1);
+        match result {
+            Ok(report) => SessionOutcome {
+                session: name,
+                ok: true,
+                error: None,
+                invalid_pixels: Some(report.invalid_pixels),
+                seconds: Some(report.timings_s.total),
+            },
+            Err(e) => {
+                bar.suspend(|| out.warn(format!("{}: {e:#}", dir.display())));
+                SessionOutcome {
                     session: name,
-                    ok: true,
-                    error: None,
-                    invalid_pixels: Some(report.invalid_pixels),
-                    seconds: Some(report.timings_s.total),
-                },
-                Err(e) => {
-                    bar.suspend(|| out.warn(format!("{}: {e:#}", dir.display())));
-                    SessionOutcome {
-                        session: name,
-                        ok: false,
-                        error: Some(format!("{e:#}")),
-                        invalid_pixels: None,
-                        seconds: None,
-                    }
+                    ok: false,
+                    error: Some(format!("{e:#}")),
+                    invalid_pixels: None,
+                    seconds: None,
                 }
             }
-        });
+        }
+    });
     bar.finish_and_clear();
     let failed = outcomes.iter().filter(|o| !o.ok).count();
     let report = BatchReport {

@@ -77,7 +77,8 @@ pub fn run(command: Command, out: &Output) -> Result<i32> {
         Command::Check(args) => {
             let rig = Rig::load(&args.rig)?;
             let defaults = SolveConfig::default();
-            let config = SolveConfig { max_condition: args.max_condition.unwrap_or(defaults.max_condition), ..defaults };
+            let config =
+                SolveConfig { max_condition: args.max_condition.unwrap_or(defaults.max_condition), ..defaults };
             // The very check `capture` makes of a rig before decoding its photos.
             session::check_rig(&args.rig, &rig, None, &config)?;
             summarise(&rig, &args.rig, out)

@@ -352,6 +352,12 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     {
         bail!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
     }
+    // The synthesis estimate from the exemplar's header, before the exemplar is decoded.
+    let header = skinkit_maps::limits::image_header(exemplar_path, skinkit_maps::limits::MAX_IMAGE_PIXELS)?;
+    let requested = SynthConfig { memory_limit: out.memory_limit(), ..config(&args, size) };
+    requested
+        .validate(header.width as usize, header.height as usize)
+        .with_context(|| format!("cannot synthesise from {}", exemplar_path.display()))?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
     if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
@@ -360,7 +366,6 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
             exemplar_path.display()
         );
     }
-    let requested = SynthConfig { memory_limit: out.memory_limit(), ..config(&args, size) };
     let context = || format!("cannot synthesise from {}", exemplar_path.display());
     let (validated, _) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };
