@@ -347,6 +347,7 @@ fn flag_values_refused_after_parsing_are_usage_errors() {
         }
         assert_usage_error(&args, flag, value);
     }
+    assert_usage_error(&["lut", "diffuse", "--out", "t.exr", "--size", "4097x16"], "--size", "4097x16");
     for (flag, value) in [("--levels", "0"), ("--levels", "21"), ("--curve-amplitude", "nan")] {
         assert_usage_error(&["stitch", "--layout", "l.toml", "--out", "o.png", flag, value], flag, value);
     }

@@ -47,6 +47,17 @@ pub fn map_size(text: &str) -> Result<(usize, usize), String> {
     }
 }
 
+/// A parser of `WxH` sizes of at most `max` per side.
+pub fn size_at_most(max: usize) -> impl Fn(&str) -> Result<(usize, usize), String> + Clone + Send + Sync + 'static {
+    move |text: &str| {
+        let (w, h) = crate::cmd::synth::parse_size(text)?;
+        if w > max || h > max {
+            return Err(format!("`{text}` is larger than {max}x{max}"));
+        }
+        Ok((w, h))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -67,5 +78,8 @@ mod tests {
         assert_eq!(map_size("32768x32768"), Ok((32768, 32768)));
         assert!(map_size("32768x32769").unwrap_err().contains("larger than a face map"));
         assert!(map_size("18446744073709551615x3").is_err(), "no overflow");
+        let lut = size_at_most(4096);
+        assert_eq!(lut("4096x1"), Ok((4096, 1)));
+        assert!(lut("4097x1").unwrap_err().contains("larger than 4096x4096") && lut("0x3").is_err());
     }
 }

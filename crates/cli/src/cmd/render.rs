@@ -19,7 +19,6 @@ use skinkit_render::load::{self, Plan};
 use skinkit_render::scene::{self, Scene};
 use skinkit_render::skin;
 
-use super::synth::parse_size;
 use crate::output::Output;
 
 /// Largest texture side assumed by `--explain` when no adapter is present (WebGPU's default).
@@ -64,12 +63,7 @@ fn frame_count(text: &str) -> Result<usize, String> {
 
 /// A `--size` value within the renderer's largest output side.
 fn render_size(text: &str) -> Result<(usize, usize), String> {
-    let (w, h) = parse_size(text)?;
-    let max = scene::MAX_OUTPUT_SIDE as usize;
-    if w > max || h > max {
-        return Err(format!("`{text}` is larger than the largest output, {max}x{max}"));
-    }
-    Ok((w, h))
+    crate::flags::size_at_most(scene::MAX_OUTPUT_SIDE as usize)(text)
 }
 
 /// One written image.
