@@ -223,28 +223,6 @@ fn exr_header(path: &Path) -> Result<ImageHeader> {
     })
 }
 
-/// Checks that the image at `path` is `width x height` from its header alone (a mask or map
-/// compared with another size is refused before it is decoded); `what` names it in the message.
-///
-/// # Errors
-/// As [`image_header`]; [`Error::InvalidParameter`] naming the file and both sizes when they
-/// differ.
-pub fn expect_size(path: &Path, what: &str, width: u64, height: u64) -> Result<ImageHeader> {
-    // The sizes are compared first: a wrong size is the more useful message, and equal sizes are
-    // bounded by whatever bounded `width x height`.
-    let header = read_header(path)?;
-    if (header.width, header.height) != (width, height) {
-        return Err(Error::InvalidParameter(format!(
-            "{what} {} is {}x{} but must be {width}x{height}",
-            path.display(),
-            header.width,
-            header.height
-        )));
-    }
-    check_pixels(path, header.width, header.height, MAX_IMAGE_PIXELS.max(width.saturating_mul(height)))?;
-    Ok(header)
-}
-
 /// Admits jobs whose memory estimates fit a budget together: [`MemoryGate::acquire`] waits
 /// until the job's estimate fits beside those running, so a batch runs fewer jobs at once
 /// rather than failing. A job larger than the whole budget is refused ([`MemoryGate::fits`])
