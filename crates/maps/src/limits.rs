@@ -157,9 +157,9 @@ pub struct ImageHeader {
 }
 
 impl ImageHeader {
-    /// Pixels of the image (the product cannot overflow: both sides fit 32 bits).
+    /// Pixels of the image.
     pub fn pixels(&self) -> u64 {
-        self.width * self.height
+        self.width.saturating_mul(self.height)
     }
 
     /// Bytes the decoded photo holds ([`crate::Photo`]: native samples, alpha dropped) plus,
