@@ -66,6 +66,13 @@ fn header_only_png(path: &Path, w: u32, h: u32) {
     bytes.extend_from_slice(&13u32.to_be_bytes());
     bytes.extend_from_slice(&ihdr);
     bytes.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+    // A one-byte zlib stream (a stored block) as the only image data, then the end: the file is
+    // well formed up to the pixels and far too short for the size it claims.
+    let idat = [b'I', b'D', b'A', b'T', 0x78, 0x01, 0x01, 0x01, 0x00, 0xFE, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x01];
+    bytes.extend_from_slice(&12u32.to_be_bytes());
+    bytes.extend_from_slice(&idat);
+    bytes.extend_from_slice(&crc32(&idat).to_be_bytes());
+    bytes.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82]);
     std::fs::write(path, bytes).unwrap();
 }
 
