@@ -259,7 +259,8 @@ fn resampled_size(layout: &Layout, i: usize, (ew, eh): (usize, usize)) -> Result
     let scale = region.exemplar_mm_per_texel / layout.mm_per_texel;
     let side = |n: usize| (n as f64 * scale).round().max(1.0);
     let (rw, rh) = (side(ew), side(eh));
-    if !(rw * rh <= limits::MAX_EXEMPLAR_TEXELS as f64) {
+    // In f64 no product overflows: a huge scale gives a huge (or infinite) count, never a wrap.
+    if rw * rh > limits::MAX_EXEMPLAR_TEXELS as f64 {
         return Err(Error::Layout {
             origin: layout.origin.clone(),
             field: format!("region `{}`: exemplar_mm_per_texel", region.name),
