@@ -10,7 +10,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use skinkit_maps::NormalMap;
-use skinkit_stitch::compose::{self, MAP_BYTES_PER_TEXEL};
+use skinkit_stitch::compose::{MAP_BYTES_PER_TEXEL, check_memory};
 use skinkit_stitch::curve::CurveParams;
 use skinkit_stitch::layout::Layout;
 use skinkit_stitch::{ComposeOptions, compose};
@@ -151,16 +151,16 @@ fn d6_a_map_at_the_size_limit_is_refused_before_anything_is_allocated() {
     assert!(e.contains("layout.toml: size: a 32768x32768 face map needs an estimated 28672 MiB"), "{e}");
     assert!(e.contains("memory limit of 8192 MiB"), "{e}");
     assert!(peak < MIB, "{} bytes held before refusing", peak);
-    assert!(compose::check_memory(&l, &options()).is_err(), "callers can check before reading exemplars");
+    assert!(check_memory(&l, &options()).is_err(), "callers can check before reading exemplars");
 }
 
 #[test]
 fn d6_the_map_floor_is_below_what_a_compose_holds() {
     let dir = tempfile::tempdir().unwrap();
-    let l = layout(dir.path(), 256, 128, 0.05, "");
+    let l = layout(dir.path(), 128, 64, 0.05, "");
     let (composed, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}).unwrap());
-    let floor = 256 * 128 * MAP_BYTES_PER_TEXEL as usize;
-    eprintln!("256x128 map: floor {floor} bytes, heap peak {peak} bytes ({:.1}x)", peak as f64 / floor as f64);
+    let floor = 128 * 64 * MAP_BYTES_PER_TEXEL as usize;
+    eprintln!("128x64 map: floor {floor} bytes, heap peak {peak} bytes ({:.1}x)", peak as f64 / floor as f64);
     assert!(peak >= floor, "the floor {floor} is above the measured peak {peak}");
     drop(composed);
 }
