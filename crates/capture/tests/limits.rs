@@ -58,9 +58,15 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// `f`'s result and the most heap bytes it held at once above what was held before it.
+/// Holds every other test of this binary off while a test allocates: each test takes it for
+/// its whole body, so a measurement sees only its own allocations.
+fn alone() -> std::sync::MutexGuard<'static, ()> {
+    MEASURING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `f`'s result and the most heap bytes it held at once above what was held before it (call it
+/// while holding [`alone`]).
 fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let _alone = MEASURING.lock().unwrap_or_else(|e| e.into_inner());
     let base = HELD.load(Ordering::SeqCst);
     PEAK.store(base, Ordering::SeqCst);
     let result = f();
@@ -121,6 +127,7 @@ fn bomb_session(dir: &Path, side: u32) -> Session {
 
 #[test]
 fn d9_a_photo_stack_over_the_memory_limit_is_refused_before_decoding() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let files = bomb_session(dir.path(), 16384);
     let options = CaptureOptions { memory_limit: 4 << 30, ..CaptureOptions::default() };
@@ -139,6 +146,7 @@ fn d9_a_photo_stack_over_the_memory_limit_is_refused_before_decoding() {
 
 #[test]
 fn d9_the_estimate_bounds_what_a_capture_holds() {
+    let _alone = alone();
     let files = Session::from_dir(&mold("cheek")).unwrap();
     let options = CaptureOptions::default();
     let estimate = session::memory_estimate(&files, None, &options).unwrap() as usize;
@@ -172,6 +180,7 @@ fn flat_rig(eps: f32) -> Rig {
 
 #[test]
 fn d7_rig_check_refuses_exactly_what_capture_refuses() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let photos = Session::from_dir(&mold("nose")).unwrap().photos;
     for eps in [0.3, 0.02, 0.008] {
@@ -197,6 +206,7 @@ fn d7_rig_check_refuses_exactly_what_capture_refuses() {
 
 #[test]
 fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rig.toml");
     let many = Rig::turntable(200, 45.0, 1.0).unwrap();

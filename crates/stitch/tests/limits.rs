@@ -61,9 +61,15 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// `f`'s result and the most heap bytes it held at once above what was held before it.
+/// Holds every other test of this binary off while a test allocates: each test takes it for
+/// its whole body, so a measurement sees only its own allocations.
+fn alone() -> std::sync::MutexGuard<'static, ()> {
+    MEASURING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `f`'s result and the most heap bytes it held at once above what was held before it (call it
+/// while holding [`alone`]).
 fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let _alone = MEASURING.lock().unwrap_or_else(|e| e.into_inner());
     let base = HELD.load(Ordering::SeqCst);
     PEAK.store(base, Ordering::SeqCst);
     let result = f();
@@ -108,6 +114,7 @@ fn exemplars() -> Vec<NormalMap> {
 
 #[test]
 fn d1_huge_exemplar_scale_is_refused_before_allocating() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 512, 256, 1e9, "");
     let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}));
@@ -119,6 +126,7 @@ fn d1_huge_exemplar_scale_is_refused_before_allocating() {
 
 #[test]
 fn d1_an_exemplar_whose_synthesis_cannot_fit_is_refused_before_resampling() {
+    let _alone = alone();
     // 3 mm against 0.05: the 256x256 exemplar would become 15360x15360 (2.7 GB of normals, which
     // the probe saw allocated) before the synthesis estimate refused it.
     let dir = tempfile::tempdir().unwrap();
@@ -131,6 +139,7 @@ fn d1_an_exemplar_whose_synthesis_cannot_fit_is_refused_before_resampling() {
 
 #[test]
 fn d6_a_coverage_bomb_is_refused_from_its_header() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     // A real 32768x32768 8-bit PNG of zeros would be about 1 MB; its header is all it takes.
     header_only_png(&dir.path().join("bomb.png"), 32768, 32768);
@@ -143,6 +152,7 @@ fn d6_a_coverage_bomb_is_refused_from_its_header() {
 
 #[test]
 fn d6_a_map_at_the_size_limit_is_refused_before_anything_is_allocated() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 32768, 32768, 0.05, "");
     let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}));
@@ -156,6 +166,7 @@ fn d6_a_map_at_the_size_limit_is_refused_before_anything_is_allocated() {
 
 #[test]
 fn d6_the_map_floor_is_below_what_a_compose_holds() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 128, 64, 0.05, "");
     let (composed, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}).unwrap());
