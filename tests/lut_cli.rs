@@ -83,7 +83,7 @@ fn lut_refuses_bad_flags_naming_them() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("lut.exr");
     let cases: [(&[&str], &str); 5] = [
-        (&["lut", "diffuse", "--size", "5000x16"], "--size 5000x16"),
+        (&["lut", "diffuse", "--size", "5000x16"], "'5000x16' for '--size"),
         (&["lut", "diffuse", "--size", "0x16"], "--size"),
         (&["lut", "diffuse", "--inv-r-max=-1"], "--inv-r-max"),
         (&["lut", "shadow", "--new-penumbra", "2"], "--new-penumbra"),

@@ -287,6 +287,7 @@ fn skin_effects_and_the_reference_render_and_change_the_picture() {
         "--reference",
         "4",
     ]);
-    assert_eq!(o.status.code(), Some(1));
+    // A flag value out of its range is a usage error (issue 15).
+    assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--reference"), "{}", stderr(&o));
 }

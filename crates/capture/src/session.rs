@@ -16,6 +16,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits};
+use skinkit_maps::limits;
 use skinkit_maps::normal::AngularStats;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 
@@ -124,6 +125,9 @@ pub struct CaptureOptions {
     /// Green convention of the truth map.
     pub encoding: NormalEncoding,
     pub limits: Limits,
+    /// Bytes a capture may hold at its peak ([`memory_estimate`], from the headers); a larger
+    /// session is refused before anything is decoded.
+    pub memory_limit: u64,
 }
 
 impl Default for CaptureOptions {
@@ -135,6 +139,7 @@ impl Default for CaptureOptions {
             transfer: Transfer::Linear,
             encoding: NormalEncoding::default(),
             limits: Limits::default(),
+            memory_limit: limits::default_memory_limit(),
         }
     }
 }
@@ -232,12 +237,14 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let mut timings = Timings::default();
     let rig = Rig::load(&session.rig).map_err(|e| context(format!("cannot use rig {}", session.rig.display()), e))?;
     rig.expect_photos(session.photos.len()).map_err(|e| context(format!("rig {}", session.rig.display()), e))?;
+    check_rig(&session.rig, &rig, session.ambient.as_deref(), &options.solve)?;
     let conditioning = rig.conditioning();
     let mut warnings: Vec<String> = conditioning.warning().into_iter().collect();
+    let ambient_path = session.ambient.clone().or_else(|| rig.ambient().map(Path::to_path_buf));
+    check_memory(session, ambient_path.as_deref(), options)?;
 
     progress(Stage::Decode);
     let t = Instant::now();
-    let ambient_path = session.ambient.clone().or_else(|| rig.ambient().map(Path::to_path_buf));
     let inputs = decode(session, ambient_path.as_deref(), options)?;
     timings.decode = t.elapsed().as_secs_f64();
 
@@ -302,6 +309,94 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         peak_memory_mib: None,
     };
     Ok(Captured { solution, report })
+}
+
+/// Checks a rig against everything [`capture`] refuses of a rig before decoding a photo: at most
+/// [`solve::MAX_LIGHTS`] lights; for distant lights, a condition number (as the solver computes
+/// it) within `config.max_condition`; the ambient frame (`ambient`, which overrides the rig's
+/// own) present. `skinkit rig check` calls this same function, so it refuses exactly the rigs
+/// `capture` refuses.
+///
+/// # Errors
+/// [`Error::Context`] naming the rig file around the light-count or conditioning refusal;
+/// [`Error::InvalidInput`] naming a missing ambient frame.
+pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &SolveConfig) -> Result<()> {
+    let in_rig = |e| context(format!("rig {}", rig_path.display()), e);
+    if near::applies(rig) {
+        // The near-light solve judges each pixel's lights itself: only the count is a rig rule.
+        solve::check_light_count(rig.light_count()).map_err(in_rig)?;
+    } else {
+        solve::check_conditioning(rig, config).map_err(in_rig)?;
+    }
+    let (path, whose) = match (ambient, rig.ambient()) {
+        (Some(p), _) => (p, "the ambient frame".to_owned()),
+        (None, Some(p)) => (p, format!("rig {}: ambient", rig_path.display())),
+        (None, None) => return Ok(()),
+    };
+    if !path.is_file() {
+        return Err(Error::InvalidInput(format!("{whose} {} is not a file", path.display())));
+    }
+    Ok(())
+}
+
+/// Bytes a capture of `session` holds at its peak, worked out from the images' headers (no
+/// pixel is decoded; each header is checked against `options.limits`, and the mask, the ambient
+/// frame and the truth map against the photos' size):
+/// `maps + truth + mask + max(photos + ambient, detrend)`, where `maps` is the solution (normals
+/// 12, albedo 4 or 12, confidence 4 bytes a pixel), `truth` 12 and `mask` 1 byte a pixel, the
+/// photos as decoded ([`limits::ImageHeader::decoded_bytes`]), and `detrend` the detrended
+/// copy of the normals (12 bytes a pixel), made after the photos are dropped.
+///
+/// # Errors
+/// When a header cannot be read, is over the pixel limit, or an image's size differs from the
+/// first photo's.
+pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<u64> {
+    let first = session
+        .photos
+        .first()
+        .ok_or_else(|| Error::InvalidInput(format!("rig {}: no photos were given", session.rig.display())))?;
+    let header = |path: &Path, what: &str| {
+        limits::image_header(path, options.limits.max_pixels)
+            .map_err(|e| context(format!("cannot read {what} {}", path.display()), e.into()))
+    };
+    let head = header(first, "photo")?;
+    let same_size = |path: &Path, what: &str| -> Result<limits::ImageHeader> {
+        let h = header(path, what)?;
+        if (h.width, h.height) != (head.width, head.height) {
+            return Err(Error::InvalidInput(format!(
+                "{what} ({}) is {}x{} but photo 1 ({}) is {}x{}",
+                path.display(),
+                h.width,
+                h.height,
+                first.display(),
+                head.width,
+                head.height
+            )));
+        }
+        Ok(h)
+    };
+    let mut photos = head.decoded_bytes();
+    for (i, path) in session.photos.iter().enumerate().skip(1) {
+        photos = photos.saturating_add(same_size(path, &format!("photo {}", i + 1))?.decoded_bytes());
+    }
+    if let Some(path) = ambient {
+        photos = photos.saturating_add(same_size(path, "ambient frame")?.decoded_bytes());
+    }
+    let px = head.pixels();
+    let mask = session.mask.as_deref().map(|p| same_size(p, "mask")).transpose()?.map_or(0, |_| px);
+    let truth = session.truth.as_deref().map(|p| same_size(p, "ground truth")).transpose()?.map_or(0, |_| 12 * px);
+    let albedo = if head.channels - u8::from(head.alpha) >= 3 { 12 } else { 4 };
+    let maps = px.saturating_mul(12 + albedo + 4);
+    Ok(maps.saturating_add(truth).saturating_add(mask).saturating_add(photos.max(px.saturating_mul(12))))
+}
+
+/// Refuses a session whose [`memory_estimate`] exceeds `options.memory_limit`.
+fn check_memory(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<()> {
+    let estimate = memory_estimate(session, ambient, options)?;
+    let folder = session.photos[0].parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let what = format!("capturing {} photos", session.photos.len());
+    limits::check_memory(&folder.display().to_string(), &what, estimate, options.memory_limit)?;
+    Ok(())
 }
 
 /// `cause` with what was being done when it happened.

@@ -6,6 +6,7 @@
 //! interrupted (SIGINT, SIGTERM or SIGHUP; see `interrupt`).
 
 mod cmd;
+mod flags;
 mod guard;
 mod interrupt;
 mod output;

@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
+use skinkit_maps::limits;
 
 /// Flags every subcommand takes.
 #[derive(clap::Args, Debug, Clone)]
@@ -16,15 +17,31 @@ pub struct GlobalArgs {
     /// Print results as one JSON document on stdout (for scripts).
     #[arg(long, global = true)]
     pub json: bool,
-    /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long, global = true, value_name = "N")]
+    /// Worker threads (default: all cores; at most 4 per core, at least 16 allowed). Results do
+    /// not depend on it.
+    #[arg(long, global = true, value_name = "N", value_parser = thread_count)]
     pub threads: Option<usize>,
+    /// Memory one job may take, estimated from the inputs' headers before anything is allocated
+    /// (bytes, 800M, 12G, or a percentage of the machine's memory such as 75%) [default: half of
+    /// the machine's memory]. `batch` runs fewer sessions at once to stay within it.
+    #[arg(long, global = true, value_name = "SIZE", value_parser = limits::parse_bytes)]
+    pub memory_limit: Option<u64>,
 }
 
-/// The terminal side of a command run.
+/// A `--threads` value: 1 to [`limits::max_threads`].
+fn thread_count(text: &str) -> Result<usize, String> {
+    let max = limits::max_threads();
+    match text.parse::<usize>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("`{text}` is not a thread count from 1 to {max} (4 per core, at least 16)")),
+    }
+}
+
+/// The terminal side of a command run, and the run's resource limits.
 pub struct Output {
     quiet: bool,
     json: bool,
+    memory_limit: u64,
 }
 
 impl Output {
@@ -33,7 +50,13 @@ impl Output {
             // Ignore the error: the global pool can only be set once, and tests may set it first.
             let _ = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global();
         }
-        Output { quiet: args.quiet, json: args.json }
+        let memory_limit = args.memory_limit.unwrap_or_else(limits::default_memory_limit);
+        Output { quiet: args.quiet, json: args.json, memory_limit }
+    }
+
+    /// The memory limit of one job, bytes (`--memory-limit`).
+    pub fn memory_limit(&self) -> u64 {
+        self.memory_limit
     }
 
     /// A progress bar on stderr over `len` steps, hidden with `--quiet`/`--json` or off a terminal.

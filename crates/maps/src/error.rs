@@ -18,6 +18,14 @@ pub enum Error {
     /// An image larger than the configured [`crate::Limits`].
     #[error("{path}: {width}x{height} exceeds the limit of {max_pixels} pixels")]
     TooLarge { path: PathBuf, width: u64, height: u64, max_pixels: u64 },
+    /// A job whose estimated memory, worked out from headers and sizes before anything is
+    /// allocated, exceeds the memory limit ([`crate::limits`]).
+    #[error(
+        "{subject}: {what} needs an estimated {} MiB, over the memory limit of {} MiB (--memory-limit)",
+        crate::limits::mib(*estimate),
+        limit >> 20
+    )]
+    OverBudget { subject: String, what: String, estimate: u64, limit: u64 },
     /// Encoding an image failed.
     #[error("{path}: cannot encode: {reason}")]
     Encode { path: PathBuf, reason: String },

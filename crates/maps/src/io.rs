@@ -23,21 +23,15 @@ pub struct Limits {
 }
 
 impl Default for Limits {
-    /// 16384 x 16384 pixels: four times a 4096x4096 photo stack's largest sensible member.
+    /// [`crate::limits::MAX_IMAGE_PIXELS`]: 16384 x 16384 pixels.
     fn default() -> Self {
-        Limits { max_pixels: 16384 * 16384 }
+        Limits { max_pixels: crate::limits::MAX_IMAGE_PIXELS }
     }
 }
 
 impl Limits {
     fn check(&self, path: &Path, width: u64, height: u64) -> Result<()> {
-        if width == 0 || height == 0 {
-            return Err(Error::decode(path, format!("image has zero size ({width}x{height})")));
-        }
-        if width.saturating_mul(height) > self.max_pixels {
-            return Err(Error::TooLarge { path: path.to_owned(), width, height, max_pixels: self.max_pixels });
-        }
-        Ok(())
+        crate::limits::check_pixels(path, width, height, self.max_pixels).map(drop)
     }
 }
 

@@ -9,6 +9,8 @@
 //!   a stack of large 16-bit photos costs two bytes a sample, not four.
 //! * [`io`] reads PNG, TIFF and EXR under [`Limits`] and writes every output atomically;
 //!   [`OutputSet`] makes a command's several outputs appear all together or not at all.
+//! * [`limits`] states every resource limit (image sizes, lights, frames, threads, memory) and
+//!   checks them from headers and arithmetic before anything is allocated.
 //!
 //! Image rows grow downward, against +y: row 0 is the top of the picture. UV origin: skinkit puts
 //! texture coordinate (0, 0) at the top-left texel (as glTF and wgpu do); loaders of bottom-left
@@ -19,6 +21,7 @@ pub mod error;
 mod exr_write;
 pub mod grid;
 pub mod io;
+pub mod limits;
 pub mod normal;
 pub mod output_set;
 pub mod photo;

@@ -12,14 +12,17 @@
 //! 4. Join the pieces with the N-way multiresolution spline ([`spline::blend`]) and measure the
 //!    seams ([`seam::measure`]).
 //!
-//! Memory follows the pieces (each region's box plus margin), not regions x map.
+//! Memory follows the pieces (each region's box plus margin), not regions x map. Before anything
+//! of the map's size is allocated, the map's floor ([`check_memory`]) and, before any exemplar
+//! is resampled, each resampled size and each region's synthesis estimate are checked against
+//! the limits ([`skinkit_maps::limits`]).
 
 use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;
 use skinkit_maps::resample::{resample_normals, scaled_size};
-use skinkit_maps::{Grid, NormalMap};
+use skinkit_maps::{Grid, NormalMap, limits};
 use skinkit_synth::SynthConfig;
 
 use crate::curve::CurveParams;
@@ -145,10 +148,13 @@ pub fn compose(
     }
     let (w, h) = (layout.width, layout.height);
     let mut seconds = ComposeSeconds::default();
+    check_memory(layout, options)?;
 
     let t = Instant::now();
-    let mut partition = Partition::build(w, h, regions, &layout.seed_points(), &options.curve)?;
+    // The coverage mask first: its size is checked from its header before it is decoded, and
+    // before the partition allocates the map.
     let coverage = layout.load_coverage()?;
+    let mut partition = Partition::build(w, h, regions, &layout.seed_points(), &options.curve)?;
     let labels = match &coverage {
         Some(mask) => {
             partition.restrict_to(mask)?;
@@ -184,16 +190,19 @@ pub fn compose(
         return Err(Error::InvalidParameter(format!("spline levels = {levels}: must be 1 to {}", spline::MAX_LEVELS)));
     }
 
-    let t = Instant::now();
-    let resampled: Vec<NormalMap> = layout
-        .regions
-        .par_iter()
-        .zip(exemplars.par_iter())
-        .map(|(region, ex)| {
-            let (ew, eh) = ex.size();
-            let (rw, rh) = scaled_size(ew, eh, region.exemplar_mm_per_texel, layout.mm_per_texel);
-            resample_normals(ex, rw, rh).map_err(Error::from)
+    // Every resampled size and synthesis estimate is checked before any exemplar is resampled.
+    let sizes: Vec<(usize, usize)> = (0..regions)
+        .map(|i| {
+            let size = resampled_size(layout, i, exemplars[i].size())?;
+            check_region_synthesis(layout, i, size, bboxes[i], levels, options)?;
+            Ok(size)
         })
+        .collect::<Result<_>>()?;
+    let t = Instant::now();
+    let resampled: Vec<NormalMap> = exemplars
+        .par_iter()
+        .zip(sizes.par_iter())
+        .map(|(ex, &(rw, rh))| resample_normals(ex, rw, rh).map_err(Error::from))
         .collect::<Result<_>>()?;
     seconds.resample = t.elapsed().as_secs_f64();
 
@@ -224,6 +233,80 @@ pub fn compose(
     Ok(Composed { normals, labels, levels, regions: reports, seams, seconds })
 }
 
+/// Bytes per face-map texel [`compose`] holds at least at once: the partition's cells and the
+/// labels (2 + 2), the regions' pieces, which cover the map (12), and the blended map (12). A
+/// floor, not the peak (the spline's pyramids and the syntheses come on top): a map whose floor
+/// exceeds the memory limit is refused before anything is allocated.
+pub const MAP_BYTES_PER_TEXEL: u64 = 28;
+
+/// Refuses a layout whose map alone ([`MAP_BYTES_PER_TEXEL`]) exceeds the synthesis options'
+/// memory limit, from its numbers alone: call it before reading or capturing any exemplar.
+///
+/// # Errors
+/// [`skinkit_maps::Error::OverBudget`] naming the layout file and its `size`.
+pub fn check_memory(layout: &Layout, options: &ComposeOptions) -> Result<()> {
+    let texels = (layout.width as u64).saturating_mul(layout.height as u64);
+    let what = format!("size: a {}x{} face map", layout.width, layout.height);
+    let estimate = texels.saturating_mul(MAP_BYTES_PER_TEXEL);
+    limits::check_memory(&layout.origin.display().to_string(), &what, estimate, options.synth.memory_limit)?;
+    Ok(())
+}
+
+/// Region `i`'s exemplar size at the map's scale, refused above
+/// [`limits::MAX_EXEMPLAR_TEXELS`] (the arithmetic in f64, so no size overflows).
+fn resampled_size(layout: &Layout, i: usize, (ew, eh): (usize, usize)) -> Result<(usize, usize)> {
+    let region = &layout.regions[i];
+    let scale = region.exemplar_mm_per_texel / layout.mm_per_texel;
+    let side = |n: usize| (n as f64 * scale).round().max(1.0);
+    let (rw, rh) = (side(ew), side(eh));
+    // In f64 no product overflows: a huge scale gives a huge (or infinite) count, never a wrap.
+    if rw * rh > limits::MAX_EXEMPLAR_TEXELS as f64 {
+        return Err(Error::Layout {
+            origin: layout.origin.clone(),
+            field: format!("region `{}`: exemplar_mm_per_texel", region.name),
+            message: format!(
+                "{} mm against the map's {} mm per texel resamples the {ew}x{eh} exemplar to {rw:.0}x{rh:.0} texels, over the limit of {} texels",
+                region.exemplar_mm_per_texel,
+                layout.mm_per_texel,
+                limits::MAX_EXEMPLAR_TEXELS
+            ),
+        });
+    }
+    let size = scaled_size(ew, eh, region.exemplar_mm_per_texel, layout.mm_per_texel);
+    debug_assert_eq!(size, (rw as usize, rh as usize));
+    Ok(size)
+}
+
+/// Checks region `i`'s synthesis options and memory estimate against its resampled exemplar
+/// size, before the exemplar is resampled.
+fn check_region_synthesis(
+    layout: &Layout,
+    i: usize,
+    (rw, rh): (usize, usize),
+    bbox: Option<Rect>,
+    levels: usize,
+    options: &ComposeOptions,
+) -> Result<()> {
+    let Some(bbox) = bbox else { return Ok(()) };
+    let rect = spline::piece_rect(bbox, levels, layout.width, layout.height);
+    let config = SynthConfig { width: rect.width, height: rect.height, ..options.synth.clone() };
+    config.validate(rw, rh).map(drop).map_err(|e| synthesis_error(layout, i, rect, (rw, rh), e))
+}
+
+/// Region `i`'s synthesis failure, naming the layout, the region and the sizes.
+fn synthesis_error(layout: &Layout, i: usize, rect: Rect, (ew, eh): (usize, usize), e: skinkit_synth::Error) -> Error {
+    let region = &layout.regions[i];
+    Error::InvalidParameter(format!(
+        "{}: region `{}`: cannot synthesise {}x{} from its {ew}x{eh} exemplar (after resampling to {} mm per texel; exemplar_mm_per_texel = {}): {e}",
+        layout.origin.display(),
+        region.name,
+        rect.width,
+        rect.height,
+        layout.mm_per_texel,
+        region.exemplar_mm_per_texel
+    ))
+}
+
 /// Synthesises region `i` over its piece rectangle (an empty piece for a region without texels).
 fn grow_region(
     layout: &Layout,
@@ -251,18 +334,8 @@ fn grow_region(
     let rect = spline::piece_rect(bbox, levels, layout.width, layout.height);
     let t = Instant::now();
     let config = SynthConfig { width: rect.width, height: rect.height, seed, ..options.synth.clone() };
-    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {}).map_err(|e| {
-        Error::InvalidParameter(format!(
-            "{}: region `{}`: cannot synthesise {}x{} from its {}x{} exemplar (after resampling to {} mm per texel): {e}",
-            layout.origin.display(),
-            region.name,
-            rect.width,
-            rect.height,
-            exemplar.width(),
-            exemplar.height(),
-            layout.mm_per_texel
-        ))
-    })?;
+    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {})
+        .map_err(|e| synthesis_error(layout, i, rect, exemplar.size(), e))?;
     report.synthesis_seconds = t.elapsed().as_secs_f64();
     report.warnings = grown.warnings;
     report.piece = Some(rect);

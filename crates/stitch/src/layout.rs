@@ -33,16 +33,17 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use skinkit_maps::Grid;
 use skinkit_maps::io::{Limits, read_scalar_map};
+use skinkit_maps::{Grid, limits};
 
 use crate::partition::SeedPoint;
 use crate::{Error, Result};
 
 /// The paper's map size.
 pub const DEFAULT_SIZE: [usize; 2] = [4096, 2048];
-/// Largest accepted `width * height` of a face map (a 32768 x 32768 map).
-pub const MAX_TEXELS: usize = 1 << 30;
+/// Largest accepted `width * height` of a face map (a 32768 x 32768 map;
+/// [`limits::MAX_MAP_TEXELS`]).
+pub const MAX_TEXELS: usize = limits::MAX_MAP_TEXELS as usize;
 
 /// Where a region's exemplar comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -228,23 +229,26 @@ impl Layout {
     ///
     /// # Errors
     /// When the image cannot be read or is not `width x height`.
+    /// The size is compared from the file's header, before anything is decoded (a small PNG can
+    /// claim 32768 x 32768 pixels).
     pub fn load_coverage(&self) -> Result<Option<Grid<bool>>> {
         let Some(path) = &self.coverage else { return Ok(None) };
-        let map = read_scalar_map(path, &Limits { max_pixels: MAX_TEXELS as u64 })?;
-        if map.size() != (self.width, self.height) {
+        let header = limits::image_header(path, MAX_TEXELS as u64)?;
+        if (header.width, header.height) != (self.width as u64, self.height as u64) {
             return Err(Error::Layout {
                 origin: self.origin.clone(),
                 field: "coverage".into(),
                 message: format!(
                     "{} is {}x{} but the map is {}x{}",
                     path.display(),
-                    map.width(),
-                    map.height(),
+                    header.width,
+                    header.height,
                     self.width,
                     self.height
                 ),
             });
         }
+        let map = read_scalar_map(path, &Limits { max_pixels: MAX_TEXELS as u64 })?;
         Ok(Some(map.map(|&v| v > 0.5)))
     }
 

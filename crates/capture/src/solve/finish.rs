@@ -290,7 +290,7 @@ impl Plan<'_> {
     }
 
     pub(super) fn full_bits(&self) -> u128 {
-        if self.k == 128 { u128::MAX } else { (1u128 << self.k) - 1 }
+        super::all_lights(self.k)
     }
 
     /// `g = P_S r_S` and `sum r_S^2` for pixel `j` over the lights in `bits`.

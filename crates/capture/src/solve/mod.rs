@@ -105,7 +105,7 @@ use crate::{Error, Result, Rig};
 /// Pixels per structure-of-arrays chunk in the kernels.
 pub const CHUNK: usize = 64;
 /// Most lights a rig may have (subsets are `u128` bitmasks).
-pub const MAX_LIGHTS: usize = 128;
+pub const MAX_LIGHTS: usize = skinkit_maps::limits::MAX_LIGHTS;
 /// Rigs with at most this many lights cache every subset in a dense `2^k` table.
 pub const DENSE_MAX_LIGHTS: usize = 12;
 /// Rows per parallel work item.
@@ -156,13 +156,55 @@ pub fn solve_into(
 /// construction, so only the photo count and the solver's own light limit are left to check).
 fn check_rig(stack: &PhotoStack, rig: &Rig) -> Result<Vec<Vec3>> {
     rig.expect_photos(stack.len())?;
-    let k = rig.light_count();
+    check_light_count(rig.light_count())?;
+    Ok(solver_directions(rig))
+}
+
+/// Refuses more than [`MAX_LIGHTS`] lights.
+///
+/// # Errors
+/// [`Error::InvalidInput`] with the count and the limit.
+pub fn check_light_count(k: usize) -> Result<()> {
     if k > MAX_LIGHTS {
         return Err(Error::InvalidInput(format!("rig has {k} lights; at most {MAX_LIGHTS} are supported")));
     }
-    // `normalize` of the stored unit directions (not a check: `Light::new` made them unit) keeps
-    // the f32 directions, and so every output bit, the solver has always used.
-    Ok(rig.directions().into_iter().map(Vec3::normalize).collect())
+    Ok(())
+}
+
+/// The rig's unit directions as the solver holds them: `normalize` of the stored unit directions
+/// (not a check: `Light::new` made them unit) keeps the f32 directions, and so every output bit,
+/// the solver has always used.
+fn solver_directions(rig: &Rig) -> Vec<Vec3> {
+    rig.directions().into_iter().map(Vec3::normalize).collect()
+}
+
+/// The bit set of all `k` lights (`k <= MAX_LIGHTS`).
+fn all_lights(k: usize) -> u128 {
+    if k == 128 { u128::MAX } else { (1u128 << k) - 1 }
+}
+
+/// Refuses a rig of at most [`MAX_LIGHTS`] lights whose condition number, computed as the
+/// distant-light solve computes it, exceeds `config.max_condition`: the one check `capture`
+/// (before decoding anything) and `rig check` share with the solver.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for too many lights; [`Error::BadRig`] with the condition number and
+/// the limit.
+pub fn check_conditioning(rig: &Rig, config: &SolveConfig) -> Result<()> {
+    check_light_count(rig.light_count())?;
+    let lights = solver_directions(rig);
+    let full = subsets::SubsetSolve::new(&lights, all_lights(lights.len()), config.max_condition);
+    refuse_ill_conditioned(lights.len(), full.condition, full.usable, config.max_condition)
+}
+
+/// The refusal of a rig whose full light set is not usable (condition above the limit).
+fn refuse_ill_conditioned(k: usize, condition: f64, usable: bool, max_condition: f64) -> Result<()> {
+    if !usable {
+        return Err(Error::BadRig(format!(
+            "the rig's {k} lights cannot determine a normal (coplanar or nearly so): condition number {condition:.4} exceeds max_condition {max_condition} (--max-condition)"
+        )));
+    }
+    Ok(())
 }
 
 /// A stored-value to linear table for 8- and 16-bit sRGB photos.

@@ -19,7 +19,7 @@ use super::subsets::{SubsetSolve, Subsets, gram_form};
 use super::{
     AlbedoMap, BAND_ROWS, CHUNK, DENSE_MAX_LIGHTS, Method, PhotoStack, Progress, Solution, SolveConfig, SolveStats,
 };
-use crate::{Error, Result, Rig, readings};
+use crate::{Result, Rig, readings};
 
 /// Everything a worker needs, built once per solve.
 pub(super) struct Plan<'a> {
@@ -129,16 +129,8 @@ impl<'a> Plan<'a> {
         lights: Vec<Vec3>,
         table: Option<&'a [f32]>,
     ) -> Result<Self> {
-        let full_bits = if lights.len() == 128 { u128::MAX } else { (1u128 << lights.len()) - 1 };
-        let full = SubsetSolve::new(&lights, full_bits, config.max_condition);
-        if !full.usable {
-            return Err(Error::BadRig(format!(
-                "the rig's {} lights cannot determine a normal (coplanar or nearly so): condition number {:.4} exceeds max_condition {}",
-                lights.len(),
-                full.condition,
-                config.max_condition
-            )));
-        }
+        let full = SubsetSolve::new(&lights, super::all_lights(lights.len()), config.max_condition);
+        super::refuse_ill_conditioned(lights.len(), full.condition, full.usable, config.max_condition)?;
         let first = &stack.photos()[0];
         let linearise = match (first.transfer(), table) {
             (Transfer::Linear, _) => Linearise::Identity,

@@ -13,11 +13,12 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result};
-use rayon::prelude::*;
 use serde::Serialize;
 
+use skinkit_capture::Rig;
 use skinkit_capture::session::{self, CaptureOptions, CaptureReport, Session};
 use skinkit_maps::OutputSet;
+use skinkit_maps::limits::{self, MemoryGate};
 
 use super::capture::SolveArgs;
 use crate::interrupt::{self, HookGuard};
@@ -57,6 +58,10 @@ pub struct BatchReport {
     /// True when a signal stopped the batch: `outcomes` lists the sessions that finished (their
     /// folders are complete); the others have no folder.
     pub interrupted: bool,
+    /// The memory limit the sessions running at once had to fit together (`--memory-limit`).
+    pub memory_limit_mib: u64,
+    /// The most sessions that ran at once.
+    pub most_at_once: usize,
     pub outcomes: Vec<SessionOutcome>,
 }
 
@@ -71,19 +76,38 @@ fn session_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
-fn run_session(dir: &Path, out_dir: &Path, options: &CaptureOptions) -> Result<(CaptureReport, Vec<PathBuf>)> {
+/// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
+/// session that could never fit fails at once with its estimate and the limit.
+fn run_session(
+    dir: &Path,
+    out_dir: &Path,
+    options: &CaptureOptions,
+    gate: &MemoryGate,
+) -> Result<(CaptureReport, Vec<PathBuf>)> {
+    let files = Session::from_dir(dir)?;
+    // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
+    let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
+    let ambient = files.ambient.clone().or(rig_ambient);
+    let estimate = session::memory_estimate(&files, ambient.as_deref(), options)?;
+    limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, gate.budget())?;
+    let _admitted = gate.acquire(estimate);
     // Staged from the start, so an interrupt during the solve removes this session's folder too.
     let set = pipeline::capture_set(out_dir)?;
-    let files = Session::from_dir(dir)?;
     let mut captured = session::capture(&files, options, &|_| {})?;
     let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
     Ok((captured.report, swept))
 }
 
 /// One session's outcome; `swept` collects what its commit cleaned up from killed runs.
-fn outcome(dir: &Path, out_dir: &Path, options: &CaptureOptions, swept: &Mutex<Vec<PathBuf>>) -> SessionOutcome {
+fn outcome(
+    dir: &Path,
+    out_dir: &Path,
+    options: &CaptureOptions,
+    gate: &MemoryGate,
+    swept: &Mutex<Vec<PathBuf>>,
+) -> SessionOutcome {
     let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    match run_session(dir, &out_dir.join(&name), options) {
+    match run_session(dir, &out_dir.join(&name), options, gate) {
         Ok((report, cleaned)) => {
             lock(swept).extend(cleaned);
             SessionOutcome {
@@ -109,17 +133,30 @@ fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 }
 
 impl BatchReport {
-    fn new(sessions: usize, mut outcomes: Vec<SessionOutcome>, interrupted: bool) -> Self {
+    fn new(sessions: usize, mut outcomes: Vec<SessionOutcome>, interrupted: bool, gate: &MemoryGate) -> Self {
         outcomes.sort_by(|a, b| a.session.cmp(&b.session));
         let failed = outcomes.iter().filter(|o| !o.ok).count();
-        BatchReport { sessions, succeeded: outcomes.len() - failed, failed, interrupted, outcomes }
+        BatchReport {
+            sessions,
+            succeeded: outcomes.len() - failed,
+            failed,
+            interrupted,
+            memory_limit_mib: gate.budget() >> 20,
+            most_at_once: gate.peaks().0,
+            outcomes,
+        }
     }
 }
 
 /// On an interrupt: `batch-report.json` of the sessions that finished, marked interrupted.
-fn report_on_interrupt(path: PathBuf, sessions: usize, finished: Arc<Mutex<Vec<SessionOutcome>>>) -> HookGuard {
+fn report_on_interrupt(
+    path: PathBuf,
+    sessions: usize,
+    finished: Arc<Mutex<Vec<SessionOutcome>>>,
+    gate: Arc<MemoryGate>,
+) -> HookGuard {
     interrupt::on_interrupt(move || {
-        let report = BatchReport::new(sessions, lock(&finished).clone(), true);
+        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate);
         // Written by the signal thread itself, whole (atomically), before the exit.
         if let Err(e) = pipeline::write_json(&path, &report) {
             eprintln!("error: {e:#}");
@@ -128,7 +165,7 @@ fn report_on_interrupt(path: PathBuf, sessions: usize, finished: Arc<Mutex<Vec<S
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
-    let options = args.solve.options()?;
+    let options = args.solve.options(out)?;
     guard::out_folder("--out", &args.out)?;
     guard::not_in_input_folder("--out", &args.out, "the sessions folder", &args.sessions)?;
     let dirs = session_dirs(&args.sessions)?;
@@ -139,11 +176,14 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let report_path = args.out.join("batch-report.json");
     let finished = Arc::new(Mutex::new(Vec::new()));
-    let hook = report_on_interrupt(report_path.clone(), dirs.len(), Arc::clone(&finished));
+    // As many sessions at once as there are workers, fewer when their estimates do not fit the
+    // memory limit together.
+    let gate = Arc::new(MemoryGate::new(options.memory_limit));
+    let hook = report_on_interrupt(report_path.clone(), dirs.len(), Arc::clone(&finished), Arc::clone(&gate));
     let swept = Mutex::new(Vec::new());
     let bar = out.progress(dirs.len() as u64, "batch");
-    dirs.par_iter().for_each(|dir| {
-        let outcome = outcome(dir, &args.out, &options, &swept);
+    limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
+        let outcome = outcome(dir, &args.out, &options, &gate, &swept);
         if interrupt::requested() && !outcome.ok {
             // Failed because the interrupt removed its staging folder: unfinished, not failed.
             return;
@@ -156,7 +196,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     });
     bar.finish_and_clear();
     out.swept(&lock(&swept));
-    let report = BatchReport::new(dirs.len(), lock(&finished).clone(), false);
+    let report = BatchReport::new(dirs.len(), lock(&finished).clone(), false, &gate);
     let mut set = OutputSet::files();
     pipeline::write_json_file(&mut set, &report_path, &report)?;
     set.commit().with_context(|| format!("cannot write {}", report_path.display()))?;

@@ -52,15 +52,19 @@ pub struct SolveArgs {
     #[arg(long, default_value_t = 50, value_name = "PIXELS")]
     pub detrend_block: usize,
     /// Robust and threshold solvers: readings below this fraction of full scale count as shadow.
-    #[arg(long, value_name = "FRACTION", value_parser = fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = shadow_fraction)]
     pub shadow_threshold: Option<f32>,
     /// Robust and threshold solvers: readings below this fraction of the pixel's 90th-percentile
     /// reading (its brightest with up to 9 lights) count as shadow [default: 0.1].
-    #[arg(long, value_name = "FRACTION", value_parser = fraction)]
+    #[arg(long, value_name = "FRACTION", value_parser = shadow_fraction)]
     pub shadow_relative: Option<f32>,
-    /// Readings at or above this fraction of full scale count as saturated.
-    #[arg(long, value_name = "FRACTION", value_parser = fraction)]
+    /// Readings at or above this fraction of full scale count as saturated (above 0, at most 1).
+    #[arg(long, value_name = "FRACTION", value_parser = saturation_fraction)]
     pub saturation: Option<f32>,
+    /// Largest condition number of the rig's light directions a capture accepts (distant lights;
+    /// `rig check` takes the same flag) [default: 50].
+    #[arg(long, value_name = "C", value_parser = condition_limit)]
+    pub max_condition: Option<f64>,
     /// How 8/16-bit photo values relate to light: `linear` (raw, machine-vision cameras) or `srgb`.
     #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
     pub transfer: String,
@@ -78,13 +82,14 @@ impl SolveArgs {
             shadow_threshold: None,
             shadow_relative: None,
             saturation: None,
+            max_condition: None,
             transfer: "linear".into(),
             green: "up".into(),
         }
     }
 
-    /// The validated library options.
-    pub fn options(&self) -> Result<CaptureOptions> {
+    /// The validated library options, within the run's memory limit.
+    pub fn options(&self, out: &Output) -> Result<CaptureOptions> {
         let defaults = SolveConfig::default();
         let solve = SolveConfig {
             method: match self.solver.as_str() {
@@ -95,6 +100,7 @@ impl SolveArgs {
             shadow_abs: self.shadow_threshold.unwrap_or(defaults.shadow_abs),
             shadow_rel: self.shadow_relative.unwrap_or(defaults.shadow_rel),
             saturation: self.saturation.unwrap_or(defaults.saturation),
+            max_condition: self.max_condition.unwrap_or(defaults.max_condition),
             ..defaults
         };
         solve.validate().context("invalid solver option")?;
@@ -105,6 +111,7 @@ impl SolveArgs {
             transfer: if self.transfer == "srgb" { Transfer::Srgb } else { Transfer::Linear },
             encoding: NormalEncoding { green },
             limits: Limits::default(),
+            memory_limit: out.memory_limit(),
         })
     }
 }
@@ -137,16 +144,33 @@ pub fn check_out(out: &Path, photos_from: Option<&Path>, files: &Session) -> Res
     guard::not_an_input(&flags, &inputs)
 }
 
-/// A number in `[0, 1]`, for the threshold flags.
-fn fraction(text: &str) -> Result<f32, String> {
+/// A `--max-condition` value: a finite number of at least 1 (a condition number's least).
+pub fn condition_limit(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        _ => Err(format!("`{text}` is not a condition number limit: give a finite number of at least 1")),
+    }
+}
+
+/// A shadow threshold: a fraction in `[0, 1)` (as [`SolveConfig::validate`] requires), so a bad
+/// value is a usage error (exit 2) rather than a failed run.
+fn shadow_fraction(text: &str) -> Result<f32, String> {
     match text.parse::<f32>() {
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!("`{text}` is not a fraction between 0 and 1")),
+        Ok(v) if (0.0..1.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}` is not a fraction from 0 up to (not including) 1")),
+    }
+}
+
+/// A saturation level: a fraction in `(0, 1]` (as [`SolveConfig::validate`] requires).
+fn saturation_fraction(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!("`{text}` is not a fraction above 0 and at most 1")),
     }
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
-    let options = args.solve.options()?;
+    let options = args.solve.options(out)?;
     let photos = match &args.photos_from {
         Some(dir) => session::photos_in(dir)?,
         None => args.photos.clone(),

@@ -83,8 +83,8 @@ fn default_samples() -> PathBuf {
     if here.is_dir() { here } else { Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds") }
 }
 
-fn options(solver: &str) -> Result<CaptureOptions> {
-    SolveArgs::defaults(solver).options()
+fn options(solver: &str, out: &Output) -> Result<CaptureOptions> {
+    SolveArgs::defaults(solver).options(out)
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
@@ -105,7 +105,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let files = Session::from_dir(dir)?;
         for solver in ["robust", "ls"] {
-            let options = options(solver)?;
+            let options = options(solver, out)?;
             let mut captured = session::capture(&files, &options, &|_| {})?;
             let target = args.out.join("capture").join(&region).join(solver);
             pipeline::write_outputs(pipeline::capture_set(&target)?, &target, &mut captured, &options)?;

@@ -11,12 +11,12 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
-use skinkit_render::skin::lut::{DiffuseLut, DiffuseLutSpec, SpecError};
+use skinkit_render::skin::lut::{self, DiffuseLut, DiffuseLutSpec, SpecError};
 use skinkit_render::skin::lut_file::{self, LutAttribute};
 use skinkit_render::skin::profile::{Domain, Normalisation};
 use skinkit_render::skin::shadow::{ShadowLut, ShadowLutSpec};
 
-use super::synth::parse_size;
+use crate::flags;
 use crate::output::Output;
 
 #[derive(clap::Subcommand, Debug)]
@@ -52,8 +52,8 @@ pub struct DiffuseArgs {
     /// The table to write (.exr, float RGB).
     #[arg(long, value_name = "EXR")]
     pub out: PathBuf,
-    /// Columns x rows.
-    #[arg(long, value_parser = parse_size, default_value = "256x256", value_name = "WxH")]
+    /// Columns x rows (at most 4096 each).
+    #[arg(long, value_parser = flags::size_at_most(lut::MAX_SIDE as usize), default_value = "256x256", value_name = "WxH")]
     pub size: (usize, usize),
     /// Over which angles the ring integral runs.
     #[arg(long, value_enum, default_value = "full")]
@@ -74,8 +74,8 @@ pub struct ShadowArgs {
     /// The table to write (.exr, float RGB).
     #[arg(long, value_name = "EXR")]
     pub out: PathBuf,
-    /// Columns x rows.
-    #[arg(long, value_parser = parse_size, default_value = "256x256", value_name = "WxH")]
+    /// Columns x rows (at most 4096 each).
+    #[arg(long, value_parser = flags::size_at_most(lut::MAX_SIDE as usize), default_value = "256x256", value_name = "WxH")]
     pub size: (usize, usize),
     /// Penumbra width of the first (top) row, mm.
     #[arg(long, default_value_t = ShadowLutSpec::default().w_min_mm, value_name = "MM")]

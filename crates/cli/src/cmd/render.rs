@@ -13,13 +13,13 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, PngLayout};
+use skinkit_maps::limits;
 use skinkit_render::gpu::{Gpu, Rendered};
 use skinkit_render::graph::PassGraph;
 use skinkit_render::load::{self, Plan};
 use skinkit_render::scene::{self, Scene};
 use skinkit_render::skin;
 
-use super::synth::parse_size;
 use crate::guard;
 use crate::output::Output;
 
@@ -34,8 +34,8 @@ pub struct Args {
     /// `output.path`.
     #[arg(long, value_name = "IMG")]
     pub out: Option<PathBuf>,
-    /// Image size (default: the scene's `output.size`).
-    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    /// Image size (default: the scene's `output.size`; at most 16384 per side).
+    #[arg(long, value_parser = render_size, value_name = "WxH")]
     pub size: Option<(usize, usize)>,
     /// Print the passes and GPU resources the scene needs, render nothing.
     #[arg(long)]
@@ -43,16 +43,29 @@ pub struct Args {
     /// Turn each camera about its target (a turntable sequence of `--frames` images).
     #[arg(long)]
     pub orbit: bool,
-    /// Images per camera with `--orbit`.
-    #[arg(long, default_value_t = 1, value_name = "N", requires = "orbit")]
+    /// Images per camera with `--orbit` (1 to 3600), drawn and written one at a time.
+    #[arg(long, default_value_t = 1, value_name = "N", requires = "orbit", value_parser = frame_count)]
     pub frames: usize,
     /// Also write the report (JSON).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
     /// Draw the diffuse light with the exact texture-space reference (CPU, slow) instead of the
-    /// scene's effects, its light map N texels wide.
-    #[arg(long, value_name = "N")]
+    /// scene's effects, its light map N texels wide (16 to 8192).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(16..=8192))]
     pub reference: Option<u32>,
+}
+
+/// A `--frames` value: 1 to [`limits::MAX_FRAMES`].
+fn frame_count(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (1..=limits::MAX_FRAMES).contains(&n) => Ok(n),
+        _ => Err(format!("`{text}` is not a frame count from 1 to {}", limits::MAX_FRAMES)),
+    }
+}
+
+/// A `--size` value within the renderer's largest output side.
+fn render_size(text: &str) -> Result<(usize, usize), String> {
+    crate::flags::size_at_most(scene::MAX_OUTPUT_SIDE as usize)(text)
 }
 
 /// One written image.
@@ -103,7 +116,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         scene: args.scene,
         out: args.out,
         size: args.size,
-        frames: if args.orbit { Some(args.frames.max(1)) } else { None },
+        frames: if args.orbit { Some(args.frames) } else { None },
         reference: args.reference,
     };
     if args.explain {
@@ -252,10 +265,13 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
     let target = gpu.create_target(width, height, target_format)?;
 
     let frames = job.frames.unwrap_or(1);
-    let jobs: Vec<(usize, usize)> = (0..scene.cameras.len()).flat_map(|c| (0..frames).map(move |f| (c, f))).collect();
-    let bar = out.progress(jobs.len() as u64, "render");
-    let mut images = Vec::with_capacity(jobs.len());
-    for &(c, f) in &jobs {
+    if !(1..=limits::MAX_FRAMES).contains(&frames) {
+        bail!("--frames: {frames} is not a frame count from 1 to {}", limits::MAX_FRAMES);
+    }
+    // One (camera, frame) at a time: nothing is held per frame but its line in the report.
+    let bar = out.progress((scene.cameras.len() * frames) as u64, "render");
+    let mut images = Vec::new();
+    for (c, f) in (0..scene.cameras.len()).flat_map(|c| (0..frames).map(move |f| (c, f))) {
         let camera = if job.frames.is_some() { load::orbit(&scene.cameras[c], f, frames) } else { scene.cameras[c] };
         let t = Instant::now();
         prepared.set_camera(&load::gpu_camera(&camera, width, height));
@@ -300,7 +316,7 @@ pub struct ViewArgs {
     /// The scene file (TOML).
     pub scene: PathBuf,
     /// Window size (default: the scene's `output.size`, at most 1280x960).
-    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, value_parser = render_size, value_name = "WxH")]
     pub size: Option<(usize, usize)>,
 }
 

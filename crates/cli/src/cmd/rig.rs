@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use serde::Serialize;
+use skinkit_capture::session;
+use skinkit_capture::solve::SolveConfig;
 use skinkit_capture::{Rig, import, sphere};
 use skinkit_maps::io;
 
@@ -55,6 +57,9 @@ pub struct CheckArgs {
     /// The rig file to check.
     #[arg(value_name = "RIG")]
     pub rig: PathBuf,
+    /// Largest condition number accepted, as `capture --max-condition` [default: 50].
+    #[arg(long, value_name = "C", value_parser = super::capture::condition_limit)]
+    pub max_condition: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -72,6 +77,11 @@ pub fn run(command: Command, out: &Output) -> Result<i32> {
         Command::FromSphere(args) => from_sphere(args, out),
         Command::Check(args) => {
             let rig = Rig::load(&args.rig)?;
+            let defaults = SolveConfig::default();
+            let config =
+                SolveConfig { max_condition: args.max_condition.unwrap_or(defaults.max_condition), ..defaults };
+            // The very check `capture` makes of a rig before decoding its photos.
+            session::check_rig(&args.rig, &rig, None, &config)?;
             summarise(&rig, &args.rig, out)
         }
     }

@@ -24,7 +24,7 @@ use skinkit_synth::SynthConfig;
 use skinkit_capture::session::{self, Session};
 
 use super::capture::SolveArgs;
-use super::synth::parse_size;
+use crate::flags;
 use crate::output::Output;
 use crate::{guard, pipeline};
 
@@ -34,18 +34,19 @@ pub struct StitchOptions {
     /// The face layout (TOML): size, scale, regions with exemplars and seed points.
     #[arg(long, value_name = "FILE")]
     pub layout: PathBuf,
-    /// Output size (overrides the layout's; points keep their UV place, the scale follows).
-    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    /// Output size (overrides the layout's; points keep their UV place, the scale follows; at
+    /// most 2^30 texels).
+    #[arg(long, value_parser = flags::map_size, value_name = "WxH")]
     pub size: Option<(usize, usize)>,
     /// Seed of the curves and of every region's synthesis.
     #[arg(long, default_value_t = 0, value_name = "S")]
     pub seed: u64,
-    /// Spline levels (default: from the narrowest region, at most 6).
-    #[arg(long, value_name = "L")]
+    /// Spline levels (1 to 20; default: from the narrowest region, at most 6).
+    #[arg(long, value_name = "L", value_parser = flags::usize_in(1, skinkit_stitch::spline::MAX_LEVELS))]
     pub levels: Option<usize>,
     /// Largest displacement of the random boundary curves, texels (default 64 at 4096 wide,
     /// scaled with the map).
-    #[arg(long, value_name = "A", conflicts_with = "straight")]
+    #[arg(long, value_name = "A", conflicts_with = "straight", value_parser = flags::non_negative_f64)]
     pub curve_amplitude: Option<f64>,
     /// Straight boundaries (the nearest-point partition as it is).
     #[arg(long)]
@@ -246,22 +247,25 @@ pub fn build(
     if let Some((w, h)) = options.size {
         layout = layout.with_size(w, h)?;
     }
-    let t = Instant::now();
-    let exemplars = exemplars(&layout, cache, out)?;
-    let seconds_exemplars = t.elapsed().as_secs_f64();
     let amplitude = if options.straight {
         0.0
     } else {
         options.curve_amplitude.unwrap_or_else(|| ComposeOptions::default_amplitude(layout.width))
     };
+    let synth = if options.upsampled { SynthConfig::upsampled(0, 0) } else { SynthConfig::default() };
     let compose_options = ComposeOptions {
         curve: CurveParams::new(amplitude, options.seed),
         levels: options.levels,
         blend: !options.no_blend,
-        synth: if options.upsampled { SynthConfig::upsampled(0, 0) } else { SynthConfig::default() },
+        synth: SynthConfig { memory_limit: out.memory_limit(), ..synth },
         seed: options.seed,
         seam_band: options.seam_band,
     };
+    // The map's own memory is checked before any exemplar is read or captured.
+    skinkit_stitch::compose::check_memory(&layout, &compose_options)?;
+    let t = Instant::now();
+    let exemplars = exemplars(&layout, cache, out)?;
+    let seconds_exemplars = t.elapsed().as_secs_f64();
     let bar = out.progress(layout.regions.len() as u64, "regions");
     let composed = compose(&layout, &exemplars, &compose_options, &|_| bar.inc(1))
         .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
@@ -276,7 +280,7 @@ pub fn build(
 
 /// Each region's exemplar: a normal map read from disk, or a session captured (once per folder).
 fn exemplars(layout: &Layout, cache: &mut CaptureCache, out: &Output) -> Result<Vec<NormalMap>> {
-    let options = SolveArgs::defaults("robust").options()?;
+    let options = SolveArgs::defaults("robust").options(out)?;
     let mut maps = Vec::with_capacity(layout.regions.len());
     for region in &layout.regions {
         let map = match &region.exemplar {

@@ -22,6 +22,7 @@ use skinkit_synth::config::UPSAMPLED_LEVELS;
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Search, SynthConfig};
 
+use crate::flags;
 use crate::output::Output;
 use crate::{guard, pipeline};
 
@@ -46,17 +47,17 @@ pub struct Args {
     pub size: Option<(usize, usize)>,
     /// Pyramid levels (1 = single resolution; default 3, 5 with `--upsampled`); clamped, with a
     /// warning, to what the exemplar allows.
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", value_parser = flags::usize_in(1, usize::MAX))]
     pub levels: Option<usize>,
-    /// Side of the causal neighbourhood at each level (odd, at least 3).
-    #[arg(long, default_value_t = 5, value_name = "N", alias = "neighbourhood")]
+    /// Side of the causal neighbourhood at each level (odd, 3 to 99).
+    #[arg(long, default_value_t = 5, value_name = "N", alias = "neighbourhood", value_parser = flags::odd_in(3, 99))]
     pub neighborhood: usize,
-    /// Side of the full neighbourhood taken from the coarser level (odd).
-    #[arg(long, default_value_t = 3, value_name = "M")]
+    /// Side of the full neighbourhood taken from the coarser level (odd, 1 to 99).
+    #[arg(long, default_value_t = 3, value_name = "M", value_parser = flags::odd_in(1, 99))]
     pub parent: usize,
     /// Correction passes per level: every texel chosen again by its full (non-causal) window
     /// (default 1, 2 with `--upsampled`).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = flags::usize_in(0, skinkit_synth::config::MAX_CORRECTIONS))]
     pub corrections: Option<usize>,
     /// Start every level from its coarser level's coordinates upsampled (Lefebvre and Hoppe 2005)
     /// instead of the causal scanline pass: whole exemplar patches are copied and the correction
@@ -64,20 +65,20 @@ pub struct Args {
     #[arg(long)]
     pub upsampled: bool,
     /// Occurrence penalty lambda (0 = off; default 4, 0 with `--upsampled`).
-    #[arg(long, value_name = "LAMBDA")]
+    #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
     pub occurrence_penalty: Option<f32>,
     /// k-coherence search (the default): candidates per source texel (Tong et al. 2002; default
     /// 4, 2 with `--upsampled`).
-    #[arg(long = "k", value_name = "K", conflicts_with_all = ["exact", "pca"])]
+    #[arg(long = "k", value_name = "K", conflicts_with_all = ["exact", "pca"], value_parser = flags::usize_in(1, 64))]
     pub k: Option<usize>,
     /// Search a PCA-projected kd-tree (plus Ashikhmin coherence) instead of k-coherence sets.
     #[arg(long, conflicts_with = "exact")]
     pub pca: bool,
     /// PCA dimensions of the kd-tree (1..=32), for `--pca` and for building k-coherence sets.
-    #[arg(long, default_value_t = 8, value_name = "D", conflicts_with = "exact")]
+    #[arg(long, default_value_t = 8, value_name = "D", conflicts_with = "exact", value_parser = flags::usize_in(1, 32))]
     pub dims: usize,
     /// Approximate search: tree candidates re-scored in the full neighbourhood space.
-    #[arg(long, default_value_t = 8, value_name = "K", conflicts_with = "exact")]
+    #[arg(long, default_value_t = 8, value_name = "K", conflicts_with = "exact", value_parser = flags::usize_in(1, usize::MAX))]
     pub rerank: usize,
     /// Exhaustive search over every exemplar neighbourhood (slow; the reference).
     #[arg(long)]
@@ -356,6 +357,12 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     }
     let outputs = [("--out", Some(out_path)), ("--coords", args.coords.as_ref()), ("--report", args.report.as_ref())];
     guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.clone())])?;
+    // The synthesis estimate from the exemplar's header, before the exemplar is decoded.
+    let header = skinkit_maps::limits::image_header(exemplar_path, skinkit_maps::limits::MAX_IMAGE_PIXELS)?;
+    let requested = SynthConfig { memory_limit: out.memory_limit(), ..config(&args, size) };
+    requested
+        .validate(header.width as usize, header.height as usize)
+        .with_context(|| format!("cannot synthesise from {}", exemplar_path.display()))?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
     if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
@@ -364,7 +371,6 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
             exemplar_path.display()
         );
     }
-    let requested = config(&args, size);
     let context = || format!("cannot synthesise from {}", exemplar_path.display());
     let (validated, _) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };

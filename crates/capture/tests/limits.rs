@@ -1,0 +1,234 @@
+//! The capture side of the resource policy (issue 15): rigs are refused by one check that
+//! `capture` and `rig check` share (D7), and a photo stack over the memory limit is refused from
+//! the headers before any photo is decoded (D9). Heap use is measured by a counting allocator:
+//! each measured call holds a lock, so no other test of this binary allocates meanwhile.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::Vec3;
+use skinkit_capture::session::{self, CaptureOptions, Session};
+use skinkit_capture::solve::SolveConfig;
+use skinkit_capture::{Light, Rig};
+
+/// The system allocator, counting the bytes held and their peak.
+struct Counting;
+
+static HELD: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+static MEASURING: Mutex<()> = Mutex::new(());
+
+fn grew(bytes: usize) {
+    let now = HELD.fetch_add(bytes, Ordering::SeqCst) + bytes;
+    PEAK.fetch_max(now, Ordering::SeqCst);
+}
+
+// SAFETY: every call is forwarded to `System` unchanged; only counters are updated beside it.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) };
+        HELD.fetch_sub(layout.size(), Ordering::SeqCst);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            HELD.fetch_sub(layout.size(), Ordering::SeqCst);
+            grew(new_size);
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// Holds every other test of this binary off while a test allocates: each test takes it for
+/// its whole body, so a measurement sees only its own allocations.
+fn alone() -> std::sync::MutexGuard<'static, ()> {
+    MEASURING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `f`'s result and the most heap bytes it held at once above what was held before it (call it
+/// while holding [`alone`]).
+fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    let base = HELD.load(Ordering::SeqCst);
+    PEAK.store(base, Ordering::SeqCst);
+    let result = f();
+    (result, PEAK.load(Ordering::SeqCst).saturating_sub(base))
+}
+
+const MIB: usize = 1 << 20;
+
+fn mold(region: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region)
+}
+
+/// A PNG of `w x h` 8-bit grey pixels whose header is all there is (no pixel data): a decoder
+/// would fail on it or allocate the whole image first; a header reader needs nothing more.
+fn header_only_png(path: &Path, w: u32, h: u32) {
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend_from_slice(&w.to_be_bytes());
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
+    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
+    bytes.extend_from_slice(&13u32.to_be_bytes());
+    bytes.extend_from_slice(&ihdr);
+    bytes.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+    // A one-byte zlib stream (a stored block) as the only image data, then the end: the file is
+    // well formed up to the pixels and far too short for the size it claims.
+    let idat = [b'I', b'D', b'A', b'T', 0x78, 0x01, 0x01, 0x01, 0x00, 0xFE, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x01];
+    bytes.extend_from_slice(&12u32.to_be_bytes());
+    bytes.extend_from_slice(&idat);
+    bytes.extend_from_slice(&crc32(&idat).to_be_bytes());
+    bytes.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82]);
+    std::fs::write(path, bytes).unwrap();
+}
+
+fn crc32(data: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in data {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
+}
+
+/// A session of 8 photos claiming `side x side` pixels each, under the paper's turntable rig.
+fn bomb_session(dir: &Path, side: u32) -> Session {
+    let rig = dir.join("rig.toml");
+    Rig::turntable(8, 45.0, 1.0).unwrap().save(&rig).unwrap();
+    let photos = (1..=8)
+        .map(|i| {
+            let p = dir.join(format!("{i:02}.png"));
+            header_only_png(&p, side, side);
+            p
+        })
+        .collect();
+    Session { rig, photos, mask: None, ambient: None, truth: None }
+}
+
+#[test]
+fn d9_a_photo_stack_over_the_memory_limit_is_refused_before_decoding() {
+    let _alone = alone();
+    let dir = tempfile::tempdir().unwrap();
+    let files = bomb_session(dir.path(), 16384);
+    let options = CaptureOptions { memory_limit: 4 << 30, ..CaptureOptions::default() };
+    // By hand: 8 photos of 2^28 one-byte samples (2 GiB), the solution's normals, grey albedo and
+    // confidence at 20 bytes a pixel (5 GiB), and the larger of the photos and the detrended copy
+    // (12 bytes a pixel, 3 GiB): 8 GiB.
+    let px = 16384u64 * 16384;
+    let by_hand = 20 * px + (8 * px).max(12 * px);
+    assert_eq!(session::memory_estimate(&files, None, &options).unwrap(), by_hand);
+    let (result, peak) = peak_during(|| session::capture(&files, &options, &|_| {}));
+    let e = result.unwrap_err().to_string();
+    assert!(e.contains("needs an estimated 8192 MiB") && e.contains("memory limit of 4096 MiB"), "{e}");
+    assert!(e.contains(&dir.path().display().to_string()), "names the photos' folder: {e}");
+    assert!(peak < 8 * MIB, "{} MiB held before refusing", peak / MIB);
+}
+
+#[test]
+fn d9_the_estimate_bounds_what_a_capture_holds() {
+    let _alone = alone();
+    let files = Session::from_dir(&mold("cheek")).unwrap();
+    let options = CaptureOptions::default();
+    let estimate = session::memory_estimate(&files, None, &options).unwrap() as usize;
+    // The solution (20 bytes a pixel), the truth map (12), and the larger of the 8 photos of
+    // 256x256 16-bit grey (16 bytes a pixel) and the detrended copy (12).
+    let px = 256 * 256;
+    assert_eq!(estimate, 20 * px + 12 * px + (16 * px).max(12 * px));
+    let (captured, peak) = peak_during(|| session::capture(&files, &options, &|_| {}).unwrap());
+    drop(captured);
+    eprintln!(
+        "cheek 256x256: estimate {estimate} bytes, heap peak {peak} bytes ({:.2})",
+        peak as f64 / estimate as f64
+    );
+    // Decoder buffers, thread-local scratch and the report ride on top of the large arrays.
+    assert!(peak <= estimate + estimate / 4, "peak {peak} above the estimate {estimate}");
+    assert!(peak >= estimate / 2, "peak {peak}: the estimate {estimate} is not about this capture");
+}
+
+/// An 8-light rig close to the plane y = 0 (directions `(cos a, +-eps, sin a)`): poorly
+/// conditioned, with a condition number that grows as `eps` shrinks.
+fn flat_rig(eps: f32) -> Rig {
+    let lights = (0..8)
+        .map(|i| {
+            let a = (25.0 + 130.0 * i as f32 / 7.0).to_radians();
+            let y = if i % 2 == 0 { eps } else { -eps };
+            Light::new(Vec3::new(a.cos(), y, a.sin()), Vec3::ONE, None).unwrap()
+        })
+        .collect();
+    Rig::new(lights, "flat").unwrap()
+}
+
+#[test]
+fn d7_rig_check_refuses_exactly_what_capture_refuses() {
+    let _alone = alone();
+    let dir = tempfile::tempdir().unwrap();
+    let photos = Session::from_dir(&mold("nose")).unwrap().photos;
+    for eps in [0.3, 0.02, 0.008] {
+        let rig = flat_rig(eps);
+        let path = dir.path().join(format!("rig-{eps}.toml"));
+        rig.save(&path).unwrap();
+        let c = rig.conditioning().condition_number;
+        for max_condition in [c * 0.999, c * 1.001, 50.0] {
+            let solve = SolveConfig { max_condition, ..SolveConfig::default() };
+            let checked = session::check_rig(&path, &rig, None, &solve);
+            let options = CaptureOptions { solve, detrend_block: 0, ..CaptureOptions::default() };
+            let files = Session { rig: path.clone(), photos: photos.clone(), mask: None, ambient: None, truth: None };
+            let captured = session::capture(&files, &options, &|_| {});
+            assert_eq!(checked.is_ok(), captured.is_ok(), "condition {c}, limit {max_condition}");
+            assert_eq!(checked.is_ok(), c <= max_condition, "condition {c}, limit {max_condition}");
+            if let Err(e) = checked {
+                let e = e.to_string();
+                assert!(e.contains(&path.display().to_string()) && e.contains("--max-condition"), "{e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
+    let _alone = alone();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rig.toml");
+    let many = Rig::turntable(200, 45.0, 1.0).unwrap();
+    let e = session::check_rig(&path, &many, None, &SolveConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("200 lights") && e.contains("at most 128") && e.contains("rig.toml"), "{e}");
+    // Refused before any photo is read: these 200 photos are headers without pixels.
+    many.save(&path).unwrap();
+    let photos: Vec<PathBuf> = (0..200)
+        .map(|i| {
+            let p = dir.path().join(format!("p{i:03}.png"));
+            header_only_png(&p, 64, 64);
+            p
+        })
+        .collect();
+    let files = Session { rig: path.clone(), photos, mask: None, ambient: None, truth: None };
+    let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
+    assert!(e.contains("at most 128"), "{e}");
+
+    let with_ambient = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(dir.path().join("nope.png")));
+    let e = session::check_rig(&path, &with_ambient, None, &SolveConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("ambient") && e.contains("nope.png") && e.contains("rig.toml"), "{e}");
+    let given = dir.path().join("gone.png");
+    let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("ambient frame") && e.contains("gone.png"), "the flag's file overrides the rig's: {e}");
+}

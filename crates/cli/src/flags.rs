@@ -1,0 +1,85 @@
+//! Value parsers for flags whose range is known before the run, so every bad flag value is a
+//! usage error (clap prints it with the flag's name and exits 2) rather than a failed run
+//! (exit 1) found after parsing. The ranges are the libraries' own (`SynthConfig::validate`,
+//! `spline::MAX_LEVELS`, `skinkit_maps::limits`), named here, not copied.
+
+use skinkit_maps::limits;
+
+/// A parser of integers in `lo..=hi`.
+pub fn usize_in(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<usize>() {
+        Ok(n) if (lo..=hi).contains(&n) => Ok(n),
+        _ if hi == usize::MAX => Err(format!("`{text}` is not a whole number of at least {lo}")),
+        _ => Err(format!("`{text}` is not a whole number from {lo} to {hi}")),
+    }
+}
+
+/// A parser of odd integers in `lo..=hi` (window sides).
+pub fn odd_in(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<usize>() {
+        Ok(n) if (lo..=hi).contains(&n) && n % 2 == 1 => Ok(n),
+        _ => Err(format!("`{text}` is not an odd number from {lo} to {hi}")),
+    }
+}
+
+/// A parser of finite numbers of at least zero.
+pub fn non_negative(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{text}` is not a finite number of at least 0")),
+    }
+}
+
+/// [`non_negative`] in f64.
+pub fn non_negative_f64(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{text}` is not a finite number of at least 0")),
+    }
+}
+
+/// A face map size `WxH` of at most [`limits::MAX_MAP_TEXELS`] texels.
+pub fn map_size(text: &str) -> Result<(usize, usize), String> {
+    let (w, h) = crate::cmd::synth::parse_size(text)?;
+    match (w as u64).checked_mul(h as u64) {
+        Some(n) if n <= limits::MAX_MAP_TEXELS => Ok((w, h)),
+        _ => Err(format!("`{text}` is larger than a face map may be ({} texels, 32768x32768)", limits::MAX_MAP_TEXELS)),
+    }
+}
+
+/// A parser of `WxH` sizes of at most `max` per side.
+pub fn size_at_most(max: usize) -> impl Fn(&str) -> Result<(usize, usize), String> + Clone + Send + Sync + 'static {
+    move |text: &str| {
+        let (w, h) = crate::cmd::synth::parse_size(text)?;
+        if w > max || h > max {
+            return Err(format!("`{text}` is larger than {max}x{max}"));
+        }
+        Ok((w, h))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_accept_their_ends_and_refuse_beyond() {
+        let p = usize_in(1, 64);
+        assert_eq!((p("1"), p("64")), (Ok(1), Ok(64)));
+        for bad in ["0", "65", "-1", "x", ""] {
+            assert!(p(bad).unwrap_err().contains("from 1 to 64"), "{bad}");
+        }
+        assert!(usize_in(1, usize::MAX)("0").unwrap_err().contains("at least 1"));
+        let o = odd_in(3, 31);
+        assert_eq!((o("3"), o("31")), (Ok(3), Ok(31)));
+        assert!(o("4").is_err() && o("1").is_err() && o("33").is_err());
+        assert!(non_negative("-0.5").is_err() && non_negative("NaN").is_err() && non_negative("inf").is_err());
+        assert_eq!(non_negative("0"), Ok(0.0));
+        assert_eq!(map_size("32768x32768"), Ok((32768, 32768)));
+        assert!(map_size("32768x32769").unwrap_err().contains("larger than a face map"));
+        assert!(map_size("18446744073709551615x3").is_err(), "no overflow");
+        let lut = size_at_most(4096);
+        assert_eq!(lut("4096x1"), Ok((4096, 1)));
+        assert!(lut("4097x1").unwrap_err().contains("larger than 4096x4096") && lut("0x3").is_err());
+    }
+}
