@@ -74,7 +74,7 @@ pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
     if listing.is_file() {
         return photos_listed(&listing);
     }
-    let entries = std::fs::read_dir(dir).map_err(|source| Error::Io { path: dir.to_owned(), source })?;
+    let entries = std::fs::read_dir(dir).map_err(|error| Error::Io { path: dir.to_owned(), error })?;
     let mut photos: Vec<PathBuf> =
         entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_photo(p)).collect();
     photos.sort();
@@ -86,7 +86,7 @@ pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
 
 /// The photos a `filenames.txt` lists, one per line, relative to its folder.
 fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
-    let text = std::fs::read_to_string(listing).map_err(|source| Error::Io { path: listing.to_owned(), source })?;
+    let text = std::fs::read_to_string(listing).map_err(|error| Error::Io { path: listing.to_owned(), error })?;
     let dir = listing.parent().unwrap_or(Path::new("."));
     let mut photos = Vec::new();
     for (line, name) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
@@ -230,15 +230,23 @@ struct Inputs {
 pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(Stage) + Sync)) -> Result<Captured> {
     let start = Instant::now();
     let mut timings = Timings::default();
-    let rig = Rig::load(&session.rig).map_err(|e| context(format!("cannot use rig {}", session.rig.display()), e))?;
-    rig.expect_photos(session.photos.len()).map_err(|e| context(format!("rig {}", session.rig.display()), e))?;
+    // Rig::load's errors name the rig file; later rig errors get it as context, once.
+    let rig = Rig::load(&session.rig)?;
+    let in_rig = |e: Error| context(format!("rig {}", session.rig.display()), e);
+    rig.expect_photos(session.photos.len()).map_err(in_rig)?;
+    // Solver options first, so that every error of the solve below is the rig's.
+    options.solve.validate()?;
     let conditioning = rig.conditioning();
     let mut warnings: Vec<String> = conditioning.warning().into_iter().collect();
 
     progress(Stage::Decode);
     let t = Instant::now();
     let ambient_path = session.ambient.clone().or_else(|| rig.ambient().map(Path::to_path_buf));
-    let inputs = decode(session, ambient_path.as_deref(), options)?;
+    let ambient_role = match &session.ambient {
+        Some(_) => "ambient frame".to_owned(),
+        None => format!("{}: field `ambient` (the ambient frame)", session.rig.display()),
+    };
+    let inputs = decode(session, ambient_path.as_deref().map(|p| (p, ambient_role.as_str())), options)?;
     timings.decode = t.elapsed().as_secs_f64();
 
     let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
@@ -255,9 +263,9 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let t = Instant::now();
     let near_lights = near::applies(&rig);
     let mut solution = if near_lights {
-        near::solve(&stack, &rig, &options.solve)?
+        near::solve(&stack, &rig, &options.solve).map_err(in_rig)?
     } else {
-        solve::solve(&stack, &rig, &options.solve, &solve::no_progress)?
+        solve::solve(&stack, &rig, &options.solve, &solve::no_progress).map_err(in_rig)?
     };
     drop(stack);
     timings.solve = t.elapsed().as_secs_f64();
@@ -309,13 +317,17 @@ fn context(what: String, cause: Error) -> Error {
     Error::Context { context: what, cause: Box::new(cause) }
 }
 
-/// Decodes the photos, the ambient frame, the mask and the truth map, all in parallel.
-fn decode(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<Inputs> {
+/// Decodes the photos, the ambient frame (its path and its role in messages), the mask and the
+/// truth map, all in parallel.
+fn decode(session: &Session, ambient: Option<(&Path, &str)>, options: &CaptureOptions) -> Result<Inputs> {
     let (photos, (ambient, (mask, truth))) = rayon::join(
-        || session.photos.par_iter().map(|p| read_photo(p, options)).collect::<Result<Vec<_>>>(),
+        || {
+            let photos = session.photos.par_iter().enumerate();
+            photos.map(|(i, p)| read_photo(p, &format!("photo {}", i + 1), options)).collect::<Result<Vec<_>>>()
+        },
         || {
             rayon::join(
-                || ambient.map(|p| read_photo(p, options)).transpose(),
+                || ambient.map(|(p, role)| read_photo(p, role, options)).transpose(),
                 || {
                     rayon::join(
                         || session.mask.as_deref().map(|p| read_mask(p, &options.limits)).transpose(),
@@ -328,23 +340,21 @@ fn decode(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -
     Ok(Inputs { photos: photos?, ambient: ambient?, mask: mask?, truth: truth? })
 }
 
-fn read_photo(path: &Path, options: &CaptureOptions) -> Result<Photo> {
-    let photo = io::read_photo(path, &options.limits)
-        .map_err(|e| context(format!("cannot read photo {}", path.display()), e.into()))?;
+/// Reads a photo; `role` (`photo 3`, `ambient frame`) prefixes its errors, which name the file.
+fn read_photo(path: &Path, role: &str, options: &CaptureOptions) -> Result<Photo> {
+    let photo = io::read_photo(path, &options.limits).map_err(|e| context(role.to_owned(), e.into()))?;
     // The transfer applies to integer photos only: float photos are linear by definition.
     Ok(if photo.bit_depth() == 32 { photo } else { photo.with_transfer(options.transfer) })
 }
 
 /// A mask image: nonzero pixels are the object.
 fn read_mask(path: &Path, limits: &Limits) -> Result<Grid<bool>> {
-    let map = io::read_scalar_map(path, limits)
-        .map_err(|e| context(format!("cannot read mask {}", path.display()), e.into()))?;
+    let map = io::read_scalar_map(path, limits).map_err(|e| context("mask".into(), e.into()))?;
     Ok(map.map(|&v| v > 0.0))
 }
 
 fn read_truth(path: &Path, options: &CaptureOptions) -> Result<NormalMap> {
-    io::read_normal_map(path, options.encoding, &options.limits)
-        .map_err(|e| context(format!("ground truth {}", path.display()), e.into()))
+    io::read_normal_map(path, options.encoding, &options.limits).map_err(|e| context("ground truth".into(), e.into()))
 }
 
 /// Angular error of `normals` against a ground-truth map, the truth detrended with the same

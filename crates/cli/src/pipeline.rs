@@ -60,7 +60,7 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value)?;
     io::write_atomic(path, |w| {
         use std::io::Write;
-        w.write_all(text.as_bytes()).map_err(|e| skinkit_maps::Error::Io { path: path.to_owned(), source: e })
+        w.write_all(text.as_bytes()).map_err(|e| skinkit_maps::Error::Io { path: path.to_owned(), error: e })
     })
     .with_context(|| format!("cannot write {}", path.display()))
 }

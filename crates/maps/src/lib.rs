@@ -22,6 +22,7 @@ pub mod normal;
 pub mod photo;
 pub mod pyramid;
 pub mod resample;
+mod signature;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};

@@ -90,14 +90,9 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                     seconds: Some(report.timings_s.total),
                 },
                 Err(e) => {
-                    bar.suspend(|| out.warn(format!("{}: {e:#}", dir.display())));
-                    SessionOutcome {
-                        session: name,
-                        ok: false,
-                        error: Some(format!("{e:#}")),
-                        invalid_pixels: None,
-                        seconds: None,
-                    }
+                    let line = crate::output::one_line(&e);
+                    bar.suspend(|| out.warn(format!("{}: {line}", dir.display())));
+                    SessionOutcome { session: name, ok: false, error: Some(line), invalid_pixels: None, seconds: None }
                 }
             }
         })
