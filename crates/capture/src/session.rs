@@ -232,7 +232,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let mut timings = Timings::default();
     // Rig::load's errors name the rig file; later rig errors get it as context, once.
     let rig = Rig::load(&session.rig)?;
-    let in_rig = |e: Error| context(format!("rig {}", session.rig.display()), e);
+    let in_rig = |e: Error| context(session.rig.display().to_string(), e);
     rig.expect_photos(session.photos.len()).map_err(in_rig)?;
     // Solver options first, so that every error of the solve below is the rig's.
     options.solve.validate()?;

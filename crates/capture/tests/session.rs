@@ -112,7 +112,8 @@ fn d11_rig_errors_name_the_rig_file() {
         })
         .collect();
     let e = capture(&nearly_coplanar);
-    assert!(e.starts_with(&format!("rig {rig_name}: ")) && e.contains("condition number"), "{e}");
+    assert!(e.starts_with(&format!("{rig_name}: ")) && e.contains("condition number"), "{e}");
+    assert_eq!(e.matches(&rig_name).count(), 1, "{e}");
     // A rig whose ambient frame is missing: the rig file and its field, then the missing file.
     let good = Rig::turntable(8, 45.0, 1.0).unwrap().to_toml_string();
     let e = capture(&format!("ambient = \"nope.png\"\n{good}"));
