@@ -241,18 +241,14 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
 
     progress(Stage::Decode);
     let t = Instant::now();
-    let ambient_path = session.ambient.clone().or_else(|| rig.ambient().map(Path::to_path_buf));
-    let ambient_role = match &session.ambient {
-        Some(_) => "ambient frame".to_owned(),
-        None => format!("{}: field `ambient` (the ambient frame)", session.rig.display()),
-    };
-    let inputs = decode(session, ambient_path.as_deref().map(|p| (p, ambient_role.as_str())), options)?;
+    let ambient = ambient_frame(session, &rig);
+    let inputs = decode(session, ambient.as_ref().map(|(p, role)| (p.as_path(), role.as_str())), options)?;
     timings.decode = t.elapsed().as_secs_f64();
 
     let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
     let mut stack = PhotoStack::new(inputs.photos, names.clone())?;
-    if let (Some(ambient), Some(path)) = (inputs.ambient, &ambient_path) {
-        stack = stack.with_ambient(ambient, &path.display().to_string())?;
+    if let (Some(frame), Some((path, _))) = (inputs.ambient, &ambient) {
+        stack = stack.with_ambient(frame, &path.display().to_string())?;
     }
     if let Some(mask) = inputs.mask {
         stack = stack.with_mask(mask)?;
@@ -310,6 +306,18 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         peak_memory_mib: None,
     };
     Ok(Captured { solution, report })
+}
+
+/// The ambient frame to subtract, if any (the session's overrides the rig's), with how messages
+/// name it: a missing rig ambient reads as the rig file's field, not as a photo (issue 15, D11).
+fn ambient_frame(session: &Session, rig: &Rig) -> Option<(PathBuf, String)> {
+    match (&session.ambient, rig.ambient()) {
+        (Some(path), _) => Some((path.clone(), "ambient frame".to_owned())),
+        (None, Some(path)) => {
+            Some((path.to_owned(), format!("{}: field `ambient` (the ambient frame)", session.rig.display())))
+        }
+        (None, None) => None,
+    }
 }
 
 /// `cause` with what was being done when it happened.

@@ -20,7 +20,7 @@
 //! - loaded normals that are zero or non-finite are replaced by computed ones, with a warning;
 //! - a vertex that no triangle with area touches gets the normal +z (deterministic, finite).
 
-use std::io::{BufRead, Read};
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
