@@ -166,7 +166,7 @@ mod tests {
             "t.obj: line 5: face vertex `99999`: `v` index 99999 is out of range (the file has 3 `v` lines)"
         );
         assert!(reason(&format!("{head}f 1 2 -4\n")).contains("line 5: face vertex `-4`: `v` index -4"));
-        assert!(reason(&format!("{head}f 1/1 2/2 3/7\n")).contains("`vt` index 7"));
+        assert!(reason(&format!("{head}f 1/1 2/1 3/7\n")).contains("`vt` index 7"));
         assert!(reason(&format!("{head}f 0 1 2\n")).contains("OBJ indices start at 1"));
         assert!(reason(&format!("{head}f 1 2 x\n")).contains("`x` is not an index"));
     }
