@@ -22,17 +22,13 @@ pub enum Error {
     /// Image IO, from the `maps` crate.
     #[error(transparent)]
     Maps(#[from] skinkit_maps::Error),
-    /// What was being done (`cannot read photo a.png`) when `cause` happened; shown as
+    /// What was being done or read (`photo 3`, `rig a.toml`) when `cause` happened; shown as
     /// `context: cause` (the cause is part of the message, not a separate source).
     #[error("{context}: {cause}")]
     Context { context: String, cause: Box<Error> },
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{path}: {error}")]
+    Io { path: PathBuf, error: std::io::Error },
 }
 
 /// Result alias for the `capture` crate.

@@ -122,7 +122,7 @@ struct Triple {
 }
 
 fn open(path: &Path) -> Result<std::fs::File> {
-    std::fs::File::open(path).map_err(|source| Error::Io { path: path.to_owned(), source })
+    std::fs::File::open(path).map_err(|error| Error::Io { path: path.to_owned(), error })
 }
 
 fn read_text(mut reader: impl Read, name: &str) -> Result<String> {

@@ -283,7 +283,7 @@ impl Rig {
     /// # Errors
     /// [`Error::Io`] when the file cannot be read; [`Error::BadFile`] as [`Rig::parse`].
     pub fn load(path: &Path) -> Result<Rig> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
         let mut rig = Rig::parse(&text, &path.display().to_string())?;
         if let Some(ambient) = rig.ambient.take() {
             let folder = path.parent().unwrap_or(Path::new(""));
@@ -329,7 +329,7 @@ impl Rig {
         let text = self.to_toml_relative(path.parent());
         skinkit_maps::io::write_atomic(path, |w| {
             use std::io::Write;
-            w.write_all(text.as_bytes()).map_err(|source| skinkit_maps::Error::Io { path: path.to_owned(), source })
+            w.write_all(text.as_bytes()).map_err(|error| skinkit_maps::Error::Io { path: path.to_owned(), error })
         })?;
         Ok(())
     }

@@ -75,7 +75,7 @@ pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
     if listing.is_file() {
         return photos_listed(&listing);
     }
-    let entries = std::fs::read_dir(dir).map_err(|source| Error::Io { path: dir.to_owned(), source })?;
+    let entries = std::fs::read_dir(dir).map_err(|error| Error::Io { path: dir.to_owned(), error })?;
     let mut photos: Vec<PathBuf> =
         entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_photo(p)).collect();
     photos.sort();
@@ -87,7 +87,7 @@ pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
 
 /// The photos a `filenames.txt` lists, one per line, relative to its folder.
 fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
-    let text = std::fs::read_to_string(listing).map_err(|source| Error::Io { path: listing.to_owned(), source })?;
+    let text = std::fs::read_to_string(listing).map_err(|error| Error::Io { path: listing.to_owned(), error })?;
     let dir = listing.parent().unwrap_or(Path::new("."));
     let mut photos = Vec::new();
     for (line, name) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
@@ -235,23 +235,27 @@ struct Inputs {
 pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(Stage) + Sync)) -> Result<Captured> {
     let start = Instant::now();
     let mut timings = Timings::default();
-    let rig = Rig::load(&session.rig).map_err(|e| context(format!("cannot use rig {}", session.rig.display()), e))?;
-    rig.expect_photos(session.photos.len()).map_err(|e| context(format!("rig {}", session.rig.display()), e))?;
+    // Rig::load's errors name the rig file; later rig errors get it as context, once.
+    let rig = Rig::load(&session.rig)?;
+    let in_rig = |e: Error| context(session.rig.display().to_string(), e);
+    rig.expect_photos(session.photos.len()).map_err(in_rig)?;
+    // Solver options first, so that every error of the solve below is the rig's.
+    options.solve.validate()?;
     check_rig(&session.rig, &rig, session.ambient.as_deref(), &options.solve)?;
     let conditioning = rig.conditioning();
     let mut warnings: Vec<String> = conditioning.warning().into_iter().collect();
-    let ambient_path = session.ambient.clone().or_else(|| rig.ambient().map(Path::to_path_buf));
-    check_memory(session, ambient_path.as_deref(), options)?;
+    let ambient = ambient_frame(session, &rig);
+    check_memory(session, ambient.as_ref().map(|(p, _)| p.as_path()), options)?;
 
     progress(Stage::Decode);
     let t = Instant::now();
-    let inputs = decode(session, ambient_path.as_deref(), options)?;
+    let inputs = decode(session, ambient.as_ref().map(|(p, role)| (p.as_path(), role.as_str())), options)?;
     timings.decode = t.elapsed().as_secs_f64();
 
     let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
     let mut stack = PhotoStack::new(inputs.photos, names.clone())?;
-    if let (Some(ambient), Some(path)) = (inputs.ambient, &ambient_path) {
-        stack = stack.with_ambient(ambient, &path.display().to_string())?;
+    if let (Some(frame), Some((path, _))) = (inputs.ambient, &ambient) {
+        stack = stack.with_ambient(frame, &path.display().to_string())?;
     }
     if let Some(mask) = inputs.mask {
         stack = stack.with_mask(mask)?;
@@ -262,9 +266,9 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let t = Instant::now();
     let near_lights = near::applies(&rig);
     let mut solution = if near_lights {
-        near::solve(&stack, &rig, &options.solve)?
+        near::solve(&stack, &rig, &options.solve).map_err(in_rig)?
     } else {
-        solve::solve(&stack, &rig, &options.solve, &solve::no_progress)?
+        solve::solve(&stack, &rig, &options.solve, &solve::no_progress).map_err(in_rig)?
     };
     drop(stack);
     timings.solve = t.elapsed().as_secs_f64();
@@ -330,7 +334,7 @@ pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &So
     }
     let (path, whose) = match (ambient, rig.ambient()) {
         (Some(p), _) => (p, "the ambient frame".to_owned()),
-        (None, Some(p)) => (p, format!("rig {}: ambient", rig_path.display())),
+        (None, Some(p)) => (p, format!("{}: field `ambient` (the ambient frame)", rig_path.display())),
         (None, None) => return Ok(()),
     };
     if !path.is_file() {
@@ -399,18 +403,34 @@ fn check_memory(session: &Session, ambient: Option<&Path>, options: &CaptureOpti
     Ok(())
 }
 
+/// The ambient frame to subtract, if any (the session's overrides the rig's), with how messages
+/// name it: a missing rig ambient reads as the rig file's field, not as a photo (issue 15, D11).
+fn ambient_frame(session: &Session, rig: &Rig) -> Option<(PathBuf, String)> {
+    match (&session.ambient, rig.ambient()) {
+        (Some(path), _) => Some((path.clone(), "ambient frame".to_owned())),
+        (None, Some(path)) => {
+            Some((path.to_owned(), format!("{}: field `ambient` (the ambient frame)", session.rig.display())))
+        }
+        (None, None) => None,
+    }
+}
+
 /// `cause` with what was being done when it happened.
 fn context(what: String, cause: Error) -> Error {
     Error::Context { context: what, cause: Box::new(cause) }
 }
 
-/// Decodes the photos, the ambient frame, the mask and the truth map, all in parallel.
-fn decode(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<Inputs> {
+/// Decodes the photos, the ambient frame (its path and its role in messages), the mask and the
+/// truth map, all in parallel.
+fn decode(session: &Session, ambient: Option<(&Path, &str)>, options: &CaptureOptions) -> Result<Inputs> {
     let (photos, (ambient, (mask, truth))) = rayon::join(
-        || session.photos.par_iter().map(|p| read_photo(p, options)).collect::<Result<Vec<_>>>(),
+        || {
+            let photos = session.photos.par_iter().enumerate();
+            photos.map(|(i, p)| read_photo(p, &format!("photo {}", i + 1), options)).collect::<Result<Vec<_>>>()
+        },
         || {
             rayon::join(
-                || ambient.map(|p| read_photo(p, options)).transpose(),
+                || ambient.map(|(p, role)| read_photo(p, role, options)).transpose(),
                 || {
                     rayon::join(
                         || session.mask.as_deref().map(|p| read_mask(p, &options.limits)).transpose(),
@@ -423,23 +443,21 @@ fn decode(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -
     Ok(Inputs { photos: photos?, ambient: ambient?, mask: mask?, truth: truth? })
 }
 
-fn read_photo(path: &Path, options: &CaptureOptions) -> Result<Photo> {
-    let photo = io::read_photo(path, &options.limits)
-        .map_err(|e| context(format!("cannot read photo {}", path.display()), e.into()))?;
+/// Reads a photo; `role` (`photo 3`, `ambient frame`) prefixes its errors, which name the file.
+fn read_photo(path: &Path, role: &str, options: &CaptureOptions) -> Result<Photo> {
+    let photo = io::read_photo(path, &options.limits).map_err(|e| context(role.to_owned(), e.into()))?;
     // The transfer applies to integer photos only: float photos are linear by definition.
     Ok(if photo.bit_depth() == 32 { photo } else { photo.with_transfer(options.transfer) })
 }
 
 /// A mask image: nonzero pixels are the object.
 fn read_mask(path: &Path, limits: &Limits) -> Result<Grid<bool>> {
-    let map = io::read_scalar_map(path, limits)
-        .map_err(|e| context(format!("cannot read mask {}", path.display()), e.into()))?;
+    let map = io::read_scalar_map(path, limits).map_err(|e| context("mask".into(), e.into()))?;
     Ok(map.map(|&v| v > 0.0))
 }
 
 fn read_truth(path: &Path, options: &CaptureOptions) -> Result<NormalMap> {
-    io::read_normal_map(path, options.encoding, &options.limits)
-        .map_err(|e| context(format!("ground truth {}", path.display()), e.into()))
+    io::read_normal_map(path, options.encoding, &options.limits).map_err(|e| context("ground truth".into(), e.into()))
 }
 
 /// Angular error of `normals` against a ground-truth map, the truth detrended with the same

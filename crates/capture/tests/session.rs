@@ -87,5 +87,37 @@ fn session_errors_name_the_file() {
     std::fs::write(dir.path().join("08.png"), b"not a png").unwrap();
     let files = Session::from_dir(dir.path()).unwrap();
     let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
-    assert!(e.contains("cannot read photo") && e.contains("08.png"), "{e}");
+    // The photo's place in the rig, then its file, each once.
+    assert!(e.starts_with("photo 8: ") && e.matches("08.png").count() == 1, "{e}");
+}
+
+/// Issue 15, D11: a rig's conditioning and its ambient frame are reported against the rig file.
+#[test]
+fn d11_rig_errors_name_the_rig_file() {
+    let dir = tempfile::tempdir().unwrap();
+    write_session(dir.path(), 16, 0.0);
+    let rig_path = dir.path().join("rig.toml");
+    let capture = |rig_text: &str| {
+        std::fs::write(&rig_path, rig_text).unwrap();
+        let files = Session::from_dir(dir.path()).unwrap();
+        session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string()
+    };
+    let rig_name = rig_path.display().to_string();
+    // Eight lights within +-0.015 of the y = 0 plane: rank 3, but a condition number over 50.
+    let nearly_coplanar: String = (0..8)
+        .map(|i| {
+            let x = (i as f32 - 3.5) / 4.0;
+            let y = if i % 2 == 0 { 0.015 } else { -0.015 };
+            format!("[[light]]\ndirection = [{x}, {y}, 1.0]\n")
+        })
+        .collect();
+    let e = capture(&nearly_coplanar);
+    assert!(e.starts_with(&format!("{rig_name}: ")) && e.contains("condition number"), "{e}");
+    assert_eq!(e.matches(&rig_name).count(), 1, "{e}");
+    // A rig whose ambient frame is missing: the rig file and its field, then the missing file.
+    let good = Rig::turntable(8, 45.0, 1.0).unwrap().to_toml_string();
+    let e = capture(&format!("ambient = \"nope.png\"\n{good}"));
+    let want = format!("{rig_name}: field `ambient` (the ambient frame): ");
+    assert!(e.starts_with(&want) && e.contains("nope.png") && !e.contains("photo"), "{e}");
+    assert_eq!(e.matches("nope.png").count(), 1, "{e}");
 }

@@ -2,8 +2,9 @@
 //!
 //! This crate only parses arguments, turns them into validated library configs, draws progress on
 //! stderr and prints results; the work itself lives in the library crates. Exit codes: 0 when all
-//! went well, 1 when an input failed (a bad photo, rig or session), 2 for a usage error, 130 when
-//! interrupted (SIGINT, SIGTERM or SIGHUP; see `interrupt`).
+//! went well, 1 when an input or the job failed (a bad photo, rig or session, an unwritable
+//! output), 2 for a usage error, 130 when interrupted (SIGINT, SIGTERM or SIGHUP; see
+//! `interrupt`). Errors print as one line ([`output::Output::error`]), each cause once.
 
 mod cmd;
 mod flags;

@@ -114,19 +114,16 @@ impl Output {
     }
 }
 
-/// The error and its causes on one line, each cause once: a cause whose text the line already
-/// holds (a library error that prints its own source) is not repeated.
-fn one_line(error: &anyhow::Error) -> String {
+/// The error and its causes on one line, each cause once (issue 15, D10). Two rules:
+/// - a cause whose text the line already holds is skipped (a library error that embeds its
+///   source's text, as every skinkit error does, repeats nothing);
+/// - a cause that opens with what the line ends with drops that opening, so a context naming a
+///   file (`cannot write a.png`) and a library error naming it again (`a.png: Is a directory`)
+///   read `cannot write a.png: Is a directory`.
+pub(crate) fn one_line(error: &anyhow::Error) -> String {
     let mut line = String::new();
     for cause in error.chain() {
-        let text = cause.to_string();
-        if line.contains(&text) {
-            continue;
-        }
-        if !line.is_empty() {
-            line.push_str(": ");
-        }
-        line.push_str(&text);
+        join_cause(&mut line, &cause.to_string());
     }
     line
 }
@@ -147,4 +144,71 @@ impl std::error::Error for UsageError {}
 /// The exit code of a failed run: 2 for a [`UsageError`] anywhere in the chain, else 1.
 pub fn exit_code(error: &anyhow::Error) -> i32 {
     if error.chain().any(|cause| cause.is::<UsageError>()) { 2 } else { 1 }
+}
+
+/// Appends `cause` to `line` under the rules of [`one_line`].
+fn join_cause(line: &mut String, cause: &str) {
+    if cause.is_empty() || line.contains(cause) {
+        return;
+    }
+    let rest = match cause.split_once(": ") {
+        Some((head, rest)) if ends_with_word(line, head) => rest,
+        _ => cause,
+    };
+    if line.contains(rest) {
+        return;
+    }
+    if !line.is_empty() {
+        line.push_str(": ");
+    }
+    line.push_str(rest);
+}
+
+/// `line` ends with `word` as a whole word (after a space, a quote or bracket, or as all of it).
+fn ends_with_word(line: &str, word: &str) -> bool {
+    match line.strip_suffix(word) {
+        Some(before) => !line.is_empty() && before.chars().last().is_none_or(|c| " ([`'\"".contains(c)),
+        None => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+    use anyhow::Context;
+
+    fn io_error(kind: std::io::ErrorKind) -> std::io::Error {
+        std::io::Error::from(kind)
+    }
+
+    /// Issue 15, D10: each cause once, whether a library error embeds its source's text, exposes
+    /// it as `source()`, or a context names the same file as the error below it.
+    #[test]
+    fn d10_error_chains_say_each_cause_once() {
+        let os = std::io::Error::from_raw_os_error(2);
+        let text = os.to_string();
+        // A context naming the file over an error naming it again.
+        let e = anyhow::Error::new(skinkit_maps::Error::Io { path: "a.png".into(), error: os })
+            .context("cannot read photo a.png");
+        assert_eq!(one_line(&e), format!("cannot read photo a.png: {text}"));
+        // A context over an io::Error chain that repeats its text.
+        let inner = anyhow::Error::new(io_error(std::io::ErrorKind::IsADirectory));
+        let kind_text = inner.to_string();
+        let e = inner.context(format!("x.png: {kind_text}")).context("cannot write x.png");
+        assert_eq!(one_line(&e), format!("cannot write x.png: {kind_text}"));
+        // Unrelated causes are all kept, in order.
+        let e = anyhow::anyhow!("bad value").context("field b").context("scene.toml");
+        assert_eq!(one_line(&e), "scene.toml: field b: bad value");
+    }
+
+    #[test]
+    fn a_cause_is_not_dropped_for_a_partial_overlap() {
+        // "photo 1" ends the line, but the cause opens with "photo 12": nothing is dropped.
+        let e = anyhow::anyhow!("photo 12: too dark").context("photo 1");
+        assert_eq!(one_line(&e), "photo 1: photo 12: too dark");
+        let e = anyhow::anyhow!("2: too dark").context("light 12");
+        assert_eq!(one_line(&e), "light 12: 2: too dark");
+        let r: Result<(), _> = Err(anyhow::anyhow!("a.png: gone")).context("mask a.png");
+        assert_eq!(one_line(&r.unwrap_err()), "mask a.png: gone");
+    }
 }

@@ -95,7 +95,7 @@ fn json_atomic<T: Serialize>(path: &Path, value: &T) -> skinkit_maps::Result<()>
     let text = serde_json::to_string_pretty(value).map_err(|e| skinkit_maps::Error::InvalidParameter(e.to_string()))?;
     io::write_atomic(path, |w| {
         use std::io::Write;
-        w.write_all(text.as_bytes()).map_err(|e| skinkit_maps::Error::Io { path: path.to_owned(), source: e })
+        w.write_all(text.as_bytes()).map_err(|e| skinkit_maps::Error::Io { path: path.to_owned(), error: e })
     })
 }
 

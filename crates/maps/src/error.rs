@@ -30,12 +30,8 @@ pub enum Error {
     #[error("{path}: cannot encode: {reason}")]
     Encode { path: PathBuf, reason: String },
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{path}: {error}")]
+    Io { path: PathBuf, error: std::io::Error },
 }
 
 /// Result alias for the `maps` crate.
@@ -43,7 +39,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Error::Io { path: path.into(), source }
+        Error::Io { path: path.into(), error: source }
     }
     pub(crate) fn decode(path: impl Into<PathBuf>, reason: impl ToString) -> Self {
         Error::Decode { path: path.into(), reason: reason.to_string() }

@@ -71,9 +71,8 @@ pub fn decode_photo(path: &Path, reader: impl std::io::BufRead + std::io::Seek, 
 
 fn decode_dynamic(path: &Path, reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<DynamicImage> {
     let reader = ImageReader::new(reader).with_guessed_format().map_err(|e| Error::io(path, e))?;
-    if reader.format().is_none() {
-        return Err(Error::decode(path, "unrecognised file signature (expected PNG, TIFF or EXR)"));
-    }
+    // Only PNG and TIFF reach the decoder, and only under their own names (JPEG never: D13).
+    crate::signature::check(path, reader.format())?;
     let decoder = reader.into_decoder().map_err(|e| Error::decode(path, e))?;
     let (w, h) = decoder.dimensions();
     limits.check(path, w as u64, h as u64)?;
@@ -137,6 +136,7 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
 /// Reads the first RGB(A) layer of an EXR file as float triples (alpha ignored, missing channels 0).
 fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
     use exr::prelude::read_first_rgba_layer_from_file;
+    crate::signature::check_file(path)?;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::decode(path, e))?;
     let header = meta.headers.first().ok_or_else(|| Error::decode(path, "no layer"))?;
     let size = header.layer_size;
@@ -164,10 +164,10 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> Re
     let prefix = format!(".{name}.");
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".tmp");
-    // tempfile creates private (0600) files; outputs are ordinary files (0644 less the umask).
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
-    let tmp = builder.tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?;
+    // `make_in` with our own open: its errors are the OS's alone, where `tempfile_in` would add
+    // the temporary file's name, which no message should show (issue 15, D10); errors name
+    // `path`, the file the user asked for.
+    let tmp = builder.make_in(&dir, open_new).map_err(|e| Error::io(path, e))?;
     {
         let mut writer = BufWriter::with_capacity(1 << 20, tmp.as_file());
         write(&mut writer)?;
@@ -177,6 +177,16 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<&File>) -> Re
     crate::output_set::charge_write(path, written)?;
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
+}
+
+/// Creates `path`, which must not exist, for writing: mode 0644 less the umask on Unix (outputs
+/// are ordinary files; tempfile's own files are private, 0600).
+fn open_new(path: &Path) -> std::io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true).create_new(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o644);
+    options.open(path)
 }
 
 /// Pixel layouts [`write_png`] accepts.

@@ -27,6 +27,7 @@ pub mod output_set;
 pub mod photo;
 pub mod pyramid;
 pub mod resample;
+mod signature;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};

@@ -182,7 +182,7 @@ fn welded_normals(mesh: &Mesh, weld: &[usize], ids_per_row: usize) -> Vec<Vec3> 
 /// When the file cannot be written.
 pub fn write_obj(mesh: &Mesh, path: &Path) -> skinkit_maps::Result<()> {
     skinkit_maps::io::write_atomic(path, |w| {
-        obj_text(mesh, w).map_err(|source| skinkit_maps::Error::Io { path: path.to_owned(), source })
+        obj_text(mesh, w).map_err(|error| skinkit_maps::Error::Io { path: path.to_owned(), error })
     })
 }
 

@@ -19,6 +19,7 @@ pub mod highlight;
 pub mod label;
 pub mod load;
 pub mod mesh;
+mod mesh_source;
 pub mod pass;
 pub mod passes;
 pub mod scene;

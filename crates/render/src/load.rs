@@ -36,16 +36,26 @@ use crate::shading::{self, GreenAxis, RenderInputs, SpecularMode, Texture, ToneC
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LoadError {
-    /// The mesh could not be loaded (the message names the file).
-    #[error(transparent)]
-    Mesh(#[from] MeshError),
-    /// A map could not be read (the message names the file).
-    #[error("{field}: {source}")]
+    /// A mesh could not be loaded: `scene.toml: mesh: head.obj: ...` (the scene file, its
+    /// field, then the mesh error, which names the mesh file).
+    #[error("{file}: {field}: {error}")]
+    Mesh {
+        /// The scene file.
+        file: String,
+        /// `mesh` or `translucent[i].mesh`.
+        field: String,
+        error: MeshError,
+    },
+    /// A map could not be read: the scene file, its field, then the map error (which names the
+    /// map file). Errors here embed their cause's text and expose no `source()`, so a printed
+    /// chain says each cause once.
+    #[error("{file}: {field}: {error}")]
     Map {
+        /// The scene file.
+        file: String,
         /// `normal_map.path` or `albedo`.
         field: &'static str,
-        #[source]
-        source: skinkit_maps::Error,
+        error: skinkit_maps::Error,
     },
     /// A map file the scene names does not exist (yet).
     #[error("{file}: {field}: {path} does not exist{hint}")]
@@ -123,7 +133,8 @@ pub fn target_for(format: scene::OutputFormat) -> (TargetFormat, ToneCurve) {
 /// # Errors
 /// Unreadable or malformed mesh or maps.
 pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Result<Loaded> {
-    let loaded = Mesh::load(&scene.mesh)?;
+    let loaded =
+        Mesh::load(&scene.mesh).map_err(|error| LoadError::Mesh { file: scene.name(), field: "mesh".into(), error })?;
     let mut warnings = loaded.warnings;
     let mesh = loaded.mesh;
     let method = scene.normal_map.as_ref().map_or(FrameMethod::Paper, |m| m.frames);
@@ -143,8 +154,11 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         Some(spec) => {
             exists(scene, "normal_map.path", &spec.path, spec.made_by.as_deref())?;
             let encoding = NormalEncoding { green: spec.green };
-            let map = io::read_normal_map(&spec.path, encoding, &limits)
-                .map_err(|source| LoadError::Map { field: "normal_map.path", source })?;
+            let map = io::read_normal_map(&spec.path, encoding, &limits).map_err(|error| LoadError::Map {
+                file: scene.name(),
+                field: "normal_map.path",
+                error,
+            })?;
             fit(Texture::from_normal_map(&map), "normal map", max_texture_side, &mut warnings)
         }
     };
@@ -153,7 +167,11 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         Some(Albedo::Constant(c)) => Texture::solid([c.x, c.y, c.z, 1.0]),
         Some(Albedo::Map(path)) => {
             exists(scene, "albedo", path, None)?;
-            let texture = read_albedo(path, &limits).map_err(|source| LoadError::Map { field: "albedo", source })?;
+            let texture = read_albedo(path, &limits).map_err(|error| LoadError::Map {
+                file: scene.name(),
+                field: "albedo",
+                error,
+            })?;
             fit(texture, "albedo", max_texture_side, &mut warnings)
         }
     };

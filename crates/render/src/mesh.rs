@@ -31,12 +31,8 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 #[non_exhaustive]
 pub enum MeshError {
     /// The file could not be read.
-    #[error("{file}: {source}")]
-    Io {
-        file: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{file}: {error}")]
+    Io { file: String, error: std::io::Error },
     /// The extension names no supported format.
     #[error("{file}: unsupported mesh format (expected .obj, .gltf or .glb)")]
     UnsupportedFormat { file: String },
@@ -61,6 +57,9 @@ pub enum MeshError {
     /// An index that names no vertex.
     #[error("{file}: triangle {triangle} uses vertex {index} but the mesh has {count} vertices")]
     IndexOutOfRange { file: String, triangle: usize, index: u32, count: usize },
+    /// An OBJ line the loader refuses, named by its line number in the file.
+    #[error("{file}: line {line}: {reason}")]
+    ObjLine { file: String, line: usize, reason: String },
     /// Attribute arrays or the index count do not fit together.
     #[error("{file}: {field}: {reason}")]
     Layout { file: String, field: &'static str, reason: String },
@@ -100,7 +99,7 @@ impl Mesh {
     pub fn load(path: &Path) -> Result<LoadedMesh> {
         let file = path.display().to_string();
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        let bytes = std::fs::read(path).map_err(|source| MeshError::Io { file: file.clone(), source })?;
+        let bytes = std::fs::read(path).map_err(|error| MeshError::Io { file: file.clone(), error })?;
         match ext.as_deref() {
             Some("obj") => Self::parse_obj(&mut bytes.as_slice(), &file),
             Some("gltf") | Some("glb") => Self::parse_gltf(&bytes, path.parent(), &file),
@@ -114,9 +113,14 @@ impl Mesh {
     /// # Errors
     /// As [`Mesh::load`].
     pub fn parse_obj(reader: &mut impl BufRead, origin: &str) -> Result<LoadedMesh> {
+        let mut bytes = Vec::new();
+        reader.read_to_end(&mut bytes).map_err(|error| MeshError::Io { file: origin.to_owned(), error })?;
+        // Source lines are checked first: the parser below re-indexes and forgets them.
+        crate::mesh_source::check_obj(&String::from_utf8_lossy(&bytes), origin)?;
         let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-        let (models, _materials) = tobj::load_obj_buf(reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| MeshError::Obj { file: origin.to_owned(), reason: e.to_string() })?;
+        let (models, _materials) =
+            tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
+                .map_err(|e| MeshError::Obj { file: origin.to_owned(), reason: e.to_string() })?;
         let mut builder = Builder::new(origin);
         for model in &models {
             builder.add_obj_model(model)?;
@@ -289,6 +293,8 @@ impl Builder {
             self.warnings.push(format!("{}: {name} is not a triangle list: skipped", self.file));
             return Ok(());
         }
+        crate::mesh_source::check_gltf_primitive(primitive, buffers, &name)
+            .map_err(|reason| MeshError::Gltf { file: self.file.clone(), reason })?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
         let positions: Vec<Vec3> = match reader.read_positions() {
             Some(p) => p.map(|p| transform.transform_point3(Vec3::from(p))).collect(),

@@ -69,12 +69,8 @@ pub const MAX_OUTPUT_SIDE: u32 = 16384;
 #[non_exhaustive]
 pub enum SceneError {
     /// The file could not be read.
-    #[error("{file}: {source}")]
-    Io {
-        file: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{file}: {error}")]
+    Io { file: String, error: std::io::Error },
     /// Not valid TOML, an unknown key, or a value of the wrong type (the TOML parser's message
     /// names the key and line).
     #[error("{file}: {message}")]
@@ -220,7 +216,7 @@ impl Scene {
     /// Unreadable file, TOML syntax, unknown keys, wrong types, invalid values.
     pub fn load(path: &Path) -> Result<Scene> {
         let text = std::fs::read_to_string(path)
-            .map_err(|source| SceneError::Io { file: path.display().to_string(), source })?;
+            .map_err(|error| SceneError::Io { file: path.display().to_string(), error })?;
         Scene::parse(&text, path)
     }
 

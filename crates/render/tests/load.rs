@@ -271,3 +271,30 @@ fn translucent_casters_add_their_pass_only_to_a_shadow_map() {
     assert_eq!(passes, ["base"]);
     assert!(notes.iter().any(|n| n.contains("translucent")), "{notes:?}");
 }
+
+/// Issue 15, D11 and D10: a mesh, normal map or albedo that cannot be read is reported as the
+/// scene file, its field, then the file and the cause, each once.
+#[test]
+fn d11_render_errors_name_the_scene_file_and_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene_file = tmp.path().join("scene.toml").display().to_string();
+    // A file that exists but is no image (so the existence check passes and the decoder refuses).
+    let notes = tmp.path().join("notes.png");
+    std::fs::write(&notes, "not an image\n").unwrap();
+    for field in ["normal_map.path", "albedo"] {
+        let body = match field {
+            "albedo" => format!("albedo = \"{}\"", notes.display()),
+            _ => format!("[normal_map]\npath = \"{}\"", notes.display()),
+        };
+        let e = load(&scene(tmp.path(), &body), 64, 64, 8192).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{scene_file}: {field}: {}: ", notes.display())), "{e}");
+        assert_eq!(e.matches("notes.png").count(), 1, "{e}");
+    }
+    // The mesh is removed after the scene was read: the scene, `mesh`, the mesh file, the OS.
+    let scene = scene(tmp.path(), "");
+    std::fs::remove_file(tmp.path().join("quad.obj")).unwrap();
+    let e = load(&scene, 64, 64, 8192).unwrap_err().to_string();
+    let want = format!("{scene_file}: mesh: {}: ", tmp.path().join("quad.obj").display());
+    assert!(e.starts_with(&want), "{e}");
+    assert_eq!(e.matches("(os error 2)").count(), 1, "{e}");
+}

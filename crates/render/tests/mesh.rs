@@ -86,11 +86,35 @@ f 2/2 5/5 2/2
 }
 
 #[test]
-fn nan_position_is_an_error_naming_the_vertex() {
+fn nan_position_is_an_error_naming_the_line() {
     let err = obj("v 0 0 0\nv nan 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap_err();
     let msg = err.to_string();
-    assert!(matches!(err, MeshError::NonFinite { index: 1, field: "position", .. }), "{msg}");
-    assert!(msg.contains("test.obj") && msg.contains("vertex 1"), "{msg}");
+    assert!(matches!(err, MeshError::ObjLine { line: 2, .. }), "{msg}");
+    assert!(msg.starts_with("test.obj: line 2: `v` has a non-finite value"), "{msg}");
+}
+
+/// Issue 15, D12: OBJ errors give the line of the file, not a vertex number after re-indexing
+/// (the probe's NaN on the 50th `v` line came out as "vertex 42"), and out-of-range face indices
+/// name their line too.
+#[test]
+fn d12_obj_errors_name_the_source_line() {
+    // A grid of 10 x 10 vertices in file order, faces after them, NaN on the 50th `v` line.
+    let mut text = String::from("# a comment\nvt 0 0\nvt 1 0\nvt 0 1\n");
+    for i in 0..100 {
+        let x = if i == 49 { "nan".to_owned() } else { (i % 10).to_string() };
+        text += &format!("v {x} {} 0\n", i / 10);
+    }
+    text += "f 1/1 2/2 11/3\nf 12/1 13/2 22/3\n";
+    let err = obj(&text).unwrap_err();
+    // Four lines before the first `v`: the 50th `v` line is line 54.
+    assert!(err.to_string().starts_with("test.obj: line 54: `v`"), "{err}");
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 1/1 2/1 99999/1\n";
+    let err = obj(text).unwrap_err().to_string();
+    assert!(err.starts_with("test.obj: line 6: face vertex `99999/1`: `v` index 99999 is out of range"), "{err}");
+    let err = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 -99999/1\n").unwrap_err().to_string();
+    assert!(err.starts_with("test.obj: line 5: ") && err.contains("-99999"), "{err}");
+    let err = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/99999\n").unwrap_err().to_string();
+    assert!(err.starts_with("test.obj: line 5: ") && err.contains("`vt` index 99999"), "{err}");
 }
 
 #[test]
@@ -226,6 +250,22 @@ fn gltf_with_external_buffer_resolves_against_its_folder() {
     let path = dir.path().join("tri.gltf");
     std::fs::write(&path, triangle_json(Some("tri.bin"), bin.len())).unwrap();
     check_transformed_triangles(&Mesh::load(&path).unwrap());
+}
+
+/// Issue 15, D12: an accessor that overruns its buffer view, and a view that lies past its
+/// buffer, are named as such (they read as "no positions" and "4 indices is not a multiple of 3").
+#[test]
+fn d12_gltf_range_errors_name_the_accessor_or_view() {
+    let bin = triangle_buffer();
+    let json =
+        triangle_json(None, bin.len()).replace(r#""count": 3, "type": "VEC3""#, r#""count": 1000000, "type": "VEC3""#);
+    let err = Mesh::parse_gltf(&glb(&json, &bin), None, "x.glb").unwrap_err().to_string();
+    assert!(err.starts_with("x.glb: not a readable glTF file: mesh 0 primitive 0: POSITION: accessor 0"), "{err}");
+    assert!(err.contains("1000000 elements of 12 bytes") && err.contains("bufferView 0 holds 36"), "{err}");
+    let json = triangle_json(None, bin.len())
+        .replace(r#""byteOffset": 60, "byteLength": 6"#, r#""byteOffset": 4096, "byteLength": 8"#);
+    let err = Mesh::parse_gltf(&glb(&json, &bin), None, "x.glb").unwrap_err().to_string();
+    assert!(err.contains("indices: bufferView 2 (bytes 4096..4104) lies past the end of buffer 0 (68 bytes)"), "{err}");
 }
 
 #[test]

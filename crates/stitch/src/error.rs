@@ -49,12 +49,8 @@ pub enum Error {
     #[error("{}: region `{region}`: {what} {} does not exist", origin.display(), path.display())]
     MissingExemplar { origin: PathBuf, region: String, what: &'static str, path: PathBuf },
     /// Reading a file failed.
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{}: {error}", path.display())]
+    Io { path: PathBuf, error: std::io::Error },
     /// A parameter the caller got wrong (curve parameters, seed points, sizes, ...).
     #[error("{0}")]
     InvalidParameter(String),

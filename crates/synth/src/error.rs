@@ -7,6 +7,11 @@ pub enum Error {
     /// The exemplar cannot hold a single full neighbourhood.
     #[error("exemplar {width}x{height} is smaller than the {n}x{n} neighbourhood")]
     ExemplarTooSmall { width: usize, height: usize, n: usize },
+    /// A normal-map exemplar in which every texel is the invalid marker: nothing to copy.
+    #[error(
+        "the {width}x{height} exemplar has no valid normal (every texel is zero or non-finite): there is nothing to synthesise from"
+    )]
+    NoValidNormals { width: usize, height: usize },
     /// A [`crate::SynthConfig`] field out of range.
     #[error("synthesis option {field} = {value}: {reason}")]
     InvalidConfig { field: &'static str, value: String, reason: String },

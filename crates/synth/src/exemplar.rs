@@ -11,12 +11,34 @@ use rayon::prelude::*;
 use skinkit_maps::Grid;
 
 use crate::neighbourhood::{Neighbourhood, distance2};
+use crate::{Error, Result};
 
 /// Floats summed between two checks of [`ExemplarLevel::distance2_below`].
 const EXIT_CHUNK: usize = 12;
 
 /// Candidates per rayon task in the exhaustive scan.
 const SCAN_CHUNK: usize = 256;
+
+/// Checks a normal-map exemplar before any work (issue 15, D13): refuses one without a single
+/// valid texel, and warns, with the count, when some texels are the invalid marker (they are
+/// copied into the output like any other texel).
+///
+/// # Errors
+/// [`Error::NoValidNormals`] when every texel is invalid.
+pub(crate) fn check_normal_exemplar(exemplar: &skinkit_maps::NormalMap) -> Result<Option<String>> {
+    let (width, height) = exemplar.size();
+    let total = width * height;
+    let invalid = total - exemplar.valid_count();
+    if invalid == total {
+        return Err(Error::NoValidNormals { width, height });
+    }
+    Ok((invalid > 0).then(|| {
+        let percent = 100.0 * invalid as f64 / total as f64;
+        format!(
+            "exemplar: {invalid} of {total} texels ({percent:.1}%) are invalid (zero or non-finite normals); the output copies them as invalid texels"
+        )
+    }))
+}
 
 /// One exemplar level ready for searching.
 #[derive(Clone, Debug)]

@@ -150,13 +150,16 @@ pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn
 /// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
 ///
 /// # Errors
-/// When [`SynthConfig::validate`] fails.
+/// When [`SynthConfig::validate`] fails, or the exemplar has no valid texel
+/// ([`crate::Error::NoValidNormals`], refused before any work).
 pub fn synthesize_normals(
     exemplar: &NormalMap,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
 ) -> Result<NormalSynthesis> {
-    let s = synthesize(exemplar.grid(), config, progress)?;
+    let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
+    let mut s = synthesize(exemplar.grid(), config, progress)?;
+    s.warnings.splice(0..0, exemplar_warning);
     Ok(NormalSynthesis {
         // The finest level copies exemplar texels, which are unit (or invalid zero) already:
         // wrapping them keeps the bits, where renormalising would perturb the last one.

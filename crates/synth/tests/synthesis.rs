@@ -590,3 +590,24 @@ fn upsampled_preset_beats_the_scanline_default_on_a_skin_exemplar() {
     assert!(e_up < 0.6 * e_scan, "energy: upsampled {e_up:.5} vs scanline {e_scan:.5}");
     assert!(s_up < s_scan, "slope distance: upsampled {s_up:.5} vs scanline {s_scan:.5}");
 }
+
+/// Issue 15, D13: an exemplar without one valid normal is refused before any work, and one with
+/// some invalid texels is synthesised with a warning that counts them.
+#[test]
+fn d13_an_exemplar_without_valid_normals_is_refused_early() {
+    use skinkit_maps::NormalMap;
+    let called = std::sync::atomic::AtomicBool::new(false);
+    let progress = |_: usize, _: f32| called.store(true, std::sync::atomic::Ordering::Relaxed);
+    let empty = NormalMap::from_grid(Grid::filled(24, 20, Vec3::ZERO));
+    let e = synthesize_normals(&empty, &config(16, 16, Search::Exact), &progress).unwrap_err();
+    assert!(matches!(e, Error::NoValidNormals { width: 24, height: 20 }), "{e}");
+    assert!(e.to_string().contains("no valid normal"), "{e}");
+    assert!(!called.load(std::sync::atomic::Ordering::Relaxed), "refused after work had started");
+
+    let mut some = NormalMap::from_grid(Grid::filled(24, 20, Vec3::Z));
+    for x in 0..6 {
+        some.set(x, 3, Vec3::ZERO);
+    }
+    let s = synthesize_normals(&some, &config(16, 16, Search::Exact), &quiet).unwrap();
+    assert!(s.warnings[0].contains("6 of 480 texels"), "{:?}", s.warnings);
+}

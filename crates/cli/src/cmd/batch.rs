@@ -121,7 +121,7 @@ fn outcome(
         Err(e) => SessionOutcome {
             session: name,
             ok: false,
-            error: Some(format!("{e:#}")),
+            error: Some(crate::output::one_line(&e)),
             invalid_pixels: None,
             seconds: None,
         },

@@ -173,7 +173,7 @@ fn patch(side: f32, u: [f32; 2], v: [f32; 2]) -> Mesh {
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
     io::write_atomic(path, |w| {
         use std::io::Write;
-        w.write_all(text.as_bytes()).map_err(|source| skinkit_maps::Error::Io { path: path.to_owned(), source })
+        w.write_all(text.as_bytes()).map_err(|error| skinkit_maps::Error::Io { path: path.to_owned(), error })
     })
     .with_context(|| format!("cannot write {}", path.display()))
 }

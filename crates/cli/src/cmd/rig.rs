@@ -110,14 +110,13 @@ fn from_sphere(args: FromSphereArgs, out: &Output) -> Result<i32> {
         photos.chain(args.matte.iter().map(|p| ("a matte-sphere photo".to_owned(), p.clone()))).collect();
     guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let limits = skinkit_maps::Limits::default();
-    let read = |paths: &[PathBuf]| -> Result<Vec<_>> {
-        paths
-            .iter()
-            .map(|p| io::read_photo(p, &limits).with_context(|| format!("cannot read {}", p.display())))
-            .collect()
+    // The photo's role and place; the library's error names the file.
+    let read = |paths: &[PathBuf], kind: &str| -> Result<Vec<_>> {
+        let photos = paths.iter().enumerate();
+        photos.map(|(i, p)| io::read_photo(p, &limits).with_context(|| format!("{kind} photo {}", i + 1))).collect()
     };
-    let mirror = read(&args.photos)?;
-    let matte = read(&args.matte)?;
+    let mirror = read(&args.photos, "mirror")?;
+    let matte = read(&args.matte, "matte")?;
     let locate = match args.circle.as_deref() {
         Some(text) => sphere::Locate::Circle(parse_circle(text)?),
         None => sphere::Locate::Auto,

@@ -43,12 +43,8 @@ pub enum LutFileError {
     #[error(transparent)]
     Write(#[from] skinkit_maps::Error),
     /// The file could not be read.
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
     /// Not an RGB float EXR this module can read.
     #[error("{path}: not a readable table: {reason}")]
     Decode { path: String, reason: String },
@@ -276,7 +272,7 @@ fn exr_text(s: &str) -> Text {
 /// When the file cannot be read, is not an RGB EXR, or is larger than [`MAX_SIDE`] per side.
 pub fn read(path: &Path) -> Result<LutImage, LutFileError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| LutFileError::Io { path: name.clone(), source })?;
+    let bytes = std::fs::read(path).map_err(|error| LutFileError::Io { path: name.clone(), error })?;
     decode(&bytes, &name)
 }
 

@@ -113,8 +113,15 @@ fn translucent_casters(scene: &Scene, graph: &PassGraph) -> Result<Vec<passes::T
     scene
         .translucent
         .iter()
-        .map(|t| {
-            let mesh = crate::mesh::Mesh::load(&t.mesh)?.mesh;
+        .enumerate()
+        .map(|(i, t)| {
+            let mesh = crate::mesh::Mesh::load(&t.mesh)
+                .map_err(|error| LoadError::Mesh {
+                    file: scene.name(),
+                    field: format!("translucent[{i}].mesh"),
+                    error,
+                })?
+                .mesh;
             Ok(passes::TranslucentCaster {
                 positions: mesh.positions.iter().map(|p| p.to_array()).collect(),
                 indices: mesh.indices,
@@ -200,8 +207,7 @@ fn environment_sh(sky: &Sky, intensity: f32, scene_file: &Path) -> Result<[[f32;
         Sky::Constant(c) => Sh9::constant(scale(*c)),
         Sky::Gradient { sky, ground } => Sh9::gradient(scale(*sky), scale(*ground), Vec3::Y),
         Sky::LatLong(path) => {
-            let texture =
-                read_linear(path).map_err(|source| LoadError::Map { field: "environment.latlong", source })?;
+            let texture = read_linear(path).map_err(|error| map_error(scene_file, "environment.latlong", error))?;
             let texels: Vec<[f32; 3]> =
                 texture.texels.iter().map(|t| [t[0] * intensity, t[1] * intensity, t[2] * intensity]).collect();
             Sh9::project_latlong(texture.width as usize, texture.height as usize, &texels)
@@ -209,6 +215,11 @@ fn environment_sh(sky: &Sky, intensity: f32, scene_file: &Path) -> Result<[[f32;
         }
     };
     Ok(sh.coeffs)
+}
+
+/// [`LoadError::Map`] for the scene file `scene_file` and its `field`.
+fn map_error(scene_file: &Path, field: &'static str, error: skinkit_maps::Error) -> LoadError {
+    LoadError::Map { file: scene_file.display().to_string(), field, error }
 }
 
 /// An image as linear RGB (8-bit as sRGB, 16-bit and float as linear), like an albedo.
@@ -226,7 +237,7 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
     let options = &scene.skin.tsd;
     let kernel_map = match &options.kernel_map {
         None => None,
-        Some(path) => Some(read_kernel(path).map_err(|source| LoadError::Map { field: "tsd.kernel_map", source })?),
+        Some(path) => Some(read_kernel(path).map_err(|error| map_error(&scene.file, "tsd.kernel_map", error))?),
     };
     // The chapter's (a, b) are texels of a 512 map: keep their size on the skin at any resolution.
     let to_size = plan.size as f32 / 512.0;
