@@ -22,7 +22,7 @@
 # A crash, timeout or out-of-memory input is copied to tests/fuzz-regressions/<target>/, where
 # `cargo test -p skinkit-cli --test fuzz_regressions` replays it until the bug is fixed.
 #
-# Output: one line per target (time, executions, crashes) and fuzz/summary.tsv with columns
+# Output: one line per target (time, executions, crashes) and docs/fuzz-summary.tsv with columns
 # target, seconds, executions, execs_per_second, crashes, corpus, max_len, toolchain, load, date.
 set -euo pipefail
 
@@ -67,7 +67,7 @@ seeds="$(mktemp -d)"
 trap 'rm -rf "$seeds"' EXIT
 SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q -p skinkit-cli --test fuzz_regressions valid_inputs -- --nocapture >/dev/null
 
-summary="fuzz/summary.tsv"
+summary="docs/fuzz-summary.tsv"
 tmp_summary="$(mktemp)"
 printf 'target\tseconds\texecutions\texecs_per_second\tcrashes\tcorpus\tmax_len\ttoolchain\tload\tdate\n' >"$tmp_summary"
 printf '%-16s %8s %12s %8s\n' target seconds executions crashes

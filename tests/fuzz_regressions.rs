@@ -46,8 +46,8 @@ fn every_regression_folder_names_a_target() {
     }
 }
 
-/// Valid files of every kind come back `Ok` through their entry, so a passing replay is not a sign
-/// that every entry fails early. With `SKINKIT_FUZZ_SEEDS=<folder>` the same files are written
+/// Valid files of every kind come back `Ok` through their entry (those named `err-*` are refused),
+/// so a passing replay is not a sign that every entry fails early. With `SKINKIT_FUZZ_SEEDS=<folder>` the same files are written
 /// there as `<target>/<name>`: `scripts/fuzz.sh` starts each fuzzer from them.
 #[test]
 fn valid_inputs_come_back_ok_and_seed_the_fuzzers() {
@@ -56,7 +56,11 @@ fn valid_inputs_come_back_ok_and_seed_the_fuzzers() {
     let mut kinds = std::collections::BTreeSet::new();
     for (target, name, data) in &seeds {
         let entry = entries::TARGETS.iter().find(|(t, _)| t == target).expect("a known target").1;
-        assert_eq!(entry(data), Ok(()), "{target}/{name}");
+        if name.starts_with("err-") {
+            assert!(entry(data).is_err(), "{target}/{name} should be refused");
+        } else {
+            assert_eq!(entry(data), Ok(()), "{target}/{name}");
+        }
         kinds.insert(*target);
     }
     assert_eq!(kinds.len(), entries::TARGETS.len(), "every target has a valid seed");
@@ -108,6 +112,8 @@ mod seeds {
         ));
         out.push(("gltf", "triangle.gltf".into(), gltf_json().into_bytes()));
         out.push(("gltf", "triangle.glb".into(), glb()));
+        // An external buffer (missing here): gives the fuzzer URIs to mutate.
+        out.push(("gltf", "err-external.gltf".into(), gltf_document(Some("triangle.bin"), 104).into_bytes()));
         out.extend(images(tmp));
         out
     }
