@@ -104,7 +104,10 @@ for t in "${targets[@]}"; do
     printf '%s\t%.0f\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$t" "$elapsed" "$runs" "$rate" "$found" \
         "$(find "$corpus" -type f | wc -l)" "$(max_len "$t")" "$toolchain" \
         "$(cut -d' ' -f1 /proc/loadavg)" "$(date -u +%Y-%m-%dT%H:%M:%SZ)" >>"$tmp_summary"
+    # Rows so far, so an interrupted run still leaves the targets it finished.
+    cp "$tmp_summary" "$summary.partial"
 done
+rm -f "$summary.partial"
 # A run of some targets replaces their rows and keeps the others'.
 if [ -f "$summary" ] && [ "${#targets[@]}" -lt "${#all_targets[@]}" ]; then
     merged="$(mktemp)"
