@@ -65,7 +65,16 @@ echo "built in $(($(date +%s) - build_start)) s"
 
 seeds="$(mktemp -d)"
 trap 'rm -rf "$seeds"' EXIT
-SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q -p skinkit-cli --test fuzz_regressions valid_inputs -- --nocapture >/dev/null
+# SKINKIT_FUZZ_SKIP_SEEDS=1 skips this step (it builds the regression test): the corpora kept in
+# fuzz/corpus/ and the repository's sample files are used alone then.
+if [ -z "${SKINKIT_FUZZ_SKIP_SEEDS:-}" ]; then
+    SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q -p skinkit-cli --test fuzz_regressions valid_inputs -- --nocapture >/dev/null
+else
+    mkdir -p "$seeds"/{rig_toml,layout,scene}
+    cp calibration/*.toml samples/molds/*/rig.toml "$seeds/rig_toml/" 2>/dev/null || true
+    cp samples/face/layout.toml "$seeds/layout/"
+    cp samples/scenes/*.toml "$seeds/scene/"
+fi
 
 summary="docs/fuzz-summary.tsv"
 tmp_summary="$(mktemp)"
