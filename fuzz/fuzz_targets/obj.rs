@@ -1,0 +1,6 @@
+#![no_main]
+//! Fuzz target `obj`: see `tests/fuzz/entries.rs` for what it reads and checks.
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let _ = skinkit_fuzz::obj(data);
+});
