@@ -24,9 +24,12 @@ use skinkit_stitch::layout::Layout;
 /// What an entry returns: `Ok`, or the message of a clean error.
 pub type Outcome = Result<(), String>;
 
+/// A fuzz entry: the bytes in, `Ok` or a clean error out.
+pub type Entry = fn(&[u8]) -> Outcome;
+
 /// Every target: its name (the `fuzz/fuzz_targets/<name>.rs` file and the regression folder) and
 /// its entry.
-pub const TARGETS: &[(&str, fn(&[u8]) -> Outcome)] = &[
+pub const TARGETS: &[(&str, Entry)] = &[
     ("rig_toml", rig_toml),
     ("diligent_lights", diligent_lights),
     ("uw_lights", uw_lights),

@@ -182,7 +182,7 @@ impl OutputSet {
 
     fn unstage_error(&self, error: Error) -> Error {
         match error {
-            Error::Io { path, source } => Error::Io { path: self.unstage(&path), source },
+            Error::Io { path, error } => Error::Io { path: self.unstage(&path), error },
             Error::Encode { path, reason } => Error::Encode { path: self.unstage(&path), reason },
             other => other,
         }
