@@ -325,7 +325,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
 /// [`Error::Context`] naming the rig file around the light-count or conditioning refusal;
 /// [`Error::InvalidInput`] naming a missing ambient frame.
 pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &SolveConfig) -> Result<()> {
-    let in_rig = |e| context(format!("rig {}", rig_path.display()), e);
+    let in_rig = |e| context(rig_path.display().to_string(), e);
     if near::applies(rig) {
         // The near-light solve judges each pixel's lights itself: only the count is a rig rule.
         solve::check_light_count(rig.light_count()).map_err(in_rig)?;
@@ -360,8 +360,7 @@ pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &Capt
         .first()
         .ok_or_else(|| Error::InvalidInput(format!("rig {}: no photos were given", session.rig.display())))?;
     let header = |path: &Path, what: &str| {
-        limits::image_header(path, options.limits.max_pixels)
-            .map_err(|e| context(format!("cannot read {what} {}", path.display()), e.into()))
+        limits::image_header(path, options.limits.max_pixels).map_err(|e| context(what.to_owned(), e.into()))
     };
     let head = header(first, "photo")?;
     let same_size = |path: &Path, what: &str| -> Result<limits::ImageHeader> {
