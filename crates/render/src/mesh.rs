@@ -25,6 +25,9 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
+/// The deepest node hierarchy a glTF file may have (real scenes nest a few tens of levels).
+const MAX_GLTF_DEPTH: usize = 256;
+
 /// Errors from loading or validating a mesh. Every message names the file (or `mesh` for a mesh
 /// built in memory).
 #[derive(Debug, thiserror::Error)]
@@ -138,14 +141,19 @@ impl Mesh {
         let gltf_err = |e: gltf::Error| MeshError::Gltf { file: origin.to_owned(), reason: e.to_string() };
         let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(gltf_err)?;
         let base = base.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+        crate::mesh_source::check_gltf_buffer_uris(&document, &base)
+            .map_err(|reason| MeshError::Gltf { file: origin.to_owned(), reason })?;
         let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(gltf_err)?;
         let scene = document
             .default_scene()
             .or_else(|| document.scenes().next())
             .ok_or_else(|| MeshError::Gltf { file: origin.to_owned(), reason: "the file has no scene".into() })?;
         let mut builder = Builder::new(origin);
+        // glTF's nodes form trees; a node reached twice (a cycle, or a child of two parents) would
+        // recurse without end or multiply its meshes, so it is refused.
+        let mut visited = vec![false; document.nodes().len()];
         for node in scene.nodes() {
-            builder.add_gltf_node(&node, Mat4::IDENTITY, &buffers)?;
+            builder.add_gltf_node(&node, Mat4::IDENTITY, &buffers, &mut visited, 0)?;
         }
         builder.finish()
     }
@@ -268,7 +276,23 @@ impl Builder {
         self.add_part(Part { positions, normals, uvs, indices: m.indices.clone() }, &model.name)
     }
 
-    fn add_gltf_node(&mut self, node: &gltf::Node, parent: Mat4, buffers: &[gltf::buffer::Data]) -> Result<()> {
+    /// Adds `node`'s meshes and, recursively, its children's (at most [`MAX_GLTF_DEPTH`] deep, so
+    /// a hostile chain cannot overflow the stack).
+    fn add_gltf_node(
+        &mut self,
+        node: &gltf::Node,
+        parent: Mat4,
+        buffers: &[gltf::buffer::Data],
+        visited: &mut [bool],
+        depth: usize,
+    ) -> Result<()> {
+        let refuse = |reason: String| Err(MeshError::Gltf { file: self.file.clone(), reason });
+        if std::mem::replace(&mut visited[node.index()], true) {
+            return refuse(format!("node {} is reached twice: a scene's nodes must form a tree", node.index()));
+        }
+        if depth >= MAX_GLTF_DEPTH {
+            return refuse(format!("node {} is nested deeper than {MAX_GLTF_DEPTH} levels", node.index()));
+        }
         let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
@@ -276,7 +300,7 @@ impl Builder {
             }
         }
         for child in node.children() {
-            self.add_gltf_node(&child, transform, buffers)?;
+            self.add_gltf_node(&child, transform, buffers, visited, depth + 1)?;
         }
         Ok(())
     }

@@ -104,6 +104,48 @@ pub(crate) fn check_gltf_primitive(
     Ok(())
 }
 
+/// Checks every external buffer URI before the `gltf` crate resolves it: its percent-encoding must
+/// decode to UTF-8 (the crate unwraps that decoding and would panic), and a path that exists must
+/// be a regular file (`/dev/zero` or a FIFO would be read without end). Data URIs and GLB blobs
+/// are left to the crate.
+///
+/// # Errors
+/// A message naming the buffer and its URI.
+pub(crate) fn check_gltf_buffer_uris(document: &gltf::Document, base: &std::path::Path) -> Result<(), String> {
+    for buffer in document.buffers() {
+        let gltf::buffer::Source::Uri(uri) = buffer.source() else { continue };
+        if uri.starts_with("data:") {
+            continue;
+        }
+        let named = |why: &str| format!("buffer {} (uri `{uri}`): {why}", buffer.index());
+        let decoded = percent_decode(uri).ok_or_else(|| named("its percent-encoding is not UTF-8"))?;
+        let path = decoded.strip_prefix("file://").or_else(|| decoded.strip_prefix("file:")).unwrap_or(&decoded);
+        let full = base.join(path);
+        if full.exists() && !full.is_file() {
+            return Err(named(&format!("{} is not a regular file", full.display())));
+        }
+    }
+    Ok(())
+}
+
+/// `%XX` escapes decoded, or `None` when an escape is malformed or the bytes are not UTF-8.
+fn percent_decode(text: &str) -> Option<String> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
 fn check_accessor(accessor: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
     // A view-less accessor is all zeros (or sparse): nothing to overrun.
     let Some(view) = accessor.view() else { return Ok(()) };
@@ -139,6 +181,15 @@ fn check_accessor(accessor: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> 
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn percent_decoding_refuses_what_is_not_utf8() {
+        assert_eq!(super::percent_decode("a%20b.bin").as_deref(), Some("a b.bin"));
+        assert_eq!(super::percent_decode("plain.bin").as_deref(), Some("plain.bin"));
+        assert_eq!(super::percent_decode("%FF"), None);
+        assert_eq!(super::percent_decode("%G0"), None);
+        assert_eq!(super::percent_decode("cut%2"), None);
+    }
+
     use super::*;
 
     fn reason(text: &str) -> String {

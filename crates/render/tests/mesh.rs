@@ -309,3 +309,51 @@ f 4/4/2 5/5/2 6/6/2
     assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
     assert!(loaded.warnings[0].contains("3 zero or non-finite normals"), "{:?}", loaded.warnings);
 }
+
+/// Issue 15 (found by reading the importer for its fuzz target): a node that is its own child
+/// recursed until the stack overflowed, and a node with two parents multiplied its meshes.
+#[test]
+fn gltf_nodes_reached_twice_are_refused() {
+    let bin = triangle_buffer();
+    let cycle = triangle_json(None, bin.len()).replace(r#""children": [2]"#, r#""children": [1]"#);
+    let err = Mesh::parse_gltf(&glb(&cycle, &bin), None, "c.glb").unwrap_err().to_string();
+    assert!(err.starts_with("c.glb: ") && err.contains("node 1 is reached twice"), "{err}");
+    let two_parents = triangle_json(None, bin.len()).replace(r#""children": [2]"#, r#""children": [2, 0]"#);
+    let err = Mesh::parse_gltf(&glb(&two_parents, &bin), None, "d.glb").unwrap_err().to_string();
+    assert!(err.contains("node 0 is reached twice"), "{err}");
+}
+
+/// A hierarchy deeper than the importer follows is refused, not recursed into.
+#[test]
+fn gltf_node_chains_deeper_than_the_limit_are_refused() {
+    let bin = triangle_buffer();
+    let base = triangle_json(None, bin.len());
+    // The same mesh and buffers under a scene whose one root heads a chain of 300 nodes.
+    let rest = &base[base.find(r#"  "meshes""#).unwrap()..];
+    let mut nodes: Vec<String> = (0..300).map(|i| format!(r#"{{ "children": [{}] }}"#, i + 1)).collect();
+    nodes.push(r#"{ "mesh": 0 }"#.to_owned());
+    let json = format!(
+        r#"{{ "asset": {{ "version": "2.0" }}, "scene": 0, "scenes": [{{ "nodes": [0] }}], "nodes": [{}],
+{rest}"#,
+        nodes.join(", ")
+    );
+    let err = Mesh::parse_gltf(&glb(&json, &bin), None, "deep.glb").unwrap_err().to_string();
+    assert!(err.contains("nested deeper than 256 levels"), "{err}");
+}
+
+/// Buffer URIs the `gltf` crate would panic on (bad percent-encoding) or read without end (a
+/// device) are refused with the buffer named.
+#[test]
+fn gltf_buffer_uris_that_are_not_files_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (uri, want) in [
+        ("%FF", "percent-encoding is not UTF-8"),
+        ("/dev/zero", "/dev/zero is not a regular file"),
+        ("file:///dev/zero", "/dev/zero is not a regular file"),
+        (".", "is not a regular file"),
+    ] {
+        let json = triangle_json(Some(uri), 68);
+        let err = Mesh::parse_gltf(json.as_bytes(), Some(dir.path()), "u.gltf").unwrap_err().to_string();
+        assert!(err.contains(&format!("buffer 0 (uri `{uri}`)")) && err.contains(want), "{uri}: {err}");
+    }
+}
