@@ -338,7 +338,7 @@ pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &So
         (None, None) => return Ok(()),
     };
     if !path.is_file() {
-        return Err(Error::InvalidInput(format!("{whose} {} is not a file", path.display())));
+        return Err(Error::InvalidInput(format!("{whose}: {} is not a file", path.display())));
     }
     Ok(())
 }

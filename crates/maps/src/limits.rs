@@ -185,6 +185,9 @@ pub fn image_header(path: &Path, max_pixels: u64) -> Result<ImageHeader> {
 
 /// The header of a PNG, TIFF or EXR image, unchecked.
 fn read_header(path: &Path) -> Result<ImageHeader> {
+    // The same signature rules as the decoders (JPEG refused with its reason, a name that says
+    // another format), so a header read first gives the error the decode would have given.
+    crate::signature::check_file(path)?;
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) { exr_header(path) } else { raster_header(path) }
 }
 
