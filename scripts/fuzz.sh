@@ -54,8 +54,11 @@ else
     sanitizer=(--sanitizer none)
     toolchain="stable+RUSTC_BOOTSTRAP"
 fi
-# One target folder for everything built here: the workspace's own.
-export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
+# The fuzz targets build in their own folder (SKINKIT_FUZZ_TARGET_DIR, default target/fuzz): a
+# nightly sanitizer build shares nothing with the workspace's, and a folder of its own lets it run
+# beside a workspace build without waiting on that build's lock.
+fuzz_target_dir="${SKINKIT_FUZZ_TARGET_DIR:-$root/target/fuzz}"
+fuzz=(env CARGO_TARGET_DIR="$fuzz_target_dir" "${fuzz[@]}")
 
 echo "load before: $(uptime)"
 echo "building ${#targets[@]} targets ($toolchain, debug assertions on)..."
@@ -68,7 +71,8 @@ trap 'rm -rf "$seeds"' EXIT
 # SKINKIT_FUZZ_SKIP_SEEDS=1 skips this step (it builds the regression test): the corpora kept in
 # fuzz/corpus/ and the repository's sample files are used alone then.
 if [ -z "${SKINKIT_FUZZ_SKIP_SEEDS:-}" ]; then
-    SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q -p skinkit-cli --test fuzz_regressions valid_inputs -- --nocapture >/dev/null
+    # `--workspace`, as the test command builds it: `-p` would resolve other features and rebuild.
+    SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q --workspace --test fuzz_regressions valid_inputs -- --nocapture >/dev/null
 else
     mkdir -p "$seeds"/{rig_toml,layout,scene}
     cp calibration/*.toml samples/molds/*/rig.toml "$seeds/rig_toml/" 2>/dev/null || true

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use skinkit_capture::session::{self, CaptureOptions, Session};
+use skinkit_testkit::header_only_png;
 
 fn skinkit(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
@@ -30,39 +31,6 @@ fn assert_usage_error(args: &[&str], flag: &str, value: &str) {
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
     assert!(e.contains(flag) && e.contains(value), "{args:?}: {e}");
-}
-
-/// A PNG of `w x h` 8-bit grey pixels whose header is all there is (no pixel data): a decoder
-/// would fail on it, so a refusal that names its size came from the header alone.
-fn header_only_png(path: &Path, w: u32, h: u32) {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&w.to_be_bytes());
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
-    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
-    bytes.extend_from_slice(&13u32.to_be_bytes());
-    bytes.extend_from_slice(&ihdr);
-    bytes.extend_from_slice(&crc32(&ihdr).to_be_bytes());
-    // A one-byte zlib stream (a stored block) as the only image data, then the end: the file is
-    // well formed up to the pixels and far too short for the size it claims.
-    let idat = [b'I', b'D', b'A', b'T', 0x78, 0x01, 0x01, 0x01, 0x00, 0xFE, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x01];
-    bytes.extend_from_slice(&12u32.to_be_bytes());
-    bytes.extend_from_slice(&idat);
-    bytes.extend_from_slice(&crc32(&idat).to_be_bytes());
-    bytes.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82]);
-    std::fs::write(path, bytes).unwrap();
-}
-
-/// CRC-32 (IEEE), bit by bit: the PNG chunk checksum.
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in data {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-        }
-    }
-    !crc
 }
 
 /// A two-region layout on a 512x256 map; region `b`'s exemplar is `scale` mm per texel.

@@ -291,3 +291,21 @@ fn skin_effects_and_the_reference_render_and_change_the_picture() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--reference"), "{}", stderr(&o));
 }
+
+#[test]
+fn a_render_over_the_memory_limit_is_refused_before_its_target_is_made() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = head_scene(dir.path(), None, "");
+    let out = dir.path().join("big.png");
+    // 16384x16384 as sRGB PNG needs about 9 GiB for one frame: over 1 GiB, refused at once.
+    let args = ["--memory-limit", "1G", "render", s(&scene), "--size", "16384x16384", "--out", s(&out)];
+    let o = skinkit(&args);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("scene.toml") && e.contains("rendering 16384x16384") && e.contains("memory limit"), "{e}");
+    assert!(!out.exists());
+    // The same scene at its own size fits.
+    let small = dir.path().join("small.png");
+    let o = skinkit(&["--memory-limit", "1G", "render", "--quiet", s(&scene), "--out", s(&small)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -3,112 +3,22 @@
 //! the headers before any photo is decoded (D9). Heap use is measured by a counting allocator:
 //! each measured call holds a lock, so no other test of this binary allocates meanwhile.
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::SolveConfig;
 use skinkit_capture::{Light, Rig};
-
-/// The system allocator, counting the bytes held and their peak.
-struct Counting;
-
-static HELD: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-static MEASURING: Mutex<()> = Mutex::new(());
-
-fn grew(bytes: usize) {
-    let now = HELD.fetch_add(bytes, Ordering::SeqCst) + bytes;
-    PEAK.fetch_max(now, Ordering::SeqCst);
-}
-
-// SAFETY: every call is forwarded to `System` unchanged; only counters are updated beside it.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        HELD.fetch_sub(layout.size(), Ordering::SeqCst);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            HELD.fetch_sub(layout.size(), Ordering::SeqCst);
-            grew(new_size);
-        }
-        p
-    }
-}
+use skinkit_testkit::alloc::{Counting, alone, peak_during};
+use skinkit_testkit::header_only_png;
 
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
-
-/// Holds every other test of this binary off while a test allocates: each test takes it for
-/// its whole body, so a measurement sees only its own allocations.
-fn alone() -> std::sync::MutexGuard<'static, ()> {
-    MEASURING.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// `f`'s result and the most heap bytes it held at once above what was held before it (call it
-/// while holding [`alone`]).
-fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let base = HELD.load(Ordering::SeqCst);
-    PEAK.store(base, Ordering::SeqCst);
-    let result = f();
-    (result, PEAK.load(Ordering::SeqCst).saturating_sub(base))
-}
 
 const MIB: usize = 1 << 20;
 
 fn mold(region: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region)
-}
-
-/// A PNG of `w x h` 8-bit grey pixels whose header is all there is (no pixel data): a decoder
-/// would fail on it or allocate the whole image first; a header reader needs nothing more.
-fn header_only_png(path: &Path, w: u32, h: u32) {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&w.to_be_bytes());
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
-    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
-    bytes.extend_from_slice(&13u32.to_be_bytes());
-    bytes.extend_from_slice(&ihdr);
-    bytes.extend_from_slice(&crc32(&ihdr).to_be_bytes());
-    // A one-byte zlib stream (a stored block) as the only image data, then the end: the file is
-    // well formed up to the pixels and far too short for the size it claims.
-    let idat = [b'I', b'D', b'A', b'T', 0x78, 0x01, 0x01, 0x01, 0x00, 0xFE, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x01];
-    bytes.extend_from_slice(&12u32.to_be_bytes());
-    bytes.extend_from_slice(&idat);
-    bytes.extend_from_slice(&crc32(&idat).to_be_bytes());
-    bytes.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82]);
-    std::fs::write(path, bytes).unwrap();
-}
-
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in data {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-        }
-    }
-    !crc
 }
 
 /// A session of 8 photos claiming `side x side` pixels each, under the paper's turntable rig.

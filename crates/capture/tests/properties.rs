@@ -11,24 +11,15 @@
 use glam::{DVec3, Vec3};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
+use proptest::test_runner::Config;
 use skinkit_capture::detrend::detrend;
 use skinkit_capture::solve::{Method, PhotoStack, SolveConfig, no_progress, solve};
 use skinkit_capture::{Light, Rig};
 use skinkit_maps::{Channels, Grid, NormalMap, Photo, Samples};
 
-/// `cases` cases from a fixed seed, unless `PROPTEST_CASES` / `PROPTEST_RNG_SEED` say otherwise.
+/// `cases` cases from this suite's fixed seed (`PROPTEST_CASES`, `PROPTEST_RNG_SEED` override).
 fn config(cases: u32) -> Config {
-    let from_env = Config::default();
-    Config {
-        cases: if std::env::var_os("PROPTEST_CASES").is_some() { from_env.cases } else { cases },
-        rng_seed: if std::env::var_os("PROPTEST_RNG_SEED").is_some() {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(0x5eed_ca97)
-        },
-        ..from_env
-    }
+    skinkit_testkit::proptest_config(cases, 0x5eed_ca97)
 }
 
 /// A direction at least 17 degrees above the mold plane.

@@ -47,6 +47,26 @@ pub fn map_size(text: &str) -> Result<(usize, usize), String> {
     }
 }
 
+/// An image size `WxH` of at most [`limits::MAX_IMAGE_PIXELS`] pixels (a grown map, a render).
+pub fn image_size(text: &str) -> Result<(usize, usize), String> {
+    let (w, h) = crate::cmd::synth::parse_size(text)?;
+    match (w as u64).checked_mul(h as u64) {
+        Some(n) if n <= limits::MAX_IMAGE_PIXELS => Ok((w, h)),
+        _ => Err(format!("`{text}` is larger than an image may be ({} pixels, 16384x16384)", limits::MAX_IMAGE_PIXELS)),
+    }
+}
+
+/// A parser of square sides `n` from `lo` with `n * n` at most `max_texels`.
+pub fn square_side(
+    lo: usize,
+    max_texels: u64,
+) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<usize>() {
+        Ok(n) if n >= lo && (n as u64).checked_mul(n as u64).is_some_and(|t| t <= max_texels) => Ok(n),
+        _ => Err(format!("`{text}` is not a side from {lo} whose square is at most {max_texels} texels")),
+    }
+}
+
 /// A parser of `WxH` sizes of at most `max` per side.
 pub fn size_at_most(max: usize) -> impl Fn(&str) -> Result<(usize, usize), String> + Clone + Send + Sync + 'static {
     move |text: &str| {
@@ -78,6 +98,11 @@ mod tests {
         assert_eq!(map_size("32768x32768"), Ok((32768, 32768)));
         assert!(map_size("32768x32769").unwrap_err().contains("larger than a face map"));
         assert!(map_size("18446744073709551615x3").is_err(), "no overflow");
+        assert_eq!(image_size("16384x16384"), Ok((16384, 16384)));
+        assert!(image_size("16385x16384").unwrap_err().contains("larger than an image"));
+        let side = square_side(8, 100);
+        assert_eq!((side("8"), side("10")), (Ok(8), Ok(10)));
+        assert!(side("7").is_err() && side("11").is_err() && side("18446744073709551615").is_err());
         let lut = size_at_most(4096);
         assert_eq!(lut("4096x1"), Ok((4096, 1)));
         assert!(lut("4097x1").unwrap_err().contains("larger than 4096x4096") && lut("0x3").is_err());

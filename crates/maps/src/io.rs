@@ -137,10 +137,7 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
 fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
     use exr::prelude::read_first_rgba_layer_from_file;
     crate::signature::check_file(path)?;
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::decode(path, e))?;
-    let header = meta.headers.first().ok_or_else(|| Error::decode(path, "no layer"))?;
-    let size = header.layer_size;
-    limits.check(path, size.width() as u64, size.height() as u64)?;
+    crate::limits::exr_read_size(path, limits.max_pixels)?;
     let image = read_first_rgba_layer_from_file(
         path,
         |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.width() * resolution.height()]),
@@ -481,6 +478,31 @@ mod tests {
         let e = read_photo(&good, &Limits { max_pixels: 100 }).unwrap_err().to_string();
         assert!(e.contains("exceeds"), "{e}");
         assert!(read_photo(&dir.path().join("missing.png"), &Limits::default()).is_err());
+    }
+
+    #[test]
+    fn every_part_of_a_multi_part_exr_is_checked_against_the_limit() {
+        use exr::prelude::{Encoding, Image, ImageAttributes, IntegerBounds, Layer, LayerAttributes};
+        use exr::prelude::{SpecificChannels, Vec2, WritableImage};
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("parts.exr");
+        let pixel = |_: Vec2<usize>| (0.0f32, 0.0f32, 1.0f32);
+        let part = |name: &str, side: usize| {
+            let channels = SpecificChannels::rgb(pixel);
+            Layer::new((side, side), LayerAttributes::named(name), Encoding::UNCOMPRESSED, channels)
+        };
+        let bounds = IntegerBounds::from_dimensions((16, 16));
+        let image = Image::from_layers(ImageAttributes::new(bounds), vec![part("small", 8), part("large", 16)]);
+        image.write().to_file(&path).unwrap();
+        // The first part (64 pixels) fits 100; the second (256) does not, and the file is refused.
+        let e = read_photo(&path, &Limits { max_pixels: 100 }).unwrap_err().to_string();
+        assert!(e.contains("parts.exr") && e.contains("16x16"), "{e}");
+        let e = crate::limits::image_header(&path, 100).unwrap_err().to_string();
+        assert!(e.contains("16x16"), "{e}");
+        let header = crate::limits::image_header(&path, 1000).unwrap();
+        assert_eq!((header.width, header.height), (8, 8), "the part the reader decodes");
+        let photo = read_photo(&path, &Limits { max_pixels: 1000 }).unwrap();
+        assert_eq!((photo.width(), photo.height()), (8, 8));
     }
 
     #[test]

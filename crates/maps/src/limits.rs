@@ -178,17 +178,16 @@ impl ImageHeader {
 /// When the file cannot be opened, is not a supported image, or is empty or over the limit
 /// ([`Error::TooLarge`] naming the file).
 pub fn image_header(path: &Path, max_pixels: u64) -> Result<ImageHeader> {
-    let header = read_header(path)?;
-    check_pixels(path, header.width, header.height, max_pixels)?;
-    Ok(header)
-}
-
-/// The header of a PNG, TIFF or EXR image, unchecked.
-fn read_header(path: &Path) -> Result<ImageHeader> {
     // The same signature rules as the decoders (JPEG refused with its reason, a name that says
     // another format), so a header read first gives the error the decode would have given.
     crate::signature::check_file(path)?;
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) { exr_header(path) } else { raster_header(path) }
+    let header = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        exr_header(path, max_pixels)?
+    } else {
+        raster_header(path)?
+    };
+    check_pixels(path, header.width, header.height, max_pixels)?;
+    Ok(header)
 }
 
 fn raster_header(path: &Path) -> Result<ImageHeader> {
@@ -212,18 +211,27 @@ fn raster_header(path: &Path) -> Result<ImageHeader> {
     })
 }
 
-fn exr_header(path: &Path) -> Result<ImageHeader> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::decode(path, e))?;
-    let header = meta.headers.first().ok_or_else(|| Error::decode(path, "no layer"))?;
-    let size = header.layer_size;
+fn exr_header(path: &Path, max_pixels: u64) -> Result<ImageHeader> {
+    let (width, height) = exr_read_size(path, max_pixels)?;
     // The EXR reader keeps three f32 channels (missing ones are 0, alpha is dropped).
-    Ok(ImageHeader {
-        width: size.width() as u64,
-        height: size.height() as u64,
-        channels: 3,
-        alpha: false,
-        sample_bytes: 4,
-    })
+    Ok(ImageHeader { width: width as u64, height: height as u64, channels: 3, alpha: false, sample_bytes: 4 })
+}
+
+/// The size of the part of an EXR file the reader decodes (the first with R, G and B channels,
+/// else the first), after checking every part against `max_pixels`: a multi-part file's decoder
+/// may allocate for any part, so a small first part must not let a huge second one through.
+///
+/// # Errors
+/// When the header cannot be read, the file has no part, or a part is empty or over the limit.
+pub(crate) fn exr_read_size(path: &Path, max_pixels: u64) -> Result<(usize, usize)> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::decode(path, e))?;
+    for header in &meta.headers {
+        check_pixels(path, header.layer_size.width() as u64, header.layer_size.height() as u64, max_pixels)?;
+    }
+    let has = |header: &exr::meta::header::Header, name: &str| header.channels.list.iter().any(|c| c.name.eq(name));
+    let read = meta.headers.iter().find(|h| has(h, "R") && has(h, "G") && has(h, "B")).or(meta.headers.first());
+    let size = read.ok_or_else(|| Error::decode(path, "no layer"))?.layer_size;
+    Ok((size.width(), size.height()))
 }
 
 /// Admits jobs whose memory estimates fit a budget together: [`MemoryGate::acquire`] waits

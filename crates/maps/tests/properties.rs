@@ -9,22 +9,13 @@
 //! `PROPTEST_CASES=N` runs N cases of each; `PROPTEST_RNG_SEED=S` other cases than the default seed.
 
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
+use proptest::test_runner::Config;
 use skinkit_maps::Grid;
 use skinkit_maps::pyramid::{Border, KERNEL, collapse, expand, laplacian, max_levels, reduce};
 
-/// `cases` cases from a fixed seed, unless `PROPTEST_CASES` / `PROPTEST_RNG_SEED` say otherwise.
+/// `cases` cases from this suite's fixed seed (`PROPTEST_CASES`, `PROPTEST_RNG_SEED` override).
 fn config(cases: u32) -> Config {
-    let from_env = Config::default();
-    Config {
-        cases: if std::env::var_os("PROPTEST_CASES").is_some() { from_env.cases } else { cases },
-        rng_seed: if std::env::var_os("PROPTEST_RNG_SEED").is_some() {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(0x5eed_0a95)
-        },
-        ..from_env
-    }
+    skinkit_testkit::proptest_config(cases, 0x5eed_0a95)
 }
 
 fn grid() -> impl Strategy<Value = Grid<f32>> {

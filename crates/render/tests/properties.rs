@@ -12,25 +12,16 @@
 
 use glam::{Mat3, Vec2, Vec3};
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
+use proptest::test_runner::Config;
 use skinkit_render::brdf::{LOBE_CEILING, Lafortune, Lobe, lobe_power};
 use skinkit_render::frames::{FrameMethod, bitangent, tangents};
 use skinkit_render::mesh::Mesh;
 use skinkit_render::skin::lut::{DiffuseLut, DiffuseLutSpec};
 use skinkit_render::skin::shadow::{ShadowLut, ShadowLutSpec};
 
-/// `cases` cases from a fixed seed, unless `PROPTEST_CASES` / `PROPTEST_RNG_SEED` say otherwise.
+/// `cases` cases from this suite's fixed seed (`PROPTEST_CASES`, `PROPTEST_RNG_SEED` override).
 fn config(cases: u32) -> Config {
-    let from_env = Config::default();
-    Config {
-        cases: if std::env::var_os("PROPTEST_CASES").is_some() { from_env.cases } else { cases },
-        rng_seed: if std::env::var_os("PROPTEST_RNG_SEED").is_some() {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(0x5eed_4e4d)
-        },
-        ..from_env
-    }
+    skinkit_testkit::proptest_config(cases, 0x5eed_4e4d)
 }
 
 fn vec3(r: f32) -> impl Strategy<Value = Vec3> {

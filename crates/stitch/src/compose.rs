@@ -112,6 +112,9 @@ pub struct Composed {
     pub regions: Vec<RegionReport>,
     pub seams: SeamReport,
     pub seconds: ComposeSeconds,
+    /// Regions grown at once: all of them when their memory estimates fit the limit together,
+    /// else 1.
+    pub regions_at_once: usize,
 }
 
 /// A region's synthesis seed: the run's seed mixed with the region's own (or its index), so
@@ -175,49 +178,10 @@ pub fn compose(
         .iter()
         .map(|a| a.bbox.map(|b| Rect { x0: b.x, y0: b.y, width: b.width, height: b.height }))
         .collect();
-    let levels = if !options.blend {
-        1
-    } else {
-        match options.levels {
-            Some(l) => l,
-            None => {
-                let narrowest = bboxes.iter().flatten().map(|b| b.width.min(b.height)).min().unwrap_or(1);
-                spline::levels_for_overlap(narrowest).min(MAX_AUTO_LEVELS)
-            }
-        }
-    };
-    if levels == 0 || levels > spline::MAX_LEVELS {
-        return Err(Error::InvalidParameter(format!("spline levels = {levels}: must be 1 to {}", spline::MAX_LEVELS)));
-    }
-
-    // Every resampled size and synthesis estimate is checked before any exemplar is resampled.
-    let sizes: Vec<(usize, usize)> = (0..regions)
-        .map(|i| {
-            let size = resampled_size(layout, i, exemplars[i].size())?;
-            check_region_synthesis(layout, i, size, bboxes[i], levels, options)?;
-            Ok(size)
-        })
-        .collect::<Result<_>>()?;
-    let t = Instant::now();
-    let resampled: Vec<NormalMap> = exemplars
-        .par_iter()
-        .zip(sizes.par_iter())
-        .map(|(ex, &(rw, rh))| resample_normals(ex, rw, rh).map_err(Error::from))
-        .collect::<Result<_>>()?;
-    seconds.resample = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let grown: Vec<(Piece, RegionReport)> = (0..regions)
-        .into_par_iter()
-        .map(|i| grow_region(layout, i, &resampled[i], bboxes[i], levels, partition.areas()[i].texels, options))
-        .map(|r| {
-            if let Ok((_, report)) = &r {
-                progress(&report.name);
-            }
-            r
-        })
-        .collect::<Result<_>>()?;
-    seconds.synthesis = t.elapsed().as_secs_f64();
+    let levels = spline_levels(&bboxes, options)?;
+    let texels: Vec<usize> = partition.areas().iter().map(|a| a.texels).collect();
+    let (grown, regions_at_once) =
+        grow_regions(layout, exemplars, &bboxes, &texels, levels, options, progress, &mut seconds)?;
     let (pieces, reports): (Vec<Piece>, Vec<RegionReport>) = grown.into_iter().unzip();
 
     let t = Instant::now();
@@ -230,7 +194,7 @@ pub fn compose(
     let t = Instant::now();
     let seams = seam::measure(&labels, normals.grid(), regions, options.seam_band.max(1))?;
     seconds.seams = t.elapsed().as_secs_f64();
-    Ok(Composed { normals, labels, levels, regions: reports, seams, seconds })
+    Ok(Composed { normals, labels, levels, regions: reports, seams, seconds, regions_at_once })
 }
 
 /// Bytes per face-map texel [`compose`] holds at least at once: the partition's cells and the
@@ -250,6 +214,80 @@ pub fn check_memory(layout: &Layout, options: &ComposeOptions) -> Result<()> {
     let estimate = texels.saturating_mul(MAP_BYTES_PER_TEXEL);
     limits::check_memory(&layout.origin.display().to_string(), &what, estimate, options.synth.memory_limit)?;
     Ok(())
+}
+
+/// The spline's level count: the options' own, else as many as the narrowest region's overlap
+/// allows (1 without blending).
+fn spline_levels(bboxes: &[Option<Rect>], options: &ComposeOptions) -> Result<usize> {
+    let levels = if !options.blend {
+        1
+    } else {
+        match options.levels {
+            Some(l) => l,
+            None => {
+                let narrowest = bboxes.iter().flatten().map(|b| b.width.min(b.height)).min().unwrap_or(1);
+                spline::levels_for_overlap(narrowest).min(MAX_AUTO_LEVELS)
+            }
+        }
+    };
+    if levels == 0 || levels > spline::MAX_LEVELS {
+        return Err(Error::InvalidParameter(format!("spline levels = {levels}: must be 1 to {}", spline::MAX_LEVELS)));
+    }
+    Ok(levels)
+}
+
+/// Resamples every region's exemplar to the map's scale and grows the region over its piece,
+/// after checking every size and estimate first; the seconds of both steps go to `seconds`.
+/// Gives the pieces and reports and how many regions grew at once.
+#[allow(clippy::too_many_arguments)] // the steps of `compose` it stands for, by name
+fn grow_regions(
+    layout: &Layout,
+    exemplars: &[NormalMap],
+    bboxes: &[Option<Rect>],
+    texels: &[usize],
+    levels: usize,
+    options: &ComposeOptions,
+    progress: &(dyn Fn(&str) + Sync),
+    seconds: &mut ComposeSeconds,
+) -> Result<(Vec<(Piece, RegionReport)>, usize)> {
+    let regions = layout.regions.len();
+    // Every resampled size and synthesis estimate is checked before any exemplar is resampled.
+    let (sizes, estimates): (Vec<(usize, usize)>, Vec<u64>) = (0..regions)
+        .map(|i| {
+            let size = resampled_size(layout, i, exemplars[i].size())?;
+            Ok((size, check_region_synthesis(layout, i, size, bboxes[i], levels, options)?))
+        })
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
+    // Regions grow side by side when their estimates fit the limit together beside the map's
+    // floor; else one at a time (each fits alone, and each synthesis is parallel within).
+    let map_floor = (layout.width as u64 * layout.height as u64).saturating_mul(MAP_BYTES_PER_TEXEL);
+    let together = estimates.iter().fold(map_floor, |sum, &e| sum.saturating_add(e));
+    let side_by_side = together <= options.synth.memory_limit;
+    let t = Instant::now();
+    let resampled: Vec<NormalMap> = exemplars
+        .par_iter()
+        .zip(sizes.par_iter())
+        .map(|(ex, &(rw, rh))| resample_normals(ex, rw, rh).map_err(Error::from))
+        .collect::<Result<_>>()?;
+    seconds.resample = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let grow = |i: usize| {
+        let grown = grow_region(layout, i, &resampled[i], bboxes[i], levels, texels[i], options);
+        if let Ok((_, report)) = &grown {
+            progress(&report.name);
+        }
+        grown
+    };
+    let grown: Vec<(Piece, RegionReport)> = if side_by_side {
+        (0..regions).into_par_iter().map(grow).collect::<Result<_>>()?
+    } else {
+        (0..regions).map(grow).collect::<Result<_>>()?
+    };
+    seconds.synthesis = t.elapsed().as_secs_f64();
+    Ok((grown, if side_by_side { regions } else { 1 }))
 }
 
 /// Region `i`'s exemplar size at the map's scale, refused above
@@ -278,7 +316,7 @@ fn resampled_size(layout: &Layout, i: usize, (ew, eh): (usize, usize)) -> Result
 }
 
 /// Checks region `i`'s synthesis options and memory estimate against its resampled exemplar
-/// size, before the exemplar is resampled.
+/// size, before the exemplar is resampled; gives the estimate (0 for a region without texels).
 fn check_region_synthesis(
     layout: &Layout,
     i: usize,
@@ -286,11 +324,12 @@ fn check_region_synthesis(
     bbox: Option<Rect>,
     levels: usize,
     options: &ComposeOptions,
-) -> Result<()> {
-    let Some(bbox) = bbox else { return Ok(()) };
+) -> Result<u64> {
+    let Some(bbox) = bbox else { return Ok(0) };
     let rect = spline::piece_rect(bbox, levels, layout.width, layout.height);
     let config = SynthConfig { width: rect.width, height: rect.height, ..options.synth.clone() };
-    config.validate(rw, rh).map(drop).map_err(|e| synthesis_error(layout, i, rect, (rw, rh), e))
+    let (validated, _) = config.validate(rw, rh).map_err(|e| synthesis_error(layout, i, rect, (rw, rh), e))?;
+    Ok(validated.memory_estimate(rw, rh))
 }
 
 /// Region `i`'s synthesis failure, naming the layout, the region and the sizes.

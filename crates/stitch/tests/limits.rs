@@ -4,10 +4,7 @@
 //! is allocated (D6). Heap use is measured by a counting allocator: each measured call holds a
 //! lock, so no other test of this binary allocates meanwhile.
 
-use std::alloc::{GlobalAlloc, Layout as AllocLayout, System};
 use std::path::Path;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use skinkit_maps::NormalMap;
 use skinkit_stitch::compose::{MAP_BYTES_PER_TEXEL, check_memory};
@@ -15,66 +12,11 @@ use skinkit_stitch::curve::CurveParams;
 use skinkit_stitch::layout::Layout;
 use skinkit_stitch::{ComposeOptions, compose};
 use skinkit_synth::SynthConfig;
-
-/// The system allocator, counting the bytes held and their peak.
-struct Counting;
-
-static HELD: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-static MEASURING: Mutex<()> = Mutex::new(());
-
-fn grew(bytes: usize) {
-    let now = HELD.fetch_add(bytes, Ordering::SeqCst) + bytes;
-    PEAK.fetch_max(now, Ordering::SeqCst);
-}
-
-// SAFETY: every call is forwarded to `System` unchanged; only counters are updated beside it.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: AllocLayout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, layout: AllocLayout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: AllocLayout) {
-        unsafe { System.dealloc(ptr, layout) };
-        HELD.fetch_sub(layout.size(), Ordering::SeqCst);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: AllocLayout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            HELD.fetch_sub(layout.size(), Ordering::SeqCst);
-            grew(new_size);
-        }
-        p
-    }
-}
+use skinkit_testkit::alloc::{Counting, alone, peak_during};
+use skinkit_testkit::header_only_png;
 
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
-
-/// Holds every other test of this binary off while a test allocates: each test takes it for
-/// its whole body, so a measurement sees only its own allocations.
-fn alone() -> std::sync::MutexGuard<'static, ()> {
-    MEASURING.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// `f`'s result and the most heap bytes it held at once above what was held before it (call it
-/// while holding [`alone`]).
-fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let base = HELD.load(Ordering::SeqCst);
-    PEAK.store(base, Ordering::SeqCst);
-    let result = f();
-    (result, PEAK.load(Ordering::SeqCst).saturating_sub(base))
-}
 
 const MIB: usize = 1 << 20;
 
@@ -176,33 +118,30 @@ fn d6_the_map_floor_is_below_what_a_compose_holds() {
     drop(composed);
 }
 
-/// A PNG of `w x h` 8-bit grey pixels whose header is all there is (no pixel data).
-fn header_only_png(path: &Path, w: u32, h: u32) {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&w.to_be_bytes());
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
-    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
-    bytes.extend_from_slice(&13u32.to_be_bytes());
-    bytes.extend_from_slice(&ihdr);
-    bytes.extend_from_slice(&crc32(&ihdr).to_be_bytes());
-    // A one-byte zlib stream (a stored block) as the only image data, then the end: the file is
-    // well formed up to the pixels and far too short for the size it claims.
-    let idat = [b'I', b'D', b'A', b'T', 0x78, 0x01, 0x01, 0x01, 0x00, 0xFE, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x01];
-    bytes.extend_from_slice(&12u32.to_be_bytes());
-    bytes.extend_from_slice(&idat);
-    bytes.extend_from_slice(&crc32(&idat).to_be_bytes());
-    bytes.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82]);
-    std::fs::write(path, bytes).unwrap();
-}
-
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in data {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+#[test]
+fn regions_that_fit_the_limit_only_one_at_a_time_grow_one_at_a_time_to_the_same_map() {
+    let _alone = alone();
+    let dir = tempfile::tempdir().unwrap();
+    // Two mirror-image regions from equal exemplars: equal estimates E, so the smallest doubling
+    // of the limit that admits one (below 2E) cannot admit both beside the map.
+    let l = layout(dir.path(), 256, 128, 0.05, "");
+    let same = vec![NormalMap::flat(64, 64), NormalMap::flat(64, 64)];
+    let roomy = compose(&l, &same, &options(), &|_| {}).unwrap();
+    assert_eq!(roomy.regions_at_once, 2);
+    let mut limit = 1u64 << 20;
+    let tight = loop {
+        let tight_options =
+            ComposeOptions { synth: SynthConfig { memory_limit: limit, ..options().synth }, ..options() };
+        match compose(&l, &same, &tight_options, &|_| {}) {
+            Ok(composed) => break composed,
+            Err(e) => assert!(e.to_string().contains("needs an estimated"), "{e}"),
         }
-    }
-    !crc
+        limit *= 2;
+        assert!(limit < 8 << 30, "never fitted");
+    };
+    assert_eq!(tight.regions_at_once, 1, "at {} MiB", limit >> 20);
+    let bits = |c: &skinkit_stitch::Composed| {
+        c.normals.grid().as_slice().iter().map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<_>>()
+    };
+    assert!(bits(&tight) == bits(&roomy), "one at a time gives the same bits");
 }

@@ -7,22 +7,13 @@
 
 use glam::Vec3;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
+use proptest::test_runner::Config;
 use skinkit_maps::Grid;
 use skinkit_stitch::spline::{Blend, Piece, SplineConfig, blend, piece_rect, region_bounds};
 
-/// `cases` cases from a fixed seed, unless `PROPTEST_CASES` / `PROPTEST_RNG_SEED` say otherwise.
+/// `cases` cases from this suite's fixed seed (`PROPTEST_CASES`, `PROPTEST_RNG_SEED` override).
 fn config(cases: u32) -> Config {
-    let from_env = Config::default();
-    Config {
-        cases: if std::env::var_os("PROPTEST_CASES").is_some() { from_env.cases } else { cases },
-        rng_seed: if std::env::var_os("PROPTEST_RNG_SEED").is_some() {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(0x5eed_5711)
-        },
-        ..from_env
-    }
+    skinkit_testkit::proptest_config(cases, 0x5eed_5711)
 }
 
 /// Labels of 1..=4 regions: each texel takes the region of the nearest of a few random seed

@@ -9,24 +9,15 @@
 
 use glam::Vec3;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
+use proptest::test_runner::Config;
 use skinkit_maps::Grid;
 use skinkit_synth::exemplar::ExemplarLevel;
 use skinkit_synth::neighbourhood::Neighbourhood;
 use skinkit_synth::search::{ApproximateIndex, KCoherenceSets};
 
-/// `cases` cases from a fixed seed, unless `PROPTEST_CASES` / `PROPTEST_RNG_SEED` say otherwise.
+/// `cases` cases from this suite's fixed seed (`PROPTEST_CASES`, `PROPTEST_RNG_SEED` override).
 fn config(cases: u32) -> Config {
-    let from_env = Config::default();
-    Config {
-        cases: if std::env::var_os("PROPTEST_CASES").is_some() { from_env.cases } else { cases },
-        rng_seed: if std::env::var_os("PROPTEST_RNG_SEED").is_some() {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(0x5eed_5e7c)
-        },
-        ..from_env
-    }
+    skinkit_testkit::proptest_config(cases, 0x5eed_5e7c)
 }
 
 /// A random exemplar of 3..=20 texels a side, values on a coarse lattice sometimes (ties) and

@@ -20,7 +20,7 @@ use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
 use super::capture::SolveArgs;
 use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
-use super::synth::{Map, QualityReport, parse_size, quality, write_coords};
+use super::synth::{Map, QualityReport, quality, write_coords};
 use crate::output::Output;
 use crate::pipeline;
 
@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub samples: Option<PathBuf>,
     /// Size each mold's captured map is grown to.
-    #[arg(long, default_value = "1024x1024", value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "1024x1024", value_parser = crate::flags::image_size, value_name = "WxH")]
     pub synth_size: (usize, usize),
     /// Seed of the syntheses.
     #[arg(long, default_value_t = 1)]

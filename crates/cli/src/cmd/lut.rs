@@ -126,7 +126,7 @@ fn run_diffuse(args: DiffuseArgs, out: &Output) -> Result<i32> {
     };
     spec.validate().map_err(flag_error)?;
     let started = Instant::now();
-    let lut = DiffuseLut::build(&spec).map_err(flag_error)?;
+    let lut = DiffuseLut::build(&spec).map_err(build_error)?;
     let build_seconds = started.elapsed().as_secs_f64();
     let started = Instant::now();
     lut_file::write_diffuse(&args.out, &lut).with_context(|| format!("cannot write {}", args.out.display()))?;
@@ -147,13 +147,18 @@ fn run_shadow(args: ShadowArgs, out: &Output) -> Result<i32> {
     };
     spec.validate().map_err(flag_error)?;
     let started = Instant::now();
-    let lut = ShadowLut::build(&spec).map_err(flag_error)?;
+    let lut = ShadowLut::build(&spec).map_err(build_error)?;
     let build_seconds = started.elapsed().as_secs_f64();
     let started = Instant::now();
     lut_file::write_shadow(&args.out, &lut).with_context(|| format!("cannot write {}", args.out.display()))?;
     let attributes = lut_file::shadow_attributes(&lut);
     report(out, &args.out, (width, height), &attributes, build_seconds, started.elapsed().as_secs_f64());
     Ok(0)
+}
+
+/// A table that validated but could not be built.
+fn build_error(error: SpecError) -> anyhow::Error {
+    anyhow::anyhow!("cannot build the table: {error}")
 }
 
 /// Sides as the spec holds them; anything beyond `u32` is refused by validation as too large.
@@ -163,7 +168,7 @@ fn sides((w, h): (usize, usize)) -> (u32, u32) {
 
 fn check_extension(path: &Path) -> Result<()> {
     if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
-        bail!("--out {}: tables are written as float .exr files", path.display());
+        return Err(crate::guard::usage(format!("--out {}: tables are written as float .exr files", path.display())));
     }
     Ok(())
 }
@@ -177,7 +182,7 @@ fn flag_error(error: SpecError) -> anyhow::Error {
         SpecError::Inverted { min_name, max_name, .. } => format!("{} / {}", flag(min_name), flag(max_name)),
         _ => "invalid table".to_owned(),
     };
-    anyhow::anyhow!("{prefix}: {error}")
+    crate::guard::usage(format!("{prefix}: {error}"))
 }
 
 fn report(

@@ -236,28 +236,20 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
     let Resolved { scene, width, height, path, format } = resolve(job)?;
     check_outputs(job, &scene, &path, report)?;
     let (target_format, tone) = load::target_for(format);
+    let what = format!("rendering {width}x{height}");
+    let frame_bytes = target_format.frame_bytes(width, height);
+    limits::check_memory(&job.scene.display().to_string(), &what, frame_bytes, out.memory_limit())?;
     let t = Instant::now();
     let mut loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
     loaded.inputs.tone = tone;
     let graph = PassGraph::for_loaded(&scene, &loaded);
     let plan = load::plan(&scene, &loaded, &graph, width, height, target_format);
     loaded.warnings.extend(plan.notes.iter().cloned());
-    for warning in &loaded.warnings {
-        out.warn(warning);
-    }
+    loaded.warnings.iter().for_each(|warning| out.warn(warning));
     let load_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let skin = match job.reference {
-        None => skin::setup::build(&scene, &loaded, &graph)?,
-        Some(size) => {
-            if !(16..=8192).contains(&size) {
-                bail!("--reference: {size} is outside 16..=8192 texels");
-            }
-            out.note(format!("baking and scattering the {size}x{size} reference light map on the CPU"));
-            skin::compare::Method::Reference { size }.setup(&scene, &loaded)?
-        }
-    };
+    let skin = skin_setup(job, &scene, &loaded, &graph, out)?;
     let skin_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let mut prepared = gpu.prepare_with(&loaded.inputs, &skin)?;
@@ -266,7 +258,7 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
 
     let frames = job.frames.unwrap_or(1);
     if !(1..=limits::MAX_FRAMES).contains(&frames) {
-        bail!("--frames: {frames} is not a frame count from 1 to {}", limits::MAX_FRAMES);
+        return Err(guard::usage(format!("--frames: {frames} is not a frame count from 1 to {}", limits::MAX_FRAMES)));
     }
     // One (camera, frame) at a time: nothing is held per frame but its line in the report.
     let bar = out.progress((scene.cameras.len() * frames) as u64, "render");
@@ -307,6 +299,26 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
         upload_seconds,
         total_seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The skin effects' CPU set-up: the scene's own, or with `--reference` the exact light map.
+fn skin_setup(
+    job: &Job,
+    scene: &Scene,
+    loaded: &load::Loaded,
+    graph: &PassGraph,
+    out: &Output,
+) -> Result<skinkit_render::passes::SkinSetup> {
+    match job.reference {
+        None => Ok(skin::setup::build(scene, loaded, graph)?),
+        Some(size) => {
+            if !(16..=8192).contains(&size) {
+                return Err(guard::usage(format!("--reference: {size} is outside 16..=8192 texels")));
+            }
+            out.note(format!("baking and scattering the {size}x{size} reference light map on the CPU"));
+            Ok(skin::compare::Method::Reference { size }.setup(scene, loaded)?)
+        }
+    }
 }
 
 /// `skinkit view`.

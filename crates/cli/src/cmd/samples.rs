@@ -28,7 +28,8 @@ pub struct Args {
     #[arg(long, default_value = "samples/molds", value_name = "DIR")]
     pub out: PathBuf,
     /// Side of each square sample in pixels.
-    #[arg(long, default_value_t = 256, value_name = "PIXELS")]
+    #[arg(long, default_value_t = 256, value_name = "PIXELS",
+          value_parser = crate::flags::square_side(1, hf::params::MAX_TEXELS))]
     pub size: usize,
     /// Seed of the heightfields and the sensor noise.
     #[arg(long, default_value_t = 2001)]

@@ -113,6 +113,8 @@ pub struct FaceReport {
     pub upsampled: bool,
     pub seed: u64,
     pub regions: Vec<RegionReport>,
+    /// Regions grown at once: all, or 1 when their estimates do not fit `--memory-limit` together.
+    pub regions_at_once: usize,
     pub seams: SeamReport,
     pub seconds: FaceSeconds,
     pub peak_memory_mib: Option<f64>,
@@ -329,6 +331,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
         upsampled: options.upsampled,
         seed: options.seed,
         regions: c.regions.clone(),
+        regions_at_once: c.regions_at_once,
         seams: c.seams.clone(),
         seconds: FaceSeconds {
             exemplars: face.seconds_exemplars,

@@ -212,9 +212,40 @@ impl MapArgs {
 fn check_map_extension(path: &Path) -> Result<()> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     if ext != "png" && ext != "exr" {
-        bail!("{}: output maps are written as .png (16-bit) or .exr", path.display());
+        return Err(guard::usage(format!("{}: output maps are written as .png (16-bit) or .exr", path.display())));
     }
     Ok(())
+}
+
+/// Refuses, before any work, outputs of the wrong kind and outputs that are the exemplar.
+fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<()> {
+    check_map_extension(out_path)?;
+    if let Some(coords) = &args.coords
+        && coords.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png")
+    {
+        let message = format!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
+        return Err(guard::usage(message));
+    }
+    let out_path = out_path.to_owned();
+    let outputs = [("--out", Some(&out_path)), ("--coords", args.coords.as_ref()), ("--report", args.report.as_ref())];
+    guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.to_owned())])
+}
+
+/// What one synthesis gives: the map, its exemplar coordinates, warnings and seconds per level.
+type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>);
+
+/// Grows `exemplar`, normals or colours, under `config`.
+fn grow_map(exemplar: &Map, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Grown> {
+    Ok(match exemplar {
+        Map::Normal(n) => {
+            let s = skinkit_synth::synthesize_normals(n, config, progress)?;
+            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds)
+        }
+        Map::Color(c) => {
+            let s = skinkit_synth::synthesize(c, config, progress)?;
+            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds)
+        }
+    })
 }
 
 /// The options as run, for the report.
@@ -349,14 +380,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let (Some(exemplar_path), Some(out_path), Some(size)) = (&args.exemplar, &args.out, args.size) else {
         bail!("synth needs EXEMPLAR, --out and --size");
     };
-    check_map_extension(out_path)?;
-    if let Some(coords) = &args.coords
-        && coords.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png")
-    {
-        bail!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
-    }
-    let outputs = [("--out", Some(out_path)), ("--coords", args.coords.as_ref()), ("--report", args.report.as_ref())];
-    guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.clone())])?;
+    check_outputs(&args, exemplar_path, out_path)?;
     // The synthesis estimate from the exemplar's header, before the exemplar is decoded.
     let header = skinkit_maps::limits::image_header(exemplar_path, skinkit_maps::limits::MAX_IMAGE_PIXELS)?;
     let requested = SynthConfig { memory_limit: out.memory_limit(), ..config(&args, size) };
@@ -375,16 +399,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let (validated, _) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };
     let progress = |level: usize, fraction: f32| bars.update(level, fraction);
-    let (output, coords, warnings, level_seconds) = match &exemplar {
-        Map::Normal(n) => {
-            let s = skinkit_synth::synthesize_normals(n, &requested, &progress).with_context(context)?;
-            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds)
-        }
-        Map::Color(c) => {
-            let s = skinkit_synth::synthesize(c, &requested, &progress).with_context(context)?;
-            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds)
-        }
-    };
+    let (output, coords, warnings, level_seconds) = grow_map(&exemplar, &requested, &progress).with_context(context)?;
     bars.finish();
     for w in &warnings {
         out.warn(w);

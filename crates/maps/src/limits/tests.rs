@@ -1,5 +1,7 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use skinkit_testkit::header_only_png;
+
 use super::*;
 use crate::io::{PngLayout, write_png};
 
@@ -53,39 +55,6 @@ fn memory_refusals_name_the_subject_and_both_sizes() {
     let e = check_memory("a.toml", "region `b`", (3 << 30) + 1, 2 << 30).unwrap_err().to_string();
     assert!(e.starts_with("a.toml: region `b` needs an estimated 3073 MiB"), "{e}");
     assert!(e.contains("memory limit of 2048 MiB"), "{e}");
-}
-
-/// A PNG whose header claims `w x h` pixels of 8-bit grey, with no pixel data at all: reading
-/// the header must not need any.
-fn header_only_png(path: &Path, w: u32, h: u32) {
-    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&w.to_be_bytes());
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
-    bytes.extend_from_slice(&13u32.to_be_bytes());
-    bytes.extend_from_slice(&ihdr);
-    bytes.extend_from_slice(&crc32(&ihdr).to_be_bytes());
-    // A one-byte zlib stream (a stored block) as the only image data, then the end: the file is
-    // well formed up to the pixels and far too short for the size it claims.
-    let idat = [b'I', b'D', b'A', b'T', 0x78, 0x01, 0x01, 0x01, 0x00, 0xFE, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x01];
-    bytes.extend_from_slice(&12u32.to_be_bytes());
-    bytes.extend_from_slice(&idat);
-    bytes.extend_from_slice(&crc32(&idat).to_be_bytes());
-    bytes.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82]);
-    std::fs::write(path, bytes).unwrap();
-}
-
-/// CRC-32 (IEEE), bit by bit: the PNG chunk checksum.
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in data {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-        }
-    }
-    !crc
 }
 
 #[test]

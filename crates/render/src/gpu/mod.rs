@@ -154,6 +154,18 @@ impl OutputFormat {
             Self::Srgb8 => 4,
         }
     }
+
+    /// The bytes one `width x height` frame holds at its peak, on the device and the host (a
+    /// software adapter keeps both in main memory): the colour target, the depth buffer, the
+    /// readback buffer and its mapped copy, the linear f32 RGBA pixels and, for
+    /// [`OutputFormat::Srgb8`], the encoded bytes. Checked against the memory limit before the
+    /// target is created (issue 15: a 16384x16384 render reached 9.5 GB).
+    pub fn frame_bytes(self, width: u32, height: u32) -> u64 {
+        let bpp = u64::from(self.bytes_per_pixel());
+        let srgb = if self == Self::Srgb8 { 4 } else { 0 };
+        let per_pixel = bpp + 4 + 2 * bpp + 16 + srgb;
+        (u64::from(width) * u64::from(height)).saturating_mul(per_pixel)
+    }
 }
 
 /// An offscreen colour target and depth buffer from [`Gpu::create_target`].
@@ -177,4 +189,19 @@ pub struct Gpu {
     pub(crate) blur_pipeline_layout: wgpu::PipelineLayout,
     pub(crate) blur_shader: wgpu::ShaderModule,
     pipelines: Mutex<Vec<(PipelineKey, wgpu::RenderPipeline)>>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::OutputFormat;
+
+    #[test]
+    fn a_frame_costs_its_target_depth_readback_and_pixels() {
+        // Rgba32Float: 16 target + 4 depth + 2 x 16 buffer and mapped copy + 16 f32 pixels.
+        assert_eq!(OutputFormat::Hdr32.frame_bytes(3, 2), 6 * (16 + 4 + 32 + 16));
+        assert_eq!(OutputFormat::Srgb8.frame_bytes(1, 1), 4 + 4 + 8 + 16 + 4);
+        // The largest output side neither overflows nor falls below the 9.5 GB measured there.
+        assert!(OutputFormat::Hdr16.frame_bytes(16384, 16384) > 9_500_000_000);
+        assert_eq!(OutputFormat::Hdr32.frame_bytes(u32::MAX, u32::MAX), u64::MAX, "saturates");
+    }
 }

@@ -283,13 +283,15 @@ pub fn read(path: &Path) -> Result<LutImage, LutFileError> {
 pub fn decode(bytes: &[u8], name: &str) -> Result<LutImage, LutFileError> {
     let bad = |e: exr::error::Error| LutFileError::Decode { path: name.to_owned(), reason: e.to_string() };
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(bad)?;
-    let header = meta
-        .headers
-        .first()
-        .ok_or_else(|| LutFileError::Decode { path: name.to_owned(), reason: "no layer".to_owned() })?;
-    let (width, height) = (header.layer_size.width(), header.layer_size.height());
-    if width > MAX_SIDE as usize || height > MAX_SIDE as usize {
-        return Err(LutFileError::TooLarge { path: name.to_owned(), width, height, max: MAX_SIDE });
+    if meta.headers.is_empty() {
+        return Err(LutFileError::Decode { path: name.to_owned(), reason: "no layer".to_owned() });
+    }
+    // Every part, not only the first: the reader may allocate for any of them.
+    for header in &meta.headers {
+        let (width, height) = (header.layer_size.width(), header.layer_size.height());
+        if width > MAX_SIDE as usize || height > MAX_SIDE as usize {
+            return Err(LutFileError::TooLarge { path: name.to_owned(), width, height, max: MAX_SIDE });
+        }
     }
     let image = exr::prelude::read()
         .no_deep_data()
