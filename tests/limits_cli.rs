@@ -328,6 +328,24 @@ fn flag_values_refused_after_parsing_are_usage_errors() {
         assert_usage_error(&args, flag, value);
     }
     assert_usage_error(&["lut", "diffuse", "--out", "t.exr", "--size", "4097x16"], "--size", "4097x16");
+    // Pairs and files a table spec refuses after parsing: still the user's flags, still exit 2.
+    let pairs: [&[&str]; 3] = [
+        &["lut", "diffuse", "--out", "t.exr", "--inv-r-min", "2", "--inv-r-max", "1"],
+        &["lut", "shadow", "--out", "t.exr", "--w-min-mm", "3", "--w-max-mm", "1"],
+        &["lut", "diffuse", "--out", "t.png"],
+    ];
+    for (args, flag) in pairs.iter().zip(["--inv-r-min / --inv-r-max", "--w-min-mm / --w-max-mm", "--out"]) {
+        let o = skinkit(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(flag), "{args:?}: {}", stderr(&o));
+    }
+    assert_usage_error(&["samples", "--size", "0", "--out", "o"], "--size", "0");
+    assert_usage_error(&["samples", "--size", "20000", "--out", "o"], "--size", "20000");
+    assert_usage_error(&["demo", "--synth-size", "0x0", "--out", "o"], "--synth-size", "0x0");
+    assert_usage_error(&["demo", "--synth-size", "16385x16384", "--out", "o"], "--synth-size", "16385x16384");
+    assert_usage_error(&["synth", s(&ex), "--size", "8x8", "--out", "o.jpg"], "o.jpg", "output maps");
+    let coords = ["synth", s(&ex), "--size", "8x8", "--out", "o.png", "--coords", "c.exr"];
+    assert_usage_error(&coords, "c.exr", "16-bit PNG");
     for (flag, value) in [("--levels", "0"), ("--levels", "21"), ("--curve-amplitude", "nan")] {
         assert_usage_error(&["stitch", "--layout", "l.toml", "--out", "o.png", flag, value], flag, value);
     }

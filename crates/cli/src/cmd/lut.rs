@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use serde::Serialize;
 use skinkit_render::skin::lut::{self, DiffuseLut, DiffuseLutSpec, SpecError};
 use skinkit_render::skin::lut_file::{self, LutAttribute};
