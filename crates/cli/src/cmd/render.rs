@@ -265,22 +265,10 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
     let mut images = Vec::new();
     for (c, f) in (0..scene.cameras.len()).flat_map(|c| (0..frames).map(move |f| (c, f))) {
         let camera = if job.frames.is_some() { load::orbit(&scene.cameras[c], f, frames) } else { scene.cameras[c] };
-        let t = Instant::now();
         prepared.set_camera(&load::gpu_camera(&camera, width, height));
-        gpu.draw(&prepared, &target)?;
-        let rendered = gpu.read(&target)?;
-        let render_seconds = t.elapsed().as_secs_f64();
         let file = numbered(&path, (scene.cameras.len() > 1).then_some(c), job.frames.map(|_| f));
-        let t = Instant::now();
-        set.write_file(&file, |p| write_image(p, &rendered, format))
-            .with_context(|| format!("cannot write {}", file.display()))?;
-        images.push(Image {
-            path: file.display().to_string(),
-            camera: c,
-            frame: f,
-            render_seconds,
-            write_seconds: t.elapsed().as_secs_f64(),
-        });
+        let (render_seconds, write_seconds) = draw_and_stage(gpu, &prepared, &target, &file, format, set)?;
+        images.push(Image { path: file.display().to_string(), camera: c, frame: f, render_seconds, write_seconds });
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -299,6 +287,26 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
         upload_seconds,
         total_seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Draws one frame into `target`, reads it back and stages it in `set` as `file`: the seconds
+/// of the draw and read, and of the write.
+fn draw_and_stage(
+    gpu: &Gpu,
+    prepared: &skinkit_render::gpu::PreparedScene,
+    target: &skinkit_render::gpu::Target,
+    file: &Path,
+    format: scene::OutputFormat,
+    set: &mut OutputSet,
+) -> Result<(f64, f64)> {
+    let t = Instant::now();
+    gpu.draw(prepared, target)?;
+    let rendered = gpu.read(target)?;
+    let render_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    set.write_file(file, |p| write_image(p, &rendered, format))
+        .with_context(|| format!("cannot write {}", file.display()))?;
+    Ok((render_seconds, t.elapsed().as_secs_f64()))
 }
 
 /// The skin effects' CPU set-up: the scene's own, or with `--reference` the exact light map.
