@@ -139,7 +139,8 @@ impl Mesh {
     /// As [`Mesh::load`].
     pub fn parse_gltf(bytes: &[u8], base: Option<&Path>, origin: &str) -> Result<LoadedMesh> {
         let gltf_err = |e: gltf::Error| MeshError::Gltf { file: origin.to_owned(), reason: e.to_string() };
-        let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(gltf_err)?;
+        let gltf::Gltf { document, blob } = crate::mesh_source::parse_gltf(bytes)
+            .map_err(|reason| MeshError::Gltf { file: origin.to_owned(), reason })?;
         let base = base.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
         crate::mesh_source::check_gltf_buffer_uris(&document, &base)
             .map_err(|reason| MeshError::Gltf { file: origin.to_owned(), reason })?;

@@ -323,6 +323,19 @@ fn gltf_nodes_reached_twice_are_refused() {
     assert!(err.contains("node 0 is reached twice"), "{err}");
 }
 
+/// A POSITION naming an accessor the file does not have: the `gltf` crate's validation indexed it
+/// unchecked and panicked (the `gltf` fuzz target's crash input, kept in tests/fuzz-regressions).
+#[test]
+fn gltf_attributes_naming_missing_accessors_are_refused() {
+    let bin = triangle_buffer();
+    let json = triangle_json(None, bin.len()).replace(r#""POSITION": 0"#, r#""POSITION": 7"#);
+    let err = Mesh::parse_gltf(&glb(&json, &bin), None, "p.glb").unwrap_err().to_string();
+    assert!(
+        err.starts_with("p.glb: ") && err.contains("mesh 0 primitive 0: POSITION names accessor 7 but the file has 3"),
+        "{err}"
+    );
+}
+
 /// A hierarchy deeper than the importer follows is refused, not recursed into.
 #[test]
 fn gltf_node_chains_deeper_than_the_limit_are_refused() {
