@@ -105,12 +105,21 @@ pub(crate) fn check_gltf_primitive(
 }
 
 /// Parses a glTF or GLB file and validates it as the `gltf` crate does, after first checking what
-/// that validation indexes without a bounds check: a primitive attribute naming an accessor
-/// beyond the file's list made the crate panic (found by the `gltf` fuzz target).
+/// the crate reads without a check: a GLB length shorter than its header, and a primitive
+/// attribute naming an accessor beyond the file's list (both panicked; found by the `gltf` fuzz
+/// target).
 ///
 /// # Errors
 /// The crate's parse or validation error, or a message naming the mesh, primitive and attribute.
 pub(crate) fn parse_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+    // A GLB header's length below the header's own 12 bytes underflows in the crate's reader (a
+    // panic with overflow checks, found by the fuzz target; a wrapped length without them).
+    if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) {
+        let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
+        if length < 12 {
+            return Err(format!("GLB header: total length {length} is shorter than the 12-byte header"));
+        }
+    }
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| e.to_string())?;
     let root = document.into_json();
     let accessors = root.accessors.len();

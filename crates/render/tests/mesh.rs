@@ -336,6 +336,17 @@ fn gltf_attributes_naming_missing_accessors_are_refused() {
     );
 }
 
+/// A GLB whose header gives a total length below its own 12 bytes (a subtraction the `gltf`
+/// crate makes unchecked; the second `gltf` fuzz crash).
+#[test]
+fn glb_lengths_shorter_than_the_header_are_refused() {
+    let bin = triangle_buffer();
+    let mut bytes = glb(&triangle_json(None, bin.len()), &bin);
+    bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
+    let err = Mesh::parse_gltf(&bytes, None, "s.glb").unwrap_err().to_string();
+    assert!(err.contains("s.glb: ") && err.contains("total length 1 is shorter than the 12-byte header"), "{err}");
+}
+
 /// A hierarchy deeper than the importer follows is refused, not recursed into.
 #[test]
 fn gltf_node_chains_deeper_than_the_limit_are_refused() {
