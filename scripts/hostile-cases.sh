@@ -240,7 +240,8 @@ run_cases() {
     T=150 hcase 6.10 D9 "batch of 2 sessions of 8 x 8192^2 photos" "0|1" - - - -- batch "$IN/big2" --out "$OUT/big2"
     # 7. Output collisions.
     mkdir -p "$OUT/dir.png" "$OUT/dir.toml"
-    # Each found at start-up (D14): well under the 2-6 s each run takes before its write.
+    # Each found at start-up (D14): well under the 2-6 s each run takes before its write; a usage
+    # error (exit 2), as an output that is an input (D5) is.
     local dir_cases=(
         "7.2a|synth|synth $IN/exemplars/truth.png --size 384x384 --out $OUT/dir.png"
         "7.2b|stitch|stitch --layout $IN/layouts/scale3.toml --size 256x128 --out $OUT/dir.png"
@@ -252,18 +253,18 @@ run_cases() {
         IFS='|' read -r -a fields <<< "$c"
         mkdir -p "$OUT/dir.png" "$OUT/dir.toml"
         # shellcheck disable=SC2086
-        MAXSEC=1.5 hcase "${fields[0]}" D14 "${fields[1]} --out an existing folder" 1 "$OUT/dir." - - -- ${fields[2]}
+        MAXSEC=1.5 hcase "${fields[0]}" D14 "${fields[1]} --out an existing folder" 2 "$OUT/dir." - - -- ${fields[2]}
     done
     read_only_and_unwritable
-    hcase 7.5a D5 "synth --out its own exemplar" 1 "$IN/same/exemplar.png" - - -- \
+    hcase 7.5a D5 "synth --out its own exemplar" 2 "$IN/same/exemplar.png" - - -- \
         synth "$IN/same/exemplar.png" --size 64x64 --out "$IN/same/exemplar.png"
-    hcase 7.5b D5 "render --out its own normal map" 1 "$IN/same/exemplar.png" - - -- \
+    hcase 7.5b D5 "render --out its own normal map" 2 "$IN/same/exemplar.png" - - -- \
         render "$IN/same/scene.toml" --out "$IN/same/exemplar.png"
-    hcase 7.5c D5 "rig import --out its own light_directions.txt" 1 "light_directions.txt" - - -- \
+    hcase 7.5c D5 "rig import --out its own light_directions.txt" 2 "light_directions.txt" - - -- \
         rig import --diligent "$IN/same/diligent" --out "$IN/same/diligent/light_directions.txt"
-    hcase 7.6a D5 "capture --out its own photo folder" 1 "$IN/same/photos" - - -- \
+    hcase 7.6a D5 "capture --out its own photo folder" 2 "$IN/same/photos" - - -- \
         capture --rig "$IN/same/photos/rig.toml" --photos-from "$IN/same/photos" --out "$IN/same/photos"
-    hcase 7.6b D5 "batch --out its own sessions folder" 1 "$IN/same/sessions" - - -- \
+    hcase 7.6b D5 "batch --out its own sessions folder" 2 "$IN/same/sessions" - - -- \
         batch "$IN/same/sessions" --out "$IN/same/sessions"
 }
 

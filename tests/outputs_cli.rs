@@ -358,7 +358,7 @@ fn d5_capture_and_batch_into_their_input_folders_are_refused() {
     let photos: Vec<String> = (1..=8).map(|i| s(&mold.join(format!("{i:02}.png"))).to_owned()).collect();
     args.extend(photos.iter().map(String::as_str));
     refused(&args, &["the folder of the photos"]);
-    refused(&["batch", s(&sessions), "--out", s(&sessions)], &["inside the sessions folder"]);
+    refused(&["batch", s(&sessions), "--out", s(&sessions)], &["is the sessions folder"]);
     refused(&["batch", s(&sessions), "--out", s(&sessions.join("out"))], &["inside the sessions folder"]);
     assert!(before == snapshot(&sessions), "the sessions changed");
     // A sub-folder of the photo folder is fine: photos are files, so the next run is unchanged.

@@ -57,10 +57,12 @@ pub fn not_an_input(outputs: &[(&str, &Path)], inputs: &[(String, PathBuf)]) -> 
     for (flag, out) in outputs {
         let resolved = resolve(out);
         if let Some((what, input)) = inputs.iter().find(|(_, input)| resolve(input) == resolved) {
+            // The input's own spelling only where it differs (a link, a relative path): the
+            // file is named once.
+            let spelled = if input == out { String::new() } else { format!(" {}", input.display()) };
             return Err(usage(format!(
-                "{flag} {} is {what} {}: writing it would destroy the input; choose another output path",
-                out.display(),
-                input.display()
+                "{flag} {} is {what}{spelled}: writing it would destroy the input; choose another output path",
+                out.display()
             )));
         }
     }
@@ -95,10 +97,11 @@ pub fn distinct(outputs: &[(&str, &Path)]) -> Result<()> {
 /// inside it: the outputs would land among the inputs and be taken for inputs by the next run.
 pub fn not_in_input_folder(flag: &str, out: &Path, what: &str, dir: &Path) -> Result<()> {
     if resolve(out).starts_with(resolve(dir)) {
+        let (place, spelled) =
+            if out == dir { ("", String::new()) } else { ("inside ", format!(" {}", dir.display())) };
         return Err(usage(format!(
-            "{flag} {} is inside {what} {}: outputs would be mixed with the inputs; choose a folder outside it",
-            out.display(),
-            dir.display()
+            "{flag} {} is {place}{what}{spelled}: outputs would be mixed with the inputs; choose a folder outside it",
+            out.display()
         )));
     }
     Ok(())

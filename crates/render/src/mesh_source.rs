@@ -97,9 +97,41 @@ pub(crate) fn check_gltf_primitive(
     buffers: &[gltf::buffer::Data],
     name: &str,
 ) -> Result<(), String> {
-    let attributes = primitive.attributes().map(|(semantic, accessor)| (semantic.to_string(), accessor));
-    for (what, accessor) in attributes.chain(primitive.indices().map(|a| ("indices".to_owned(), a))) {
+    for (semantic, accessor) in primitive.attributes() {
+        let what = semantic.to_string();
+        check_layout(&accessor, Some(&semantic)).map_err(|reason| format!("{name}: {what}: {reason}"))?;
         check_accessor(&accessor, buffers).map_err(|reason| format!("{name}: {what}: {reason}"))?;
+    }
+    if let Some(accessor) = primitive.indices() {
+        check_layout(&accessor, None).map_err(|reason| format!("{name}: indices: {reason}"))?;
+        check_accessor(&accessor, buffers).map_err(|reason| format!("{name}: indices: {reason}"))?;
+    }
+    Ok(())
+}
+
+/// Checks that an accessor the importer reads has the element layout the glTF specification
+/// gives its semantic (indices for `None`): the `gltf` crate's readers assume it, and read a
+/// mismatched one past its elements or hit `unreachable!` (found by the `gltf` fuzz target).
+/// Semantics the importer does not read are left alone.
+fn check_layout(accessor: &gltf::Accessor, semantic: Option<&gltf::Semantic>) -> Result<(), String> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType, Dimensions};
+    let (dimensions, types): (Dimensions, &[DataType]) = match semantic {
+        None => (Dimensions::Scalar, &[DataType::U8, DataType::U16, DataType::U32]),
+        Some(Semantic::Positions | Semantic::Normals) => (Dimensions::Vec3, &[DataType::F32]),
+        Some(Semantic::Tangents) => (Dimensions::Vec4, &[DataType::F32]),
+        Some(Semantic::TexCoords(_)) => (Dimensions::Vec2, &[DataType::F32, DataType::U8, DataType::U16]),
+        Some(_) => return Ok(()),
+    };
+    if accessor.dimensions() != dimensions || !types.contains(&accessor.data_type()) {
+        return Err(format!(
+            "accessor {} holds {:?} of {:?}, where {:?} of {} is read",
+            accessor.index(),
+            accessor.dimensions(),
+            accessor.data_type(),
+            dimensions,
+            types.iter().map(|t| format!("{t:?}")).collect::<Vec<_>>().join(" or ")
+        ));
     }
     Ok(())
 }

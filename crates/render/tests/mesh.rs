@@ -347,6 +347,21 @@ fn glb_lengths_shorter_than_the_header_are_refused() {
     assert!(err.contains("s.glb: ") && err.contains("total length 1 is shorter than the 12-byte header"), "{err}");
 }
 
+/// Accessors whose element layout is not what their semantic reads (the third `gltf` fuzz crash:
+/// positions of 16-bit integers, which the crate's reader walked as f32 triples).
+#[test]
+fn gltf_accessor_layouts_must_match_their_semantics() {
+    let bin = triangle_buffer();
+    let base = triangle_json(None, bin.len());
+    let position = base.replacen(r#""componentType": 5126"#, r#""componentType": 5123"#, 1);
+    assert_ne!(position, base, "the first accessor is the positions' f32");
+    let err = Mesh::parse_gltf(&glb(&position, &bin), None, "l.glb").unwrap_err().to_string();
+    assert!(
+        err.contains("l.glb: ") && err.contains("POSITION: accessor 0 holds Vec3 of U16, where Vec3 of F32 is read"),
+        "{err}"
+    );
+}
+
 /// A hierarchy deeper than the importer follows is refused, not recursed into.
 #[test]
 fn gltf_node_chains_deeper_than_the_limit_are_refused() {

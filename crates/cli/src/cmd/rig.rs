@@ -90,7 +90,7 @@ pub fn run(command: Command, out: &Output) -> Result<i32> {
 fn import_rig(args: ImportArgs, out: &Output) -> Result<i32> {
     let inputs: Vec<(String, PathBuf)> = match (&args.diligent, &args.uw) {
         (Some(dir), _) => [import::DILIGENT_DIRECTIONS, import::DILIGENT_INTENSITIES, "filenames.txt"]
-            .map(|f| (format!("the DiLiGenT file {f}"), dir.join(f)))
+            .map(|f| ("a file of the DiLiGenT folder".to_owned(), dir.join(f)))
             .into(),
         (_, Some(path)) => vec![("the light file".to_owned(), path.clone())],
         _ => Vec::new(),
