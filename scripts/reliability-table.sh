@@ -40,6 +40,14 @@ table() {
         echo
         echo "Fuzzed with $tc on $day (\`scripts/fuzz.sh\`; load is the 1-minute load average of the 2-core machine at the end of each target's run)."
     fi
+    # The crash inputs ever found: the table above counts only the last run of each target.
+    kept=$(find tests/fuzz-regressions -type f 2>/dev/null | awk -F/ '{ n[$3]++ } END { for (t in n) printf "%s %d, ", t, n[t] }' | sed 's/, $//')
+    echo
+    if [ -n "$kept" ]; then
+        echo "Crash inputs found by earlier runs, each fixed and kept in \`tests/fuzz-regressions/\` (replayed by every test run): $kept."
+    else
+        echo "No crash input has been found."
+    fi
 }
 
 if [ "${1:-}" = "--readme" ]; then
