@@ -40,19 +40,20 @@ pub fn non_negative_f64(text: &str) -> Result<f64, String> {
 
 /// A face map size `WxH` of at most [`limits::MAX_MAP_TEXELS`] texels.
 pub fn map_size(text: &str) -> Result<(usize, usize), String> {
-    let (w, h) = crate::cmd::synth::parse_size(text)?;
-    match (w as u64).checked_mul(h as u64) {
-        Some(n) if n <= limits::MAX_MAP_TEXELS => Ok((w, h)),
-        _ => Err(format!("`{text}` is larger than a face map may be ({} texels, 32768x32768)", limits::MAX_MAP_TEXELS)),
-    }
+    size_within(text, limits::MAX_MAP_TEXELS, "a face map may be", "texels, 32768x32768")
 }
 
 /// An image size `WxH` of at most [`limits::MAX_IMAGE_PIXELS`] pixels (a grown map, a render).
 pub fn image_size(text: &str) -> Result<(usize, usize), String> {
+    size_within(text, limits::MAX_IMAGE_PIXELS, "an image may be", "pixels, 16384x16384")
+}
+
+/// A `WxH` size whose area is at most `max` (no overflow), else a message naming `what` and `unit`.
+fn size_within(text: &str, max: u64, what: &str, unit: &str) -> Result<(usize, usize), String> {
     let (w, h) = crate::cmd::synth::parse_size(text)?;
     match (w as u64).checked_mul(h as u64) {
-        Some(n) if n <= limits::MAX_IMAGE_PIXELS => Ok((w, h)),
-        _ => Err(format!("`{text}` is larger than an image may be ({} pixels, 16384x16384)", limits::MAX_IMAGE_PIXELS)),
+        Some(n) if n <= max => Ok((w, h)),
+        _ => Err(format!("`{text}` is larger than {what} ({max} {unit})")),
     }
 }
 

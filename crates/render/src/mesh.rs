@@ -138,13 +138,11 @@ impl Mesh {
     /// # Errors
     /// As [`Mesh::load`].
     pub fn parse_gltf(bytes: &[u8], base: Option<&Path>, origin: &str) -> Result<LoadedMesh> {
-        let gltf_err = |e: gltf::Error| MeshError::Gltf { file: origin.to_owned(), reason: e.to_string() };
-        let gltf::Gltf { document, blob } = crate::mesh_source::parse_gltf(bytes)
-            .map_err(|reason| MeshError::Gltf { file: origin.to_owned(), reason })?;
+        let refused = |reason: String| MeshError::Gltf { file: origin.to_owned(), reason };
+        let gltf::Gltf { document, blob } = crate::mesh_source::parse_gltf(bytes).map_err(refused)?;
         let base = base.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
-        crate::mesh_source::check_gltf_buffer_uris(&document, &base)
-            .map_err(|reason| MeshError::Gltf { file: origin.to_owned(), reason })?;
-        let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(gltf_err)?;
+        crate::mesh_source::check_gltf_buffer_uris(&document, &base).map_err(refused)?;
+        let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(|e| refused(e.to_string()))?;
         let scene = document
             .default_scene()
             .or_else(|| document.scenes().next())

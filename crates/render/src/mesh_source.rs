@@ -97,14 +97,12 @@ pub(crate) fn check_gltf_primitive(
     buffers: &[gltf::buffer::Data],
     name: &str,
 ) -> Result<(), String> {
-    for (semantic, accessor) in primitive.attributes() {
-        let what = semantic.to_string();
-        check_layout(&accessor, Some(&semantic)).map_err(|reason| format!("{name}: {what}: {reason}"))?;
-        check_accessor(&accessor, buffers).map_err(|reason| format!("{name}: {what}: {reason}"))?;
-    }
-    if let Some(accessor) = primitive.indices() {
-        check_layout(&accessor, None).map_err(|reason| format!("{name}: indices: {reason}"))?;
-        check_accessor(&accessor, buffers).map_err(|reason| format!("{name}: indices: {reason}"))?;
+    let attributes = primitive.attributes().map(|(semantic, accessor)| (Some(semantic), accessor));
+    for (semantic, accessor) in attributes.chain(primitive.indices().map(|a| (None, a))) {
+        let what = semantic.as_ref().map_or_else(|| "indices".to_owned(), ToString::to_string);
+        check_layout(&accessor, semantic.as_ref())
+            .and_then(|()| check_accessor(&accessor, buffers))
+            .map_err(|reason| format!("{name}: {what}: {reason}"))?;
     }
     Ok(())
 }
