@@ -57,3 +57,47 @@ fn window(texel: impl Fn(isize, isize) -> Vec3, r: usize) -> Vec<f32> {
     let r = r as isize;
     (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| (dx, dy))).flat_map(|(dx, dy)| texel(dx, dy).to_array()).collect()
 }
+
+/// The exemplar's own figure of [`window_energy`]: the mean, over the exemplar's whole `n x n`
+/// windows (centres on multiples of `stride`), of the smallest squared distance to another whole
+/// window that does not overlap it (centres at least `n` apart on some axis). It is what a map
+/// made of the exemplar's own texture scores away from verbatim copies, so `window_energy / self`
+/// compares exemplars of different contrast. Returns 0 when no window has a non-overlapping
+/// partner.
+pub fn self_energy(exemplar: &Grid<Vec3>, n: usize, stride: usize) -> f64 {
+    let r = n / 2;
+    let (ew, eh) = exemplar.size();
+    if ew < n || eh < n {
+        return 0.0;
+    }
+    let centres: Vec<(usize, usize)> = (r..eh - r).flat_map(|y| (r..ew - r).map(move |x| (x, y))).collect();
+    let windows: Vec<Vec<f32>> = centres
+        .iter()
+        .map(|&(x, y)| window(|dx, dy| *exemplar.get_wrapped(x as isize + dx, y as isize + dy), r))
+        .collect();
+    let stride = stride.max(1);
+    let samples: Vec<usize> = (0..centres.len())
+        .filter(|&i| centres[i].0.is_multiple_of(stride) && centres[i].1.is_multiple_of(stride))
+        .collect();
+    let mins: Vec<f32> = samples
+        .par_iter()
+        .map(|&i| {
+            let (x, y) = centres[i];
+            let mut best = f32::INFINITY;
+            for (j, w) in windows.iter().enumerate() {
+                let (u, v) = centres[j];
+                if u.abs_diff(x) < n && v.abs_diff(y) < n {
+                    continue;
+                }
+                let mut d = 0.0f32;
+                for (a, b) in w.iter().zip(&windows[i]) {
+                    d += (a - b) * (a - b);
+                }
+                best = best.min(d);
+            }
+            best
+        })
+        .filter(|m| m.is_finite())
+        .collect();
+    if mins.is_empty() { 0.0 } else { mins.iter().map(|&m| m as f64).sum::<f64>() / mins.len() as f64 }
+}

@@ -442,3 +442,39 @@ impl DisjointSets {
         (0..self.parent.len()).filter(|&i| self.parent[i] == i).map(|i| self.size[i]).collect()
     }
 }
+
+/// Below this share of the exemplar's variation an output counts as collapsed (see
+/// [`variation_ratio`]).
+pub const COLLAPSE_RATIO: f64 = 0.5;
+
+/// How much of the exemplar's variation a colour output keeps: the smallest, over the channels
+/// whose exemplar standard deviation is above `1e-6`, of the output's standard deviation over the
+/// exemplar's. 1 when no channel varies (a constant exemplar cannot lose variation); 0 for a
+/// constant output of a varied exemplar. A synthesis that regresses to one window (a blank map)
+/// scores near 0; [`COLLAPSE_RATIO`] is the warning threshold.
+pub fn variation_ratio(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
+    let ratios = (0..3).map(|c| (std_dev(&channel(output, c)), std_dev(&channel(exemplar, c))));
+    min_ratio(ratios)
+}
+
+/// [`variation_ratio`] for normal maps, on the slopes ([`slopes`]) of each axis.
+pub fn slope_variation_ratio(output: &NormalMap, exemplar: &NormalMap) -> f64 {
+    let ((ox, oy), (ex, ey)) = (slopes(output), slopes(exemplar));
+    min_ratio([(std_dev(&ox), std_dev(&ex)), (std_dev(&oy), std_dev(&ey))].into_iter())
+}
+
+/// The smallest `output / exemplar` over the pairs whose exemplar deviation is above `1e-6`.
+fn min_ratio(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
+    let min = pairs.filter(|&(_, e)| e > 1e-6).map(|(o, e)| o / e).fold(f64::INFINITY, f64::min);
+    if min.is_finite() { min } else { 1.0 }
+}
+
+/// Population standard deviation of the finite values (0 for none).
+fn std_dev(values: &[f32]) -> f64 {
+    let finite: Vec<f64> = values.iter().filter(|v| v.is_finite()).map(|&v| v as f64).collect();
+    if finite.is_empty() {
+        return 0.0;
+    }
+    let mean = finite.iter().sum::<f64>() / finite.len() as f64;
+    (finite.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / finite.len() as f64).sqrt()
+}

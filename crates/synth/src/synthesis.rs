@@ -70,6 +70,7 @@ use rayon::prelude::*;
 
 use crate::config::{CORRECTION_STRIDE, Search, Start, SynthConfig, half};
 use crate::exemplar::{ExemplarLevel, better};
+use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
 use crate::search::{ApproximateIndex, KCoherenceSets};
 use crate::{Error, Result};
@@ -85,6 +86,9 @@ pub struct Synthesis {
     pub warnings: Vec<String>,
     /// Wall-clock seconds per level, `[0]` the finest.
     pub level_seconds: Vec<f64>,
+    /// The collapse guard: the output's variation over the exemplar's
+    /// ([`metrics::variation_ratio`]); under [`metrics::COLLAPSE_RATIO`] a warning says so.
+    pub variation: f64,
 }
 
 /// The result of [`synthesize_normals`].
@@ -96,6 +100,21 @@ pub struct NormalSynthesis {
     pub coords: Grid<[u32; 2]>,
     pub warnings: Vec<String>,
     pub level_seconds: Vec<f64>,
+    /// The collapse guard on slopes ([`metrics::slope_variation_ratio`]).
+    pub variation: f64,
+}
+
+/// The warning of an output that kept less than [`metrics::COLLAPSE_RATIO`] of the exemplar's
+/// variation, if it did.
+fn collapse_warning(variation: f64, what: &str) -> Option<String> {
+    (variation < metrics::COLLAPSE_RATIO).then(|| {
+        format!(
+            "the output kept {:.0} % of the exemplar's {what} variation (under {:.0} %): it may be \
+             nearly blank; try another seed or a smaller --levels",
+            100.0 * variation,
+            100.0 * metrics::COLLAPSE_RATIO
+        )
+    })
 }
 
 /// Grows `exemplar` into a `config.width x config.height` map. `progress(level, fraction)` is called
@@ -104,6 +123,17 @@ pub struct NormalSynthesis {
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
 pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
+    let mut s = synthesize_unguarded(exemplar, config, progress)?;
+    s.warnings.extend(collapse_warning(s.variation, "colour"));
+    Ok(s)
+}
+
+/// [`synthesize`] without the collapse warning (its variation is of the texels as colours).
+fn synthesize_unguarded(
+    exemplar: &Grid<Vec3>,
+    config: &SynthConfig,
+    progress: &dyn Fn(usize, f32),
+) -> Result<Synthesis> {
     let (ew, eh) = exemplar.size();
     let (config, mut warnings) = config.validate(ew, eh)?;
     let bad = exemplar.as_slice().iter().filter(|v| !v.is_finite()).count();
@@ -144,7 +174,8 @@ pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn
         }
     }
     let (texels, coords) = result.expect("level 0 is always synthesised");
-    Ok(Synthesis { texels, coords, warnings, level_seconds })
+    let variation = metrics::variation_ratio(&texels, exemplar);
+    Ok(Synthesis { texels, coords, warnings, level_seconds, variation })
 }
 
 /// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
@@ -158,16 +189,14 @@ pub fn synthesize_normals(
     progress: &dyn Fn(usize, f32),
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
-    let mut s = synthesize(exemplar.grid(), config, progress)?;
+    let mut s = synthesize_unguarded(exemplar.grid(), config, progress)?;
     s.warnings.splice(0..0, exemplar_warning);
-    Ok(NormalSynthesis {
-        // The finest level copies exemplar texels, which are unit (or invalid zero) already:
-        // wrapping them keeps the bits, where renormalising would perturb the last one.
-        normals: NormalMap::from_unit_grid(s.texels)?,
-        coords: s.coords,
-        warnings: s.warnings,
-        level_seconds: s.level_seconds,
-    })
+    // The finest level copies exemplar texels, which are unit (or invalid zero) already: wrapping
+    // them keeps the bits, where renormalising would perturb the last one.
+    let normals = NormalMap::from_unit_grid(s.texels)?;
+    let variation = metrics::slope_variation_ratio(&normals, exemplar);
+    s.warnings.extend(collapse_warning(variation, "slope"));
+    Ok(NormalSynthesis { normals, coords: s.coords, warnings: s.warnings, level_seconds: s.level_seconds, variation })
 }
 
 /// Copies `map` (a map of the exemplar's size, e.g. the albedo registered with the normals) through

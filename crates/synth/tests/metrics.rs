@@ -271,3 +271,48 @@ fn metrics_do_not_depend_on_thread_count() {
     let b = pool.install(|| radial_power_spectrum(&g, 16));
     assert_eq!(a, b);
 }
+
+/// A colour grid of independent uniform channels.
+fn color_noise(w: usize, h: usize, seed: u64) -> Grid<Vec3> {
+    let v = uniform(3 * w * h, seed);
+    Grid::from_vec(w, h, v.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()).unwrap()
+}
+
+/// Variation ratio: scaling a map about its mean scales every channel's deviation (closed form);
+/// a constant output keeps none; a constant exemplar cannot lose any.
+#[test]
+fn variation_ratio_has_closed_forms() {
+    let ex = color_noise(40, 30, 5);
+    let mean = ex.as_slice().iter().copied().sum::<Vec3>() / ex.len() as f32;
+    // Channels scaled by 0.3, 0.8 and 1.5: the smallest ratio is 0.3.
+    let scaled = ex.map(|v| mean + (*v - mean) * Vec3::new(0.3, 0.8, 1.5));
+    assert!((variation_ratio(&scaled, &ex) - 0.3).abs() < 1e-4, "{}", variation_ratio(&scaled, &ex));
+    let shifted = ex.map(|v| *v + Vec3::splat(2.0));
+    assert!((variation_ratio(&shifted, &ex) - 1.0).abs() < 1e-4);
+    assert_eq!(variation_ratio(&Grid::filled(8, 8, mean), &ex), 0.0);
+    assert_eq!(variation_ratio(&ex, &Grid::filled(8, 8, Vec3::ONE)), 1.0);
+    // A channel constant in the exemplar is left out: only the varying ones count.
+    let flat_blue = ex.map(|v| Vec3::new(v.x, v.y, 0.5));
+    let out = flat_blue.map(|v| Vec3::new(v.x, v.y, v.z + 0.1 * v.x));
+    assert!((variation_ratio(&out, &flat_blue) - 1.0).abs() < 1e-4);
+}
+
+/// Slope variation: normals of slopes scaled by `s` have slope deviations scaled by `s`; invalid
+/// (zero) texels are left out.
+#[test]
+fn slope_variation_ratio_scales_with_the_slopes() {
+    let (w, h) = (32, 24);
+    let (gx, gy) = (uniform(w * h, 8), uniform(w * h, 9));
+    let normals = |s: f32| {
+        let data = (0..w * h).map(|i| Vec3::new(-s * gx[i], -s * gy[i] * 0.5, 1.0).normalize()).collect();
+        NormalMap::from_unit_grid(Grid::from_vec(w, h, data).unwrap()).unwrap()
+    };
+    let ex = normals(1.0);
+    let r = slope_variation_ratio(&normals(0.4), &ex);
+    assert!((r - 0.4).abs() < 1e-3, "{r}");
+    let mut holes = normals(0.4).into_grid();
+    *holes.get_mut(3, 3) = Vec3::ZERO;
+    let r = slope_variation_ratio(&NormalMap::from_unit_grid(holes).unwrap(), &ex);
+    assert!((r - 0.4).abs() < 0.02, "{r}");
+    assert!(slope_variation_ratio(&NormalMap::flat(w, h), &ex) < 1e-6);
+}

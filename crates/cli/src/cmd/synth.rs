@@ -282,6 +282,10 @@ pub struct QualityReport {
     pub seam_energy_ratio: f64,
     /// The same for the exemplar, for comparison.
     pub exemplar_seam_energy_ratio: f64,
+    /// The collapse guard: the output's slope (normals) or channel (colour) standard deviation
+    /// over the exemplar's, the smallest over axes or channels; under 0.5 a warning says the output
+    /// may be nearly blank.
+    pub variation: f64,
     /// Texels of the largest verbatim copied block.
     pub largest_block: usize,
     /// Mean copied block size in texels.
@@ -469,13 +473,14 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
 pub(crate) fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wrap: bool) -> QualityReport {
     let bins = DEFAULT_SPECTRUM_BINS;
     let copies = metrics::copy_statistics(coords, exemplar.size(), wrap);
-    let (slope, channel, spectrum, seam, exemplar_seam) = match (exemplar, output) {
+    let (slope, channel, spectrum, seam, exemplar_seam, variation) = match (exemplar, output) {
         (Map::Normal(e), Map::Normal(o)) => (
             Some(metrics::slope_distance(o, e)),
             None,
             metrics::normal_spectrum_distance(o, e, bins),
             metrics::normal_seam_energy(o).ratio,
             metrics::normal_seam_energy(e).ratio,
+            metrics::slope_variation_ratio(o, e),
         ),
         (Map::Color(e), Map::Color(o)) => (
             None,
@@ -483,6 +488,7 @@ pub(crate) fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wra
             metrics::color_spectrum_distance(o, e, bins),
             metrics::seam_energy(o).ratio,
             metrics::seam_energy(e).ratio,
+            metrics::variation_ratio(o, e),
         ),
         _ => unreachable!("the output has the exemplar's kind"),
     };
@@ -492,6 +498,7 @@ pub(crate) fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wra
         spectrum_distance: spectrum,
         seam_energy_ratio: seam,
         exemplar_seam_energy_ratio: exemplar_seam,
+        variation,
         largest_block: copies.largest_block,
         mean_block: copies.mean_block,
         distinct_offsets: copies.distinct_offsets,
@@ -506,8 +513,8 @@ fn human(r: &SynthReport) -> String {
         _ => String::new(),
     };
     format!(
-        "{}: {}x{} from {}x{} in {} levels, {:.2} s\n{histogram}, spectrum distance {:.3}, seam ratio {:.2} \
-         (exemplar {:.2}), largest copied block {} texels, mean {:.1}",
+        "{}: {}x{} from {}x{} in {} levels, {:.2} s\n{histogram}, spectrum distance {:.3}, variation {:.2} of \
+         the exemplar's, seam ratio {:.2} (exemplar {:.2}), largest copied block {} texels, mean {:.1}",
         r.out,
         r.width,
         r.height,
@@ -516,6 +523,7 @@ fn human(r: &SynthReport) -> String {
         r.options.levels,
         r.seconds.total,
         q.spectrum_distance,
+        q.variation,
         q.seam_energy_ratio,
         q.exemplar_seam_energy_ratio,
         q.largest_block,
