@@ -173,15 +173,15 @@ fn bad_layouts_are_refused_with_the_field_named() {
 }
 
 #[test]
-fn upsampled_regions_stitch_into_a_unit_map_unlike_the_default() {
+fn scanline_regions_stitch_into_a_unit_map_unlike_the_default() {
     let tmp = tempfile::tempdir().unwrap();
     let layout = small_layout(tmp.path(), "");
     let (up, default) = (tmp.path().join("up.png"), tmp.path().join("default.png"));
-    let r = stitch(&layout, &up, &["--upsampled", "--seed", "2"]);
-    assert_eq!(r["upsampled"], true);
-    assert_eq!(stitch(&layout, &default, &["--seed", "2"])["upsampled"], false);
+    let r = stitch(&layout, &up, &["--scanline", "--seed", "2"]);
+    assert_eq!(r["start"], "scanline");
+    assert_eq!(stitch(&layout, &default, &["--seed", "2"])["start"], "upsampled");
     let map = skinkit_maps::io::read_normal_map(&up, Default::default(), &Default::default()).unwrap();
     assert_eq!(map.size(), (320, 160));
     assert!(map.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-3));
-    assert!(std::fs::read(&up).unwrap() != std::fs::read(&default).unwrap(), "--upsampled changed nothing");
+    assert!(std::fs::read(&up).unwrap() != std::fs::read(&default).unwrap(), "--scanline changed nothing");
 }

@@ -192,29 +192,34 @@ fn missing_exemplar_and_bad_size_are_refused() {
 }
 
 #[test]
-fn upsampled_selects_the_preset_and_flags_still_override_it() {
+fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     let tmp = tempfile::tempdir().unwrap();
     let exemplar = normal_exemplar(tmp.path(), "forehead", 64);
     let out = tmp.path().join("up.png");
-    let o = synth(&exemplar, &out, &["--upsampled", "--json"]);
+    let o = synth(&exemplar, &out, &["--json"]);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let options = &r["options"];
     assert_eq!(options["start"], "upsampled");
     assert_eq!(options["levels_requested"], 5);
-    assert_eq!(options["corrections"], 1);
+    assert_eq!(options["corrections"], 3);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");
-    let o = synth(
-        &exemplar,
-        &out,
-        &["--upsampled", "--levels", "3", "--corrections", "3", "--occurrence-penalty", "2", "--json"],
-    );
+    assert!((options["copy_cap"].as_f64().unwrap() - 0.06).abs() < 1e-6, "{options}");
+    assert!(r["quality"]["variation"].as_f64().unwrap() >= 0.5, "{}", r["quality"]);
+    // The old flag still runs, and selects the default.
+    let old: serde_json::Value =
+        serde_json::from_slice(&synth(&exemplar, &out, &["--upsampled", "--json"]).stdout).unwrap();
+    assert_eq!(old["options"], r["options"]);
+    let o = synth(&exemplar, &out, &["--levels", "3", "--corrections", "2", "--occurrence-penalty", "2", "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["options"]["levels"], 3);
-    assert_eq!(r["options"]["corrections"], 3);
+    assert_eq!(r["options"]["corrections"], 2);
     assert_eq!(r["options"]["occurrence_penalty"], 2.0);
-    // The default stays the Wei-Levoy scanline start.
-    let o = synth(&exemplar, &out, &["--json"]);
+    // The Wei-Levoy scanline start, as before.
+    let o = synth(&exemplar, &out, &["--scanline", "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["options"]["start"], "scanline");
+    assert_eq!(r["options"]["levels_requested"], 3);
+    assert_eq!(r["options"]["occurrence_penalty"], 4.0);
+    assert!(r["options"]["copy_cap"].is_null());
 }

@@ -24,7 +24,7 @@
 //!
 //! Timing: the peer is timed by [`Instant`] over a few runs (median; build + run, the image already
 //! in memory), skinkit over [`SKINKIT_RUNS`] runs (median) for the table and again by criterion
-//! (`skinkit_default/<side>`, 10 samples). The table goes to stderr and, as markdown, to
+//! (`skinkit_default/<side>` and `skinkit_scanline/<side>`, 10 samples). The table goes to stderr and, as markdown, to
 //! `target/synth-peer.md`. The report is produced only under `cargo bench` (criterion's `--bench`
 //! flag), not when `cargo test --benches` runs this target in test mode.
 
@@ -83,7 +83,7 @@ fn exemplar() -> NormalMap {
 }
 
 fn skinkit_config(side: usize) -> SynthConfig {
-    SynthConfig { seed: SEED, ..SynthConfig::new(side, side) }
+    SynthConfig { seed: SEED, ..SynthConfig::scanline(side, side) }
 }
 
 /// Interleaved 8-bit RGB codes of a normal map (row 0 first), as a normal-map PNG would hold them.
@@ -193,15 +193,15 @@ fn compare(ex: &NormalMap) -> Vec<Row> {
         let runs = if side > 512 { 1 } else { SKINKIT_RUNS };
         eprintln!("skinkit {side}x{side}: {runs} run(s)...");
         let (ours, seconds) = timed(runs, || synthesize_normals(ex, &config, &quiet).expect("valid configuration"));
+        let method = "skinkit --scanline (float)";
+        rows.push(Row { side, method, threads, runs, seconds, quality: score(&ours.normals, ex) });
+        let method = "skinkit --scanline, output quantised to 8 bits";
+        rows.push(Row { side, method, threads, runs, seconds, quality: score(&quantise(&ours.normals), ex) });
+        let config = SynthConfig { seed: SEED, ..SynthConfig::new(side, side) };
+        let (ours, seconds) = timed(runs, || synthesize_normals(ex, &config, &quiet).expect("valid configuration"));
         let method = "skinkit default (float)";
         rows.push(Row { side, method, threads, runs, seconds, quality: score(&ours.normals, ex) });
         let method = "skinkit default, output quantised to 8 bits";
-        rows.push(Row { side, method, threads, runs, seconds, quality: score(&quantise(&ours.normals), ex) });
-        let config = SynthConfig { seed: SEED, ..SynthConfig::upsampled(side, side) };
-        let (ours, seconds) = timed(runs, || synthesize_normals(ex, &config, &quiet).expect("valid configuration"));
-        let method = "skinkit upsampled (float)";
-        rows.push(Row { side, method, threads, runs, seconds, quality: score(&ours.normals, ex) });
-        let method = "skinkit upsampled, output quantised to 8 bits";
         rows.push(Row { side, method, threads, runs, seconds, quality: score(&quantise(&ours.normals), ex) });
     }
     rows
@@ -233,11 +233,11 @@ fn spread(ex: &NormalMap) -> String {
             let rgba: &texture_synthesis::image::RgbaImage = generated.as_ref();
             decode_rgb8(side, side, 4, rgba.as_raw())
         }),
-        ("skinkit default", &|seed| {
+        ("skinkit --scanline", &|seed| {
             synthesize_normals(ex, &SynthConfig { seed, ..skinkit_config(side) }, &quiet).expect("valid").normals
         }),
-        ("skinkit upsampled", &|seed| {
-            synthesize_normals(ex, &SynthConfig { seed, ..SynthConfig::upsampled(side, side) }, &quiet)
+        ("skinkit default", &|seed| {
+            synthesize_normals(ex, &SynthConfig { seed, ..SynthConfig::new(side, side) }, &quiet)
                 .expect("valid")
                 .normals
         }),
@@ -331,7 +331,7 @@ fn bench_peer(c: &mut Criterion) {
     if std::env::args().any(|a| a == "--bench") {
         report(&ex);
     }
-    let mut group = c.benchmark_group("skinkit_default");
+    let mut group = c.benchmark_group("skinkit_scanline");
     group.sample_size(10).measurement_time(Duration::from_secs(5)).warm_up_time(Duration::from_secs(1));
     for side in sides() {
         group.throughput(Throughput::Elements((side * side) as u64));
@@ -341,11 +341,11 @@ fn bench_peer(c: &mut Criterion) {
         });
     }
     group.finish();
-    let mut group = c.benchmark_group("skinkit_upsampled");
+    let mut group = c.benchmark_group("skinkit_default");
     group.sample_size(10).measurement_time(Duration::from_secs(5)).warm_up_time(Duration::from_secs(1));
     for side in sides() {
         group.throughput(Throughput::Elements((side * side) as u64));
-        let config = SynthConfig { seed: SEED, ..SynthConfig::upsampled(side, side) };
+        let config = SynthConfig { seed: SEED, ..SynthConfig::new(side, side) };
         group.bench_with_input(BenchmarkId::from_parameter(side), &config, |b, config| {
             b.iter(|| synthesize_normals(&ex, config, &quiet).expect("valid configuration"))
         });

@@ -62,9 +62,9 @@ fn target_dir() -> PathBuf {
 }
 
 /// The configuration under test: the defaults, changed by `key=value` pairs (k: k-coherence k;
-/// n: neighbourhood side; c / cc: finest and coarser correction passes; l / fl / cp: occurrence
+/// n: neighbourhood side; m: coarser window side; c / cc: finest and coarser correction passes; l / fl / cp: occurrence
 /// penalty, at the finest level, in the corrections; L: levels; up: upsampled start (1) or
-/// scanline (0); j: jitter; w: exemplar wrap).
+/// scanline (0); j: jitter; w: exemplar wrap; cap: copy cap, share of the exemplar's area).
 fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConfig {
     let mut config = SynthConfig { seed, ..SynthConfig::new(width, height) };
     for kv in spec.split(',').filter(|s| !s.is_empty()) {
@@ -82,6 +82,8 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "up" => config.start = if f > 0.0 { Start::Upsampled } else { Start::Scanline },
             "j" => config.jitter = f as usize,
             "w" => config.exemplar_wrap = f > 0.0,
+            "m" => config.parent = f as usize,
+            "cap" => config.copy_cap = (f > 0.0).then_some(f as f32),
             other => panic!("unknown key {other}"),
         }
     }

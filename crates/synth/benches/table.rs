@@ -5,11 +5,11 @@
 //!
 //! Modes: exact (exhaustive, the reference); PCA to D in {4, 8, 16, 32} dimensions + kd-tree,
 //! re-ranking the best 8 in full space (with Ashikhmin coherence candidates, the config's default);
-//! k-coherence k = 4 (the default search); and, to show what the correction pass adds, k-coherence
-//! and PCA-8 with one correction pass; last, the upsampled preset ([`SynthConfig::upsampled`]:
-//! coordinate upsampling, k = 2, two passes at the coarser levels and one at the finest, no
-//! occurrence penalty). Every other option is [`SynthConfig`]'s default (3x3 parent window, the
-//! occurrence penalty, seed 1).
+//! k-coherence k = 4 (the scanline start's search); and, to show what the correction pass adds,
+//! k-coherence and PCA-8 with one correction pass; last, the default ([`SynthConfig::new`]:
+//! coordinate upsampling, k = 2, one pass at the coarser levels and three at the finest, copy cap,
+//! no occurrence penalty). The other rows take [`SynthConfig::scanline`]'s other options (3x3
+//! parent window, the occurrence penalty, seed 1).
 //!
 //! * Energy: [`window_energy`] with 5x5 windows for every N (so cells compare), finest level, every
 //!   other texel per axis; lower is better. Slope distance: [`metrics::slope_distance`] against the
@@ -52,7 +52,7 @@ struct Mode {
     name: &'static str,
     search: Search,
     corrections: usize,
-    /// [`SynthConfig::upsampled`] (its start, passes and penalty) instead of the scanline default.
+    /// [`SynthConfig::new`] (the upsampled default) instead of [`SynthConfig::scanline`].
     upsampled: bool,
 }
 
@@ -75,9 +75,9 @@ const MODES: [Mode; 9] = [
     mode("PCA-8, rerank 8", pca(8), 1),
     mode("k-coherence k=4", Search::K_COHERENCE, 1),
     Mode {
-        name: "upsampled preset (k-coherence k=2)",
+        name: "default (upsampled, k-coherence k=2)",
         search: Search::KCoherence { k: 2, fallback: None, dims: 8, rerank: 8 },
-        corrections: 1,
+        corrections: skinkit_synth::config::DEFAULT_CORRECTIONS,
         upsampled: true,
     },
 ];
@@ -117,9 +117,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// deterministic), then the scores of the last output. A panic is caught and reported in the cell.
 fn measure(ex: &Grid<Vec3>, ex_normals: &NormalMap, n: usize, levels: usize, mode: Mode) -> Cell {
     let base = if mode.upsampled {
-        SynthConfig::upsampled(OUTPUT_SIDE, OUTPUT_SIDE)
-    } else {
         SynthConfig::new(OUTPUT_SIDE, OUTPUT_SIDE)
+    } else {
+        SynthConfig::scanline(OUTPUT_SIDE, OUTPUT_SIDE)
     };
     let config = SynthConfig {
         levels,

@@ -89,6 +89,10 @@ pub struct SynthConfig {
     pub correction_penalty: Option<f32>,
     /// Correction passes at the coarser levels, if they differ from [`SynthConfig::corrections`].
     pub coarse_corrections: Option<usize>,
+    /// The copy cap, a share of the exemplar's area (`None`: off): the finest level's last
+    /// correction pass cuts every verbatim block larger than this (see
+    /// `synthesis::cap_breaks`).
+    pub copy_cap: Option<f32>,
     /// Seed of the initial state (random exemplar positions, see [`crate::synthesis::random_copies`]).
     pub seed: u64,
     /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
@@ -100,34 +104,47 @@ impl Default for SynthConfig {
         SynthConfig {
             width: 256,
             height: 256,
-            levels: 3,
+            levels: DEFAULT_LEVELS,
             neighbourhood: 5,
             parent: 3,
-            search: Search::K_COHERENCE,
+            search: Search::KCoherence { k: 2, fallback: None, dims: 8, rerank: 8 },
             coherence: true,
             exemplar_wrap: false,
-            start: Start::Scanline,
+            start: Start::Upsampled,
             jitter: 0,
             corrections: DEFAULT_CORRECTIONS,
-            occurrence_penalty: DEFAULT_OCCURRENCE_PENALTY,
+            occurrence_penalty: 0.0,
             finest_penalty: None,
             correction_penalty: None,
-            coarse_corrections: None,
+            coarse_corrections: Some(DEFAULT_COARSE_CORRECTIONS),
+            copy_cap: Some(DEFAULT_COPY_CAP),
             seed: 0,
             memory_limit: 8 << 30,
         }
     }
 }
 
-/// Default of [`SynthConfig::corrections`], chosen by measurement (see the crate's status notes).
-pub const DEFAULT_CORRECTIONS: usize = 1;
+/// Pyramid levels of the default (before clamping to the exemplar).
+pub const DEFAULT_LEVELS: usize = 5;
 
-/// Default of [`SynthConfig::occurrence_penalty`], chosen by measurement (see the crate's status
-/// notes).
-pub const DEFAULT_OCCURRENCE_PENALTY: f32 = 4.0;
+/// Correction passes at the finest level of the default (measured by the synthesis suite,
+/// `benches/suite.rs`: a third pass lowers the energy a few per cent more).
+pub const DEFAULT_CORRECTIONS: usize = 3;
 
-/// Pyramid levels of [`SynthConfig::upsampled`] (before clamping to the exemplar).
-pub const UPSAMPLED_LEVELS: usize = 5;
+/// Correction passes at the coarser levels of the default (more drift toward the most common
+/// windows there: two passes lost more of the exemplar's variation than one).
+pub const DEFAULT_COARSE_CORRECTIONS: usize = 1;
+
+/// Default of [`SynthConfig::copy_cap`]: 6 % of the exemplar's area (blocks of up to about 31 x 31
+/// texels from a 128 x 128 exemplar).
+pub const DEFAULT_COPY_CAP: f32 = 0.06;
+
+/// The occurrence penalty of [`SynthConfig::scanline`] (the scanline start regresses to flat
+/// texels without it; measured in `tests/quality.rs`).
+pub const SCANLINE_OCCURRENCE_PENALTY: f32 = 4.0;
+
+/// The occurrence penalty of [`SynthConfig::collapse_retry`], at the coarser levels.
+pub const COLLAPSE_RETRY_PENALTY: f32 = 2.0;
 
 /// Largest [`SynthConfig::jitter`] accepted, texels.
 pub const MAX_JITTER: usize = 16;
@@ -150,23 +167,31 @@ impl SynthConfig {
         SynthConfig { width, height, ..Default::default() }
     }
 
-    /// The upsampled-coordinates preset (Lefebvre and Hoppe 2005 on Wei-Levoy's neighbourhoods):
-    /// [`Start::Upsampled`], 5 pyramid levels (clamped to the exemplar), k-coherence with k = 2,
-    /// two correction passes at the coarser levels and one at the finest, no occurrence penalty.
-    /// Whole exemplar patches are carried down the pyramid, which keeps the exemplar's slope
-    /// histogram without the penalty the scanline start needs; few candidates per texel keep the
-    /// patches whole. Measured against the scanline default and the `texture-synthesis` peer in
-    /// `benches/peer.rs` (see the crate's status notes).
-    pub fn upsampled(width: usize, height: usize) -> Self {
+    /// What the collapse guard grows again with when an output kept less than half of the
+    /// exemplar's variation: occurrence penalty [`COLLAPSE_RETRY_PENALTY`] at the coarser levels
+    /// (the finest keeps its own). `None` when the coarser levels are penalised that much already.
+    pub fn collapse_retry(&self) -> Option<SynthConfig> {
+        (self.occurrence_penalty < COLLAPSE_RETRY_PENALTY).then(|| SynthConfig {
+            occurrence_penalty: COLLAPSE_RETRY_PENALTY,
+            finest_penalty: Some(self.finest_penalty.unwrap_or(self.occurrence_penalty)),
+            ..self.clone()
+        })
+    }
+
+    /// The Wei-Levoy scanline start of earlier versions: 3 levels, the causal pass with k-coherence
+    /// (k = 4), one correction pass and occurrence penalty [`SCANLINE_OCCURRENCE_PENALTY`], no
+    /// copy cap. Sequential and slower than the default; its copied blocks are small without a cap.
+    pub fn scanline(width: usize, height: usize) -> Self {
         SynthConfig {
             width,
             height,
-            start: Start::Upsampled,
-            levels: UPSAMPLED_LEVELS,
-            search: Search::KCoherence { k: 2, fallback: None, dims: 8, rerank: 8 },
+            start: Start::Scanline,
+            levels: 3,
+            search: Search::K_COHERENCE,
             corrections: 1,
-            coarse_corrections: Some(2),
-            occurrence_penalty: 0.0,
+            coarse_corrections: None,
+            occurrence_penalty: SCANLINE_OCCURRENCE_PENALTY,
+            copy_cap: None,
             ..Default::default()
         }
     }
@@ -212,6 +237,9 @@ impl SynthConfig {
         }
         if let Some(p) = self.correction_penalty.filter(|p| !(p.is_finite() && *p >= 0.0)) {
             return Err(Error::config("correction_penalty", p, "must be finite and >= 0"));
+        }
+        if let Some(c) = self.copy_cap.filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 1.0)) {
+            return Err(Error::config("copy_cap", c, "must be a share of the exemplar's area in (0, 1]"));
         }
         if self.jitter > MAX_JITTER {
             return Err(Error::config("jitter", self.jitter, format!("at most {MAX_JITTER} texels")));

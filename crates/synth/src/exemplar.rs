@@ -77,6 +77,11 @@ impl ExemplarLevel {
         ExemplarLevel { texels, x0: r, y0: r, cols, rows, wrap, dim, features }
     }
 
+    /// Whether the exemplar wraps (its neighbourhoods read across its border).
+    pub fn wraps(&self) -> bool {
+        self.wrap
+    }
+
     /// Distance of the candidate rectangle from the level's border (0 when the exemplar wraps).
     pub fn margin(&self) -> usize {
         self.x0

@@ -365,10 +365,28 @@ pub struct CopyStats {
 /// first-column texel is one step right of the source of the last-column texel (same for rows).
 /// Blocks are the connected components (union-find); an empty map gives zeros.
 pub fn copy_statistics(coords: &Grid<[u32; 2]>, exemplar_size: (usize, usize), wrap: bool) -> CopyStats {
-    let (w, h) = coords.size();
     if coords.is_empty() {
         return CopyStats { largest_block: 0, mean_block: 0.0, distinct_offsets: 0 };
     }
+    let blocks = copy_blocks(coords, exemplar_size, wrap);
+    let largest_block = blocks.sizes.iter().copied().max().unwrap_or(0);
+    let mean_block = coords.len() as f64 / blocks.sizes.len() as f64;
+    let modulus = (exemplar_size.0.max(1) as i64, exemplar_size.1.max(1) as i64);
+    CopyStats { largest_block, mean_block, distinct_offsets: distinct_offsets(coords, modulus, wrap) }
+}
+
+/// The verbatim blocks of a source-coordinate map (as [`copy_statistics`] defines them): per
+/// texel (row-major) the index of its block, and per block its size in texels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CopyBlocks {
+    pub labels: Vec<u32>,
+    pub sizes: Vec<usize>,
+}
+
+/// The connected blocks of `coords` (see [`copy_statistics`]), labelled in order of their first
+/// texel.
+pub fn copy_blocks(coords: &Grid<[u32; 2]>, exemplar_size: (usize, usize), wrap: bool) -> CopyBlocks {
+    let (w, h) = coords.size();
     let modulus = (exemplar_size.0.max(1) as i64, exemplar_size.1.max(1) as i64);
     let follows = |a: [u32; 2], b: [u32; 2], dx: i64, dy: i64| {
         let (ex, ey) = (b[0] as i64 - a[0] as i64 - dx, b[1] as i64 - a[1] as i64 - dy);
@@ -386,10 +404,21 @@ pub fn copy_statistics(coords: &Grid<[u32; 2]>, exemplar_size: (usize, usize), w
             }
         }
     }
-    let sizes = sets.component_sizes();
-    let largest_block = sizes.iter().copied().max().unwrap_or(0);
-    let mean_block = (w * h) as f64 / sizes.len() as f64;
-    CopyStats { largest_block, mean_block, distinct_offsets: distinct_offsets(coords, modulus, wrap) }
+    let mut label_of_root = vec![u32::MAX; w * h];
+    let mut sizes = Vec::new();
+    let labels = (0..w * h)
+        .map(|i| {
+            let root = sets.find(i);
+            if label_of_root[root] == u32::MAX {
+                label_of_root[root] = sizes.len() as u32;
+                sizes.push(0);
+            }
+            let label = label_of_root[root];
+            sizes[label as usize] += 1;
+            label
+        })
+        .collect();
+    CopyBlocks { labels, sizes }
 }
 
 /// Number of distinct `src - dst` offsets (reduced modulo the exemplar size when `wrap`).
@@ -437,10 +466,6 @@ impl DisjointSets {
         self.parent[rb] = ra;
         self.size[ra] += self.size[rb];
     }
-    /// Sizes of all components (one entry per root).
-    fn component_sizes(&self) -> Vec<usize> {
-        (0..self.parent.len()).filter(|&i| self.parent[i] == i).map(|i| self.size[i]).collect()
-    }
 }
 
 /// Below this share of the exemplar's variation an output counts as collapsed (see
@@ -453,14 +478,20 @@ pub const COLLAPSE_RATIO: f64 = 0.5;
 /// constant output of a varied exemplar. A synthesis that regresses to one window (a blank map)
 /// scores near 0; [`COLLAPSE_RATIO`] is the warning threshold.
 pub fn variation_ratio(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-    let ratios = (0..3).map(|c| (std_dev(&channel(output, c)), std_dev(&channel(exemplar, c))));
-    min_ratio(ratios)
+    let deviation = |g: &Grid<Vec3>, c: usize| std_dev(g.as_slice().iter().map(|v| v[c]));
+    min_ratio((0..3).map(|c| (deviation(output, c), deviation(exemplar, c))))
 }
 
 /// [`variation_ratio`] for normal maps, on the slopes ([`slopes`]) of each axis.
 pub fn slope_variation_ratio(output: &NormalMap, exemplar: &NormalMap) -> f64 {
-    let ((ox, oy), (ex, ey)) = (slopes(output), slopes(exemplar));
-    min_ratio([(std_dev(&ox), std_dev(&ex)), (std_dev(&oy), std_dev(&ey))].into_iter())
+    slope_variation_ratio_of(output.grid(), exemplar.grid())
+}
+
+/// [`slope_variation_ratio`] of normals held as plain grids (texels with `z <= MIN_NZ` left out).
+pub(crate) fn slope_variation_ratio_of(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
+    let deviation =
+        |g: &Grid<Vec3>, c: usize| std_dev(g.as_slice().iter().filter(|v| v.z > MIN_NZ).map(|v| -v[c] / v.z));
+    min_ratio((0..2).map(|c| (deviation(output, c), deviation(exemplar, c))))
 }
 
 /// The smallest `output / exemplar` over the pairs whose exemplar deviation is above `1e-6`.
@@ -469,12 +500,18 @@ fn min_ratio(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
     if min.is_finite() { min } else { 1.0 }
 }
 
-/// Population standard deviation of the finite values (0 for none).
-fn std_dev(values: &[f32]) -> f64 {
-    let finite: Vec<f64> = values.iter().filter(|v| v.is_finite()).map(|&v| v as f64).collect();
-    if finite.is_empty() {
+/// Population standard deviation of the finite values (0 for none), in one pass (f64 sums; the
+/// values are slopes or colours, far from where the shortcut loses precision).
+fn std_dev(values: impl Iterator<Item = f32>) -> f64 {
+    let (mut n, mut sum, mut squares) = (0u64, 0.0f64, 0.0f64);
+    for v in values.filter(|v| v.is_finite()).map(f64::from) {
+        n += 1;
+        sum += v;
+        squares += v * v;
+    }
+    if n == 0 {
         return 0.0;
     }
-    let mean = finite.iter().sum::<f64>() / finite.len() as f64;
-    (finite.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / finite.len() as f64).sqrt()
+    let mean = sum / n as f64;
+    (squares / n as f64 - mean * mean).max(0.0).sqrt()
 }

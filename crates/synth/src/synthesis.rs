@@ -123,12 +123,47 @@ fn collapse_warning(variation: f64, what: &str) -> Option<String> {
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
 pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
+    guarded(exemplar, config, progress, &metrics::variation_ratio, "colour")
+}
+
+/// How much of the exemplar's variation an output kept (colour or slope deviations).
+type Variation = dyn Fn(&Grid<Vec3>, &Grid<Vec3>) -> f64;
+
+/// [`synthesize_unguarded`] behind the collapse guard: an output that kept less than
+/// [`metrics::COLLAPSE_RATIO`] of the exemplar's variation (`measure`) is grown again with
+/// [`SynthConfig::collapse_retry`] (the occurrence penalty at the coarse levels, which keeps sparse
+/// features from being averaged away), and the better of the two is kept; a warning says so, and
+/// another one if even that one collapsed.
+fn guarded(
+    exemplar: &Grid<Vec3>,
+    config: &SynthConfig,
+    progress: &dyn Fn(usize, f32),
+    measure: &Variation,
+    what: &str,
+) -> Result<Synthesis> {
     let mut s = synthesize_unguarded(exemplar, config, progress)?;
-    s.warnings.extend(collapse_warning(s.variation, "colour"));
+    s.variation = measure(&s.texels, exemplar);
+    if let Some(retry) = config.collapse_retry().filter(|_| s.variation < metrics::COLLAPSE_RATIO) {
+        let mut again = synthesize_unguarded(exemplar, &retry, progress)?;
+        again.variation = measure(&again.texels, exemplar);
+        let note = format!(
+            "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
+             with occurrence penalty {} at the coarser levels ({:.0} %{})",
+            100.0 * s.variation,
+            retry.occurrence_penalty,
+            100.0 * again.variation,
+            if again.variation > s.variation { ", kept" } else { ", not better: the first was kept" }
+        );
+        if again.variation > s.variation {
+            s = again;
+        }
+        s.warnings.push(note);
+    }
+    s.warnings.extend(collapse_warning(s.variation, what));
     Ok(s)
 }
 
-/// [`synthesize`] without the collapse warning (its variation is of the texels as colours).
+/// [`synthesize`] without the collapse guard (its `variation` is left for the caller to measure).
 fn synthesize_unguarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
@@ -174,8 +209,7 @@ fn synthesize_unguarded(
         }
     }
     let (texels, coords) = result.expect("level 0 is always synthesised");
-    let variation = metrics::variation_ratio(&texels, exemplar);
-    Ok(Synthesis { texels, coords, warnings, level_seconds, variation })
+    Ok(Synthesis { texels, coords, warnings, level_seconds, variation: f64::NAN })
 }
 
 /// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
@@ -189,14 +223,18 @@ pub fn synthesize_normals(
     progress: &dyn Fn(usize, f32),
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
-    let mut s = synthesize_unguarded(exemplar.grid(), config, progress)?;
+    let mut s = guarded(exemplar.grid(), config, progress, &metrics::slope_variation_ratio_of, "slope")?;
     s.warnings.splice(0..0, exemplar_warning);
     // The finest level copies exemplar texels, which are unit (or invalid zero) already: wrapping
     // them keeps the bits, where renormalising would perturb the last one.
     let normals = NormalMap::from_unit_grid(s.texels)?;
-    let variation = metrics::slope_variation_ratio(&normals, exemplar);
-    s.warnings.extend(collapse_warning(variation, "slope"));
-    Ok(NormalSynthesis { normals, coords: s.coords, warnings: s.warnings, level_seconds: s.level_seconds, variation })
+    Ok(NormalSynthesis {
+        normals,
+        coords: s.coords,
+        warnings: s.warnings,
+        level_seconds: s.level_seconds,
+        variation: s.variation,
+    })
 }
 
 /// Copies `map` (a map of the exemplar's size, e.g. the albedo registered with the normals) through
@@ -274,7 +312,11 @@ fn synthesize_level(
     drop(ex);
     if config.corrections > 0 {
         let full_nb = shape(config, true, coarser.is_some());
-        let level = CorrectionLevel { coarser, nb: &full_nb, search: &search, config };
+        let copy_cap = config.copy_cap.filter(|_| level == 0).map(|share| {
+            let (ew, eh) = pyramid[0].size();
+            ((share as f64 * (ew * eh) as f64) as usize).max(4)
+        });
+        let level = CorrectionLevel { coarser, copy_cap, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
@@ -377,10 +419,12 @@ fn causal_pass(
                     active: Some(&active[..]),
                     occurrence: &occurrence,
                     own: None,
+                    forbidden: None,
                 };
                 (scorer, &full_nb, TreeQuery { query: &query, active: Some(&tree_active[..]) })
             } else {
-                let scorer = Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None };
+                let scorer =
+                    Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None, forbidden: None };
                 (scorer, nb, TreeQuery { query: &query, active: None })
             };
             let score = |&i: &usize| (scorer.score(i), i);
@@ -493,11 +537,16 @@ struct Scorer<'a> {
     active: Option<&'a [bool]>,
     occurrence: &'a Occurrence,
     own: Option<usize>,
+    /// A candidate the texel may not take (its current source, when the copy cap breaks its block).
+    forbidden: Option<usize>,
 }
 
 impl Scorer<'_> {
     /// The score of candidate `i`.
     fn score(&self, i: usize) -> f32 {
+        if self.forbidden == Some(i) {
+            return f32::INFINITY;
+        }
         let d = match self.active {
             Some(active) => self.ex.distance2_masked(i, self.query, active),
             None => self.ex.distance2(i, self.query),
@@ -508,6 +557,9 @@ impl Scorer<'_> {
     /// The score of candidate `i` when it is at most `best`, `f32::INFINITY` otherwise (the
     /// distance is abandoned early once it cannot win).
     fn score_below(&self, i: usize, best: f32) -> f32 {
+        if self.forbidden == Some(i) {
+            return f32::INFINITY;
+        }
         let f = self.occurrence.factor(i, self.own);
         let bound = best / f;
         let d = match self.active {
@@ -601,6 +653,8 @@ fn build_search(
 /// What the correction passes of one level read.
 struct CorrectionLevel<'a> {
     coarser: Option<&'a Grid<Vec3>>,
+    /// The copy cap of this level in texels (the finest level only; see [`cap_breaks`]).
+    copy_cap: Option<usize>,
     /// The full `N x N` (+ coarser `M x M`) shape.
     nb: &'a Neighbourhood,
     search: &'a LevelSearch,
@@ -646,6 +700,8 @@ impl CorrectionLevel<'_> {
         let (w, h) = out.size();
         let s = CORRECTION_STRIDE;
         for pass in 0..self.config.corrections {
+            let last = pass + 1 == self.config.corrections;
+            let breaks = self.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed));
             for sub in 0..s * s {
                 let (ox, oy) = (sub % s, sub / s);
                 let rows: Vec<usize> = (oy..h).step_by(s).collect();
@@ -657,7 +713,10 @@ impl CorrectionLevel<'_> {
                     .map_init(Scratch::default, |scratch, &y| {
                         (ox..w)
                             .step_by(s)
-                            .map(|x| self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, scratch))
+                            .map(|x| {
+                                let forbid = breaks.as_ref().is_some_and(|b| b[y * w + x]);
+                                self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch)
+                            })
                             .collect()
                     })
                     .collect();
@@ -682,6 +741,7 @@ impl CorrectionLevel<'_> {
         out: &Grid<Vec3>,
         coords: &Grid<[u32; 2]>,
         occurrence: &Occurrence,
+        forbid_own: bool,
         scratch: &mut Scratch,
     ) -> usize {
         let full = self.search.full.as_ref().expect("built for corrections");
@@ -696,7 +756,8 @@ impl CorrectionLevel<'_> {
         );
         let [cx, cy] = *coords.get_wrapped(x, y);
         let own = full.index_of(cx as isize, cy as isize);
-        let scorer = Scorer { ex: full, query, active: None, occurrence, own };
+        let forbidden = own.filter(|_| forbid_own);
+        let scorer = Scorer { ex: full, query, active: None, occurrence, own, forbidden };
         let score = |&i: &usize| (scorer.score(i), i);
         candidates.clear();
         match (self.config.search, &self.search.sets) {
@@ -708,6 +769,10 @@ impl CorrectionLevel<'_> {
                 // the minimum does not depend on the order.
                 let stamp = seen.next(full.len());
                 let mut best = match own {
+                    Some(i) if forbid_own => {
+                        seen.marks[i] = stamp;
+                        (f32::INFINITY, usize::MAX)
+                    }
                     Some(i) => {
                         seen.marks[i] = stamp;
                         (scorer.score(i), i)
@@ -741,6 +806,27 @@ impl CorrectionLevel<'_> {
             _ => scorer.nearest_exact(),
         }
     }
+}
+
+/// The texels the copy cap re-chooses away from their current source: those of verbatim blocks
+/// larger than `cap` texels ([`metrics::copy_blocks`]) that lie on a grid of lines `p` apart
+/// (`(p - 1)^2 <= cap`, phase drawn from `seed`). Choosing another source there cuts every such
+/// block into pieces of at most `(p - 1)^2` texels; the new source is the best match of the cut
+/// texel's whole neighbourhood, so the cut follows the texture as a seam would.
+fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u64) -> Vec<bool> {
+    let (w, h) = coords.size();
+    let blocks = metrics::copy_blocks(coords, full.texels().size(), full.wraps());
+    let p = ((cap as f64).sqrt() as usize + 1).max(2);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(2 << 32);
+    let (px, py) = (rng.random_range(0..p), rng.random_range(0..p));
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let on_line = (x + px) % p == 0 || (y + py) % p == 0;
+            on_line && blocks.sizes[blocks.labels[i] as usize] > cap
+        })
+        .collect()
 }
 
 /// The best of `best` and the tree's candidates for the scorer's query. Tree candidates farther

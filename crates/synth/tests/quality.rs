@@ -178,16 +178,18 @@ fn assert_not_tiled(name: &str, coords: &Grid<[u32; 2]>) {
     assert_copy_bounds(name, &stats, sources);
 }
 
-/// Largest block at most an eighth of the exemplar (2048 texels; measured 178 to 1159), mean
-/// block at most 8 texels (measured 2.2 to 4.9), at least a quarter of the exemplar's texels used
-/// as sources (4096; measured 6287 to 10543 of the 124 x 124 = 15376 candidates) and as many
-/// distinct offsets (measured 9963 to 21829).
+/// Largest block at most an eighth of the exemplar (2048 texels; the default's copy cap keeps it
+/// near 6 %, 983), mean block at most 16 texels (the default copies coherent patches, which is
+/// what keeps its energy low: measured 8.5 to 14.4; the scanline start 2.2 to 4.9), at least a quarter of the exemplar's texels used
+/// as sources (4096; measured 6287 to 10543 of the 124 x 124 = 15376 candidates) and an eighth as
+/// many distinct offsets (2048; the default's patches give 3467 to 3910, the scanline start's 9963
+/// to 21829; a tiled copy has one).
 fn assert_copy_bounds(name: &str, stats: &CopyStats, sources: usize) {
     let area = HALF * HALF;
     assert!(stats.largest_block <= area / 8, "{name}: largest copied block {} > {}", stats.largest_block, area / 8);
-    assert!(stats.mean_block <= 8.0, "{name}: mean copied block {:.2} > 8", stats.mean_block);
+    assert!(stats.mean_block <= 16.0, "{name}: mean copied block {:.2} > 16", stats.mean_block);
     assert!(sources >= area / 4, "{name}: only {sources} distinct exemplar texels used");
-    assert!(stats.distinct_offsets >= area / 4, "{name}: only {} distinct offsets", stats.distinct_offsets);
+    assert!(stats.distinct_offsets >= area / 8, "{name}: only {} distinct offsets", stats.distinct_offsets);
 }
 
 /// Mean squared difference across each row boundary `y | y + 1` (`rows[y]`, the last one wrapping
@@ -469,11 +471,9 @@ fn assert_slope_within(c: &NormalCase, factor: f64) {
     assert!(oa <= factor * ab, "{}: slope distance output-A {oa:.4} > {factor} x A-B {ab:.4}", c.name);
 }
 
-/// The same target on the captured maps is not met yet: forehead 5.3, cheek 4.0 (nose 2.7,
-/// forehead-edge 0.90; 12.5, 8.0, 4.2, 1.9 before the occurrence penalty). Run with `--ignored` to
-/// track it.
+/// The same target on the captured maps, met since the upsampled default: measured OA / AB
+/// forehead 1.7, cheek 2.3, nose 1.8, forehead-edge 1.1 (the scanline start: 5.3, 4.0, 2.7, 0.90).
 #[test]
-#[ignore = "target not met yet: captured forehead and cheek at 5.3 and 4.0 x own variation"]
 fn captured_slope_distance_within_three_times_own_variation() {
     for i in 0..4 {
         assert_slope_within(mold_case(i), 3.0);

@@ -144,6 +144,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             straight: false,
             no_blend: false,
             seam_band: 4,
+            scanline: false,
             upsampled: false,
         };
         Some(face_to_dir(&options, &args.out.join("face"), &mut cache, out, Instant::now())?)

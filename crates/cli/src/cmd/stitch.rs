@@ -57,9 +57,12 @@ pub struct StitchOptions {
     /// Band width of the seam metric, texels.
     #[arg(long, default_value_t = 4, value_name = "W")]
     pub seam_band: usize,
-    /// Grow every region with the upsampled-coordinates preset (`skinkit synth --upsampled`:
-    /// lower energy, faster, larger copied blocks) instead of the scanline default.
+    /// Grow every region with the scanline start (`skinkit synth --scanline`: sequential, slower,
+    /// higher in energy) instead of the default's upsampled coordinates.
     #[arg(long)]
+    pub scanline: bool,
+    /// The default since the upsampled start became it; accepted so older scripts still run.
+    #[arg(long, hide = true, conflicts_with = "scanline")]
     pub upsampled: bool,
 }
 
@@ -109,8 +112,8 @@ pub struct FaceReport {
     pub levels: usize,
     pub curve_amplitude: f64,
     pub blend: bool,
-    /// Regions grown with the upsampled preset rather than the scanline default.
-    pub upsampled: bool,
+    /// How the regions were grown: `upsampled` (the default) or `scanline`.
+    pub start: String,
     pub seed: u64,
     pub regions: Vec<RegionReport>,
     /// Regions grown at once: all, or 1 when their estimates do not fit `--memory-limit` together.
@@ -254,7 +257,7 @@ pub fn build(
     } else {
         options.curve_amplitude.unwrap_or_else(|| ComposeOptions::default_amplitude(layout.width))
     };
-    let synth = if options.upsampled { SynthConfig::upsampled(0, 0) } else { SynthConfig::default() };
+    let synth = if options.scanline { SynthConfig::scanline(0, 0) } else { SynthConfig::default() };
     let compose_options = ComposeOptions {
         curve: CurveParams::new(amplitude, options.seed),
         levels: options.levels,
@@ -328,7 +331,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
         levels: c.levels,
         curve_amplitude: face.amplitude,
         blend: !options.no_blend,
-        upsampled: options.upsampled,
+        start: if options.scanline { "scanline" } else { "upsampled" }.to_owned(),
         seed: options.seed,
         regions: c.regions.clone(),
         regions_at_once: c.regions_at_once,

@@ -18,7 +18,6 @@ use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
-use skinkit_synth::config::UPSAMPLED_LEVELS;
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Search, SynthConfig};
 
@@ -45,7 +44,7 @@ pub struct Args {
     /// Output size in texels, `WIDTHxHEIGHT` (e.g. 512x512).
     #[arg(long, value_name = "WxH", value_parser = parse_size, required = true)]
     pub size: Option<(usize, usize)>,
-    /// Pyramid levels (1 = single resolution; default 3, 5 with `--upsampled`); clamped, with a
+    /// Pyramid levels (1 = single resolution; default 5, 3 with `--scanline`); clamped, with a
     /// warning, to what the exemplar allows.
     #[arg(long, value_name = "L", value_parser = flags::usize_in(1, usize::MAX))]
     pub levels: Option<usize>,
@@ -55,20 +54,27 @@ pub struct Args {
     /// Side of the full neighbourhood taken from the coarser level (odd, 1 to 99).
     #[arg(long, default_value_t = 3, value_name = "M", value_parser = flags::odd_in(1, 99))]
     pub parent: usize,
-    /// Correction passes per level: every texel chosen again by its full (non-causal) window
-    /// (default 1, 2 with `--upsampled`).
+    /// Correction passes at the finest level: every texel chosen again by its full window
+    /// (default 3, 1 with `--scanline`; the coarser levels get 1).
     #[arg(long, value_name = "P", value_parser = flags::usize_in(0, skinkit_synth::config::MAX_CORRECTIONS))]
     pub corrections: Option<usize>,
-    /// Start every level from its coarser level's coordinates upsampled (Lefebvre and Hoppe 2005)
-    /// instead of the causal scanline pass: whole exemplar patches are copied and the correction
-    /// passes do the matching (lower energy, parallel; see the README's comparison).
+    /// Start every level with Wei and Levoy's causal scanline pass (sequential, 3 levels, k = 4,
+    /// occurrence penalty 4, no copy cap) instead of the default's upsampled coordinates (Lefebvre
+    /// and Hoppe 2005). Slower, and higher in energy on every exemplar of the README's suite.
     #[arg(long)]
+    pub scanline: bool,
+    /// The default since the upsampled start became it; accepted so older scripts still run.
+    #[arg(long, hide = true, conflicts_with = "scanline")]
     pub upsampled: bool,
-    /// Occurrence penalty lambda (0 = off; default 4, 0 with `--upsampled`).
+    /// Largest verbatim copy, as a share of the exemplar's area (0 < SHARE <= 1; default 0.06,
+    /// none with `--scanline`): the last correction pass cuts bigger copied blocks apart.
+    #[arg(long, value_name = "SHARE", value_parser = flags::non_negative)]
+    pub copy_cap: Option<f32>,
+    /// Occurrence penalty lambda (0 = off; default 0, 4 with `--scanline`).
     #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
     pub occurrence_penalty: Option<f32>,
     /// k-coherence search (the default): candidates per source texel (Tong et al. 2002; default
-    /// 4, 2 with `--upsampled`).
+    /// 2, 4 with `--scanline`).
     #[arg(long = "k", value_name = "K", conflicts_with_all = ["exact", "pca"], value_parser = flags::usize_in(1, 64))]
     pub k: Option<usize>,
     /// Search a PCA-projected kd-tree (plus Ashikhmin coherence) instead of k-coherence sets.
@@ -256,6 +262,8 @@ pub struct OptionsReport {
     /// `scanline` (Wei-Levoy causal pass) or `upsampled` (Lefebvre-Hoppe coordinates).
     pub start: String,
     pub occurrence_penalty: f32,
+    /// Largest verbatim copy allowed, share of the exemplar's area (`null`: no cap).
+    pub copy_cap: Option<f32>,
     pub levels: usize,
     pub neighborhood: usize,
     pub parent: usize,
@@ -327,7 +335,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
 
 /// The library options the flags ask for.
 fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
-    let base = if args.upsampled { SynthConfig::upsampled(width, height) } else { SynthConfig::new(width, height) };
+    let base = if args.scanline { SynthConfig::scanline(width, height) } else { SynthConfig::new(width, height) };
     SynthConfig {
         levels: args.levels.unwrap_or(base.levels),
         neighbourhood: args.neighborhood,
@@ -347,6 +355,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         },
         coherence: !args.no_coherence,
         exemplar_wrap: args.exemplar_wrap,
+        copy_cap: args.copy_cap.or(base.copy_cap),
         seed: args.seed,
         ..base
     }
@@ -448,13 +457,14 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
     };
     OptionsReport {
         kind: args.map.kind.clone(),
-        levels_requested: args.levels.unwrap_or(if args.upsampled {
-            UPSAMPLED_LEVELS
+        levels_requested: args.levels.unwrap_or(if args.scanline {
+            SynthConfig::scanline(0, 0).levels
         } else {
             SynthConfig::default().levels
         }),
         start: format!("{:?}", run.start).to_lowercase(),
         occurrence_penalty: run.occurrence_penalty,
+        copy_cap: run.copy_cap,
         levels: run.levels,
         neighborhood: run.neighbourhood,
         parent: run.parent,
