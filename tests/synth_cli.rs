@@ -201,7 +201,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     let options = &r["options"];
     assert_eq!(options["start"], "upsampled");
     assert_eq!(options["levels_requested"], 5);
-    assert_eq!(options["corrections"], 3);
+    assert_eq!(options["corrections"], 2);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");
     assert!((options["copy_cap"].as_f64().unwrap() - 0.06).abs() < 1e-6, "{options}");

@@ -369,22 +369,34 @@ pub fn copy_statistics(coords: &Grid<[u32; 2]>, exemplar_size: (usize, usize), w
         return CopyStats { largest_block: 0, mean_block: 0.0, distinct_offsets: 0 };
     }
     let blocks = copy_blocks(coords, exemplar_size, wrap);
-    let largest_block = blocks.sizes.iter().copied().max().unwrap_or(0);
-    let mean_block = coords.len() as f64 / blocks.sizes.len() as f64;
+    let largest_block = blocks.block_sizes().max().unwrap_or(0);
+    let mean_block = coords.len() as f64 / blocks.block_sizes().count() as f64;
     let modulus = (exemplar_size.0.max(1) as i64, exemplar_size.1.max(1) as i64);
     CopyStats { largest_block, mean_block, distinct_offsets: distinct_offsets(coords, modulus, wrap) }
 }
 
 /// The verbatim blocks of a source-coordinate map (as [`copy_statistics`] defines them): per
-/// texel (row-major) the index of its block, and per block its size in texels.
+/// texel (row-major) its block's label, the index of one texel of the block; and per texel index
+/// the size of the block it labels (0 for texels that label none).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CopyBlocks {
     pub labels: Vec<u32>,
-    pub sizes: Vec<usize>,
+    pub sizes: Vec<u32>,
 }
 
-/// The connected blocks of `coords` (see [`copy_statistics`]), labelled in order of their first
-/// texel.
+impl CopyBlocks {
+    /// The size of the block texel `i` belongs to.
+    pub fn size_at(&self, i: usize) -> u32 {
+        self.sizes[self.labels[i] as usize]
+    }
+    /// The sizes of all blocks.
+    pub fn block_sizes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.sizes.iter().filter(|&&s| s > 0).map(|&s| s as usize)
+    }
+}
+
+/// The connected blocks of `coords` (see [`copy_statistics`]). Maps of `2^32` texels or more are
+/// not supported (the union-find uses `u32` indices).
 pub fn copy_blocks(coords: &Grid<[u32; 2]>, exemplar_size: (usize, usize), wrap: bool) -> CopyBlocks {
     let (w, h) = coords.size();
     let modulus = (exemplar_size.0.max(1) as i64, exemplar_size.1.max(1) as i64);
@@ -404,20 +416,14 @@ pub fn copy_blocks(coords: &Grid<[u32; 2]>, exemplar_size: (usize, usize), wrap:
             }
         }
     }
-    let mut label_of_root = vec![u32::MAX; w * h];
-    let mut sizes = Vec::new();
-    let labels = (0..w * h)
-        .map(|i| {
-            let root = sets.find(i);
-            if label_of_root[root] == u32::MAX {
-                label_of_root[root] = sizes.len() as u32;
-                sizes.push(0);
-            }
-            let label = label_of_root[root];
-            sizes[label as usize] += 1;
-            label
-        })
-        .collect();
+    // Every texel points at its root after this; the parents become the labels and the sizes of
+    // the roots the block sizes (no second map of the same size is allocated).
+    for i in 0..w * h {
+        let root = sets.find(i);
+        sets.parent[i] = root as u32;
+    }
+    let DisjointSets { parent: labels, size } = sets;
+    let sizes = size.iter().enumerate().map(|(i, &s)| if labels[i] as usize == i { s } else { 0 }).collect();
     CopyBlocks { labels, sizes }
 }
 
@@ -440,20 +446,25 @@ fn distinct_offsets(coords: &Grid<[u32; 2]>, modulus: (i64, i64), wrap: bool) ->
 
 /// Union-find with path halving and union by size.
 struct DisjointSets {
-    parent: Vec<usize>,
-    size: Vec<usize>,
+    /// `u32` indices: half the memory of `usize` on the largest maps (8192^2 texels: 512 MiB for
+    /// both vectors), which the copy cap builds at the finest level.
+    parent: Vec<u32>,
+    size: Vec<u32>,
 }
 
 impl DisjointSets {
+    /// Sets over `n < 2^32` elements.
     fn new(n: usize) -> Self {
-        DisjointSets { parent: (0..n).collect(), size: vec![1; n] }
+        assert!(u32::try_from(n).is_ok(), "{n} elements do not fit u32 indices");
+        DisjointSets { parent: (0..n as u32).collect(), size: vec![1; n] }
     }
-    fn find(&mut self, mut i: usize) -> usize {
-        while self.parent[i] != i {
-            self.parent[i] = self.parent[self.parent[i]];
-            i = self.parent[i];
+    fn find(&mut self, i: usize) -> usize {
+        let mut i = i as u32;
+        while self.parent[i as usize] != i {
+            self.parent[i as usize] = self.parent[self.parent[i as usize] as usize];
+            i = self.parent[i as usize];
         }
-        i
+        i as usize
     }
     fn union(&mut self, a: usize, b: usize) {
         let (mut ra, mut rb) = (self.find(a), self.find(b));
@@ -463,7 +474,7 @@ impl DisjointSets {
         if self.size[ra] < self.size[rb] {
             std::mem::swap(&mut ra, &mut rb);
         }
-        self.parent[rb] = ra;
+        self.parent[rb] = ra as u32;
         self.size[ra] += self.size[rb];
     }
 }

@@ -40,7 +40,7 @@
 //! same on any thread count. With `s` = 3 most texels of a sub-pass see already corrected
 //! neighbours on two sides (a Jacobi update, `s` = 1, and `s` = 2 or 5 measured slightly worse).
 //!
-//! Upsampled start ([`Start::Upsampled`], [`SynthConfig::upsampled`]; Lefebvre and Hoppe 2005):
+//! Upsampled start ([`Start::Upsampled`], the default; Lefebvre and Hoppe 2005):
 //! instead of the causal pass, the coarsest level starts as random exemplar copies and every finer
 //! level as its coarser level's coordinates upsampled (texel `(x, y)` copies `2 p + (x mod 2,
 //! y mod 2)`, clamped into the candidates, optionally jittered at the coarser levels); the
@@ -48,11 +48,24 @@
 //! pyramid, so the output keeps the exemplar's slope histogram without an occurrence penalty, and
 //! no step is sequential.
 //!
+//! Copy cap ([`SynthConfig::copy_cap`]): patches carried down the pyramid can be large (a quarter
+//! of the exemplar). Before the finest level's last correction pass, the verbatim blocks of the
+//! current coordinates are found ([`metrics::copy_blocks`]); the texels of blocks over the cap that
+//! lie on a grid of lines (spacing from the cap, phase from the seed) may not keep their source in
+//! that pass, so each such block is cut into pieces along the best-matching seam the pass finds.
+//! Texels off the lines are chosen as usual and can join a neighbour's new block, so the largest
+//! block ends near the cap rather than strictly under it (a 6 % cap measured up to 7.1 %).
+//!
+//! Collapse guard ([`synthesize`], [`synthesize_normals`]): an output whose variation (slope or
+//! channel deviation over the exemplar's, [`metrics::variation_ratio`]) falls under
+//! [`metrics::COLLAPSE_RATIO`] is grown again with [`SynthConfig::collapse_retry`]; the better
+//! output is kept and a warning says what happened.
+//!
 //! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, the
 //! exhaustive scan over candidates for one texel, and the texels of a correction sub-pass. The
 //! causal texel loop stays sequential: each texel's causal neighbourhood holds the texels
 //! synthesised just before it, including, through the toroidal wrap, the end of the previous row,
-//! so a row cannot start before the previous one is finished (see the crate's status notes).
+//! so a row cannot start before the previous one is finished (see `docs/synthesis-notes.md`).
 //!
 //! Normal maps are synthesised as unnormalised vectors, so pyramid averages stay meaningful. The
 //! finest level copies exemplar texels verbatim, so the output of a unit exemplar is unit (or
@@ -66,9 +79,8 @@ use rand_chacha::ChaCha8Rng;
 use skinkit_maps::pyramid::{Border, gaussian};
 use skinkit_maps::{Grid, NormalMap};
 
-use rayon::prelude::*;
-
-use crate::config::{CORRECTION_STRIDE, Search, Start, SynthConfig, half};
+use crate::config::{Search, Start, SynthConfig, half};
+use crate::correction::CorrectionLevel;
 use crate::exemplar::{ExemplarLevel, better};
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
@@ -475,15 +487,15 @@ fn causal_pass(
 
 /// What a kd-tree is queried with: a causal feature, and which of its texel slots hold
 /// synthesised texels (`None`: all).
-struct TreeQuery<'a> {
-    query: &'a [f32],
-    active: Option<&'a [bool]>,
+pub(crate) struct TreeQuery<'a> {
+    pub(crate) query: &'a [f32],
+    pub(crate) active: Option<&'a [bool]>,
 }
 
 /// The occurrence (histogram) penalty of Kopf et al. 2007, section 4.3: a candidate whose
 /// exemplar texel the level already copies more often than its share has its squared distance
 /// multiplied by `1 + lambda * max(0, count - expected)`.
-struct Occurrence {
+pub(crate) struct Occurrence {
     counts: Vec<u32>,
     /// Copies per candidate if every candidate were used equally: output texels / candidates.
     expected: f32,
@@ -492,13 +504,13 @@ struct Occurrence {
 
 impl Occurrence {
     /// Zero counts over `candidates`, for a level of `texels` output texels.
-    fn new(candidates: usize, texels: usize, lambda: f32) -> Self {
+    pub(crate) fn new(candidates: usize, texels: usize, lambda: f32) -> Self {
         let counts = vec![0; if lambda > 0.0 { candidates } else { 0 }];
         Occurrence { counts, expected: texels as f32 / candidates.max(1) as f32, lambda }
     }
 
     /// The counts of the sources in `coords` (positions that are not candidates are not counted).
-    fn of(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, lambda: f32) -> Self {
+    pub(crate) fn of(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, lambda: f32) -> Self {
         let mut o = Occurrence::new(full.len(), coords.len(), lambda);
         if lambda > 0.0 {
             for &[x, y] in coords.as_slice() {
@@ -511,7 +523,7 @@ impl Occurrence {
     }
 
     /// Counts one more copy of candidate `i`.
-    fn add(&mut self, i: usize) {
+    pub(crate) fn add(&mut self, i: usize) {
         if let Some(c) = self.counts.get_mut(i) {
             *c += 1;
         }
@@ -519,7 +531,7 @@ impl Occurrence {
 
     /// The factor on candidate `i`'s squared distance; `own` (a texel's current source in a
     /// correction pass) is counted without the texel itself.
-    fn factor(&self, i: usize, own: Option<usize>) -> f32 {
+    pub(crate) fn factor(&self, i: usize, own: Option<usize>) -> f32 {
         if self.lambda <= 0.0 {
             return 1.0;
         }
@@ -530,20 +542,20 @@ impl Occurrence {
 
 /// How one texel scores candidates: squared distance over the active part of its feature (all of
 /// it unless `active` says otherwise), times the occurrence factor.
-struct Scorer<'a> {
-    ex: &'a ExemplarLevel,
-    query: &'a [f32],
+pub(crate) struct Scorer<'a> {
+    pub(crate) ex: &'a ExemplarLevel,
+    pub(crate) query: &'a [f32],
     /// Per texel slot of the feature, whether it counts (`None`: every slot).
-    active: Option<&'a [bool]>,
-    occurrence: &'a Occurrence,
-    own: Option<usize>,
+    pub(crate) active: Option<&'a [bool]>,
+    pub(crate) occurrence: &'a Occurrence,
+    pub(crate) own: Option<usize>,
     /// A candidate the texel may not take (its current source, when the copy cap breaks its block).
-    forbidden: Option<usize>,
+    pub(crate) forbidden: Option<usize>,
 }
 
 impl Scorer<'_> {
     /// The score of candidate `i`.
-    fn score(&self, i: usize) -> f32 {
+    pub(crate) fn score(&self, i: usize) -> f32 {
         if self.forbidden == Some(i) {
             return f32::INFINITY;
         }
@@ -556,7 +568,7 @@ impl Scorer<'_> {
 
     /// The score of candidate `i` when it is at most `best`, `f32::INFINITY` otherwise (the
     /// distance is abandoned early once it cannot win).
-    fn score_below(&self, i: usize, best: f32) -> f32 {
+    pub(crate) fn score_below(&self, i: usize, best: f32) -> f32 {
         if self.forbidden == Some(i) {
             return f32::INFINITY;
         }
@@ -570,7 +582,7 @@ impl Scorer<'_> {
     }
 
     /// The best candidate of the level by exhaustive scan.
-    fn nearest_exact(&self) -> usize {
+    pub(crate) fn nearest_exact(&self) -> usize {
         self.ex.nearest_by(|i| self.score(i))
     }
 }
@@ -604,17 +616,17 @@ pub fn random_copies(
 }
 
 /// The search structures of one level.
-struct LevelSearch {
+pub(crate) struct LevelSearch {
     /// PCA kd-tree over causal features (approximate search, or k-coherence with a fallback).
-    index: Option<ApproximateIndex>,
+    pub(crate) index: Option<ApproximateIndex>,
     /// k-coherence sets (k-coherence only).
-    sets: Option<KCoherenceSets>,
+    pub(crate) sets: Option<KCoherenceSets>,
     /// The candidates with full-window features (the causal pass's texels next to already
     /// synthesised wrapped neighbours, and the correction passes).
-    full: Option<ExemplarLevel>,
+    pub(crate) full: Option<ExemplarLevel>,
     /// PCA kd-tree over full features (correction passes of approximate search and of k-coherence
     /// with a fallback).
-    full_index: Option<ApproximateIndex>,
+    pub(crate) full_index: Option<ApproximateIndex>,
 }
 
 /// The search structures a level needs: the PCA kd-trees (approximate search, or k-coherence with
@@ -650,191 +662,12 @@ fn build_search(
     LevelSearch { index, sets, full, full_index }
 }
 
-/// What the correction passes of one level read.
-struct CorrectionLevel<'a> {
-    coarser: Option<&'a Grid<Vec3>>,
-    /// The copy cap of this level in texels (the finest level only; see [`cap_breaks`]).
-    copy_cap: Option<usize>,
-    /// The full `N x N` (+ coarser `M x M`) shape.
-    nb: &'a Neighbourhood,
-    search: &'a LevelSearch,
-    config: &'a SynthConfig,
-}
-
-/// Per-thread buffers of a correction pass.
-#[derive(Default)]
-struct Scratch {
-    query: Vec<f32>,
-    sources: Vec<usize>,
-    candidates: Vec<usize>,
-    seen: Seen,
-}
-
-/// Marks of the candidates already scored for the current texel.
-#[derive(Default)]
-struct Seen {
-    marks: Vec<u32>,
-    stamp: u32,
-}
-
-impl Seen {
-    /// A fresh stamp for the next texel, over `len` candidates.
-    fn next(&mut self, len: usize) -> u32 {
-        if self.marks.len() != len || self.stamp == u32::MAX {
-            self.marks.clear();
-            self.marks.resize(len, 0);
-            self.stamp = 0;
-        }
-        self.stamp += 1;
-        self.stamp
-    }
-}
-
-impl CorrectionLevel<'_> {
-    /// Runs `config.corrections` passes over the level in place. Each pass is split into
-    /// `CORRECTION_STRIDE^2` sub-passes by `(x mod s, y mod s)`, in row-major order of the
-    /// residues; a sub-pass chooses all its texels in parallel from the state the previous
-    /// sub-passes left, then writes them, so the result does not depend on the thread count.
-    fn run(&self, out: &mut Grid<Vec3>, coords: &mut Grid<[u32; 2]>, report: &dyn Fn(usize)) {
-        let full = self.search.full.as_ref().expect("built for corrections");
-        let (w, h) = out.size();
-        let s = CORRECTION_STRIDE;
-        for pass in 0..self.config.corrections {
-            let last = pass + 1 == self.config.corrections;
-            let breaks = self.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed));
-            for sub in 0..s * s {
-                let (ox, oy) = (sub % s, sub / s);
-                let rows: Vec<usize> = (oy..h).step_by(s).collect();
-                let (read_out, read_coords) = (&*out, &*coords);
-                let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
-                let occurrence = Occurrence::of(full, read_coords, lambda);
-                let chosen: Vec<Vec<usize>> = rows
-                    .par_iter()
-                    .map_init(Scratch::default, |scratch, &y| {
-                        (ox..w)
-                            .step_by(s)
-                            .map(|x| {
-                                let forbid = breaks.as_ref().is_some_and(|b| b[y * w + x]);
-                                self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch)
-                            })
-                            .collect()
-                    })
-                    .collect();
-                for (&y, row) in rows.iter().zip(&chosen) {
-                    for (x, &best) in (ox..w).step_by(s).zip(row) {
-                        *out.get_mut(x, y) = full.texel(best);
-                        *coords.get_mut(x, y) = full.position(best);
-                    }
-                }
-                let causal = if self.config.start == Start::Scanline { h } else { 0 };
-                report(causal + h * pass + (sub + 1) * h / (s * s));
-            }
-        }
-    }
-
-    /// The candidate texel `(x, y)` copies, chosen by its full neighbourhood in `out`.
-    #[allow(clippy::too_many_arguments)]
-    fn choose(
-        &self,
-        x: isize,
-        y: isize,
-        out: &Grid<Vec3>,
-        coords: &Grid<[u32; 2]>,
-        occurrence: &Occurrence,
-        forbid_own: bool,
-        scratch: &mut Scratch,
-    ) -> usize {
-        let full = self.search.full.as_ref().expect("built for corrections");
-        let Scratch { query, sources, candidates, seen } = scratch;
-        query.resize(self.nb.dim(), 0.0);
-        self.nb.gather(
-            x,
-            y,
-            |sx, sy| *out.get_wrapped(sx, sy),
-            |sx, sy| self.coarser.map_or(Vec3::ZERO, |c| *c.get_wrapped(sx, sy)),
-            query,
-        );
-        let [cx, cy] = *coords.get_wrapped(x, y);
-        let own = full.index_of(cx as isize, cy as isize);
-        let forbidden = own.filter(|_| forbid_own);
-        let scorer = Scorer { ex: full, query, active: None, occurrence, own, forbidden };
-        let score = |&i: &usize| (scorer.score(i), i);
-        candidates.clear();
-        match (self.config.search, &self.search.sets) {
-            (Search::KCoherence { fallback, .. }, Some(sets)) => {
-                sources.clear();
-                coherence_candidates(full, self.nb, coords, None, x, y, sources);
-                // The texel's current source is usually close to the best: scoring it first makes
-                // the early exit cut the others sooner. Each candidate is scored once (`seen`);
-                // the minimum does not depend on the order.
-                let stamp = seen.next(full.len());
-                let mut best = match own {
-                    Some(i) if forbid_own => {
-                        seen.marks[i] = stamp;
-                        (f32::INFINITY, usize::MAX)
-                    }
-                    Some(i) => {
-                        seen.marks[i] = stamp;
-                        (scorer.score(i), i)
-                    }
-                    None => (f32::INFINITY, usize::MAX),
-                };
-                for &source in sources.iter() {
-                    for &j in sets.set(source) {
-                        let j = j as usize;
-                        if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
-                            best = better(best, (scorer.score_below(j, best.0), j));
-                        }
-                    }
-                }
-                match (&self.search.full_index, fallback) {
-                    _ if best.1 == usize::MAX => scorer.nearest_exact(),
-                    (Some(index), Some(ratio)) if best.0 > ratio * sets.typical_full() => {
-                        tree_refine(index, &TreeQuery { query, active: None }, best, &score, candidates)
-                    }
-                    _ => best.1,
-                }
-            }
-            (Search::Approximate { .. }, _) => {
-                if self.config.coherence {
-                    coherence_candidates(full, self.nb, coords, None, x, y, candidates);
-                }
-                let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
-                let index = self.search.full_index.as_ref().expect("built for corrections");
-                tree_refine(index, &TreeQuery { query, active: None }, coherent, &score, candidates)
-            }
-            _ => scorer.nearest_exact(),
-        }
-    }
-}
-
-/// The texels the copy cap re-chooses away from their current source: those of verbatim blocks
-/// larger than `cap` texels ([`metrics::copy_blocks`]) that lie on a grid of lines `p` apart
-/// (`(p - 1)^2 <= cap`, phase drawn from `seed`). Choosing another source there cuts every such
-/// block into pieces of at most `(p - 1)^2` texels; the new source is the best match of the cut
-/// texel's whole neighbourhood, so the cut follows the texture as a seam would.
-fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u64) -> Vec<bool> {
-    let (w, h) = coords.size();
-    let blocks = metrics::copy_blocks(coords, full.texels().size(), full.wraps());
-    let p = ((cap as f64).sqrt() as usize + 1).max(2);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(2 << 32);
-    let (px, py) = (rng.random_range(0..p), rng.random_range(0..p));
-    (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let on_line = (x + px) % p == 0 || (y + py) % p == 0;
-            on_line && blocks.sizes[blocks.labels[i] as usize] > cap
-        })
-        .collect()
-}
-
 /// The best of `best` and the tree's candidates for the scorer's query. Tree candidates farther
 /// than `best` (in projected distance, a lower bound of the full one, which the occurrence factor
 /// only raises) cannot win, so the tree is searched only within that radius; the margin covers
 /// the rounding of the f32 projection. A masked query has its left-out slots set to the
 /// projection's mean and no radius (the projected distance no longer bounds the masked one).
-fn tree_refine(
+pub(crate) fn tree_refine(
     index: &ApproximateIndex,
     tree_query: &TreeQuery,
     best: (f32, usize),
@@ -861,7 +694,7 @@ fn tree_refine(
 /// Ashikhmin (2001) candidates: for each already synthesised neighbour at offset `(dx, dy)` in `nb`
 /// (every neighbour when `done` is `None`), the exemplar texel at its source shifted back by
 /// `(dx, dy)`.
-fn coherence_candidates(
+pub(crate) fn coherence_candidates(
     ex: &ExemplarLevel,
     nb: &Neighbourhood,
     coords: &Grid<[u32; 2]>,
