@@ -122,7 +122,7 @@ fn collapse_warning(variation: f64, what: &str) -> Option<String> {
     (variation < metrics::COLLAPSE_RATIO).then(|| {
         format!(
             "the output kept {:.0} % of the exemplar's {what} variation (under {:.0} %): it may be \
-             nearly blank; try another seed or a smaller --levels",
+             nearly blank; try another seed",
             100.0 * variation,
             100.0 * metrics::COLLAPSE_RATIO
         )
