@@ -21,7 +21,8 @@
 //! (exemplar | peer | skinkit per exemplar, seed 1, normals shaded) goes to
 //! `docs/synth-contact-sheet.png` (the peer then runs again for seed 1, for its output).
 //!
-//! Knobs for experiments: `SYNTH_SUITE_CONFIG` (keys as `k=2,j=1,...`, see [`parse_config`]),
+//! The three texture photos come from the folder `SYNTH_SUITE_TEXTURES` names (without it they
+//! are skipped, and the report has 9 exemplars). Knobs for experiments: `SYNTH_SUITE_CONFIG` (keys as `k=2,j=1,...`, see [`parse_config`]),
 //! `SYNTH_SUITE_ONLY` (a substring of exemplar names), `SYNTH_SUITE_SEEDS` (how many),
 //! `SYNTH_SUITE_SPEED=0` (skip the speed part). Peer scores are cached in
 //! `target/synth-suite-peer.tsv` (keyed by exemplar, seed and size; delete it to rerun the peer).

@@ -48,9 +48,10 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// The texture photos' folder, when the shared data sits beside the repository.
+/// The texture photos' folder (`brick-128.png`, `grass-128.png`, `gravel-128.png`; CC0 photos kept
+/// out of the repository), named by `SYNTH_SUITE_TEXTURES`.
 fn textures() -> Option<PathBuf> {
-    let dir = repo().join("../shared/textures");
+    let dir = PathBuf::from(std::env::var_os("SYNTH_SUITE_TEXTURES")?);
     dir.is_dir().then_some(dir)
 }
 
@@ -82,7 +83,7 @@ pub fn all() -> Vec<Exemplar> {
                 set.push(Exemplar { name: format!("{name} photo as height"), texels: Texels::Normal(normals) });
             }
         }
-        None => eprintln!("suite: no texture photos beside the repository; the photo exemplars are skipped"),
+        None => eprintln!("suite: SYNTH_SUITE_TEXTURES names no folder; the photo exemplars are skipped"),
     }
     set.push(Exemplar { name: "ink blots on paper".into(), texels: Texels::Color(ink_blots(SIDE, 7)) });
     set
