@@ -260,7 +260,8 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
     }
     .with_context(|| format!("cannot write {}", albedo.display()))?;
     write_coords(&dir.join("coords.png"), &grown.coords)?;
-    let quality = quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false);
+    let quality =
+        quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false, grown.variation);
     Ok(GrowthResult {
         region: region.to_owned(),
         width: size.0,

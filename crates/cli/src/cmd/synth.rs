@@ -237,19 +237,20 @@ fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<(
     guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.to_owned())])
 }
 
-/// What one synthesis gives: the map, its exemplar coordinates, warnings and seconds per level.
-type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>);
+/// What one synthesis gives: the map, its exemplar coordinates, warnings, seconds per level and
+/// the collapse guard's variation.
+type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>, f64);
 
 /// Grows `exemplar`, normals or colours, under `config`.
 fn grow_map(exemplar: &Map, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Grown> {
     Ok(match exemplar {
         Map::Normal(n) => {
             let s = skinkit_synth::synthesize_normals(n, config, progress)?;
-            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds)
+            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds, s.variation)
         }
         Map::Color(c) => {
             let s = skinkit_synth::synthesize(c, config, progress)?;
-            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds)
+            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds, s.variation)
         }
     })
 }
@@ -412,12 +413,13 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let (validated, _) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };
     let progress = |level: usize, fraction: f32| bars.update(level, fraction);
-    let (output, coords, warnings, level_seconds) = grow_map(&exemplar, &requested, &progress).with_context(context)?;
+    let (output, coords, warnings, level_seconds, variation) =
+        grow_map(&exemplar, &requested, &progress).with_context(context)?;
     bars.finish();
     for w in &warnings {
         out.warn(w);
     }
-    let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap);
+    let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap, variation);
     // One set: the map, the coordinates and the report appear together or not at all.
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
@@ -479,18 +481,23 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
 }
 
 /// The quality metrics of an output against its exemplar (slopes or channels, spectrum, tiling,
-/// copied blocks).
-pub(crate) fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wrap: bool) -> QualityReport {
+/// copied blocks); `variation` is the synthesis's own collapse-guard figure.
+pub(crate) fn quality(
+    exemplar: &Map,
+    output: &Map,
+    coords: &Grid<[u32; 2]>,
+    wrap: bool,
+    variation: f64,
+) -> QualityReport {
     let bins = DEFAULT_SPECTRUM_BINS;
     let copies = metrics::copy_statistics(coords, exemplar.size(), wrap);
-    let (slope, channel, spectrum, seam, exemplar_seam, variation) = match (exemplar, output) {
+    let (slope, channel, spectrum, seam, exemplar_seam) = match (exemplar, output) {
         (Map::Normal(e), Map::Normal(o)) => (
             Some(metrics::slope_distance(o, e)),
             None,
             metrics::normal_spectrum_distance(o, e, bins),
             metrics::normal_seam_energy(o).ratio,
             metrics::normal_seam_energy(e).ratio,
-            metrics::slope_variation_ratio(o, e),
         ),
         (Map::Color(e), Map::Color(o)) => (
             None,
@@ -498,7 +505,6 @@ pub(crate) fn quality(exemplar: &Map, output: &Map, coords: &Grid<[u32; 2]>, wra
             metrics::color_spectrum_distance(o, e, bins),
             metrics::seam_energy(o).ratio,
             metrics::seam_energy(e).ratio,
-            metrics::variation_ratio(o, e),
         ),
         _ => unreachable!("the output has the exemplar's kind"),
     };

@@ -23,7 +23,7 @@ pub struct ExemplarResult {
     pub output: Option<Texels>,
 }
 
-/// Mean and worst of a score over seeds (`worst` is the max, or the min when lower is worse).
+/// The mean, largest and smallest of a score over seeds.
 fn mean(v: &[Scores], f: fn(&Scores) -> f64) -> f64 {
     v.iter().map(f).sum::<f64>() / v.len().max(1) as f64
 }
@@ -47,9 +47,8 @@ impl PeerCache {
             .lines()
             .filter_map(|line| {
                 let fields: Vec<&str> = line.split('\t').collect();
-                let v: Vec<f64> = fields.get(3..8)?.iter().filter_map(|s| s.parse().ok()).collect();
-                let scores =
-                    Scores { energy: v[0], copy: v[1], distribution: v[2], spectrum: v[3], variation: *v.get(4)? };
+                let v: Vec<f64> = fields.get(3..8)?.iter().map(|s| s.parse().ok()).collect::<Option<_>>()?;
+                let scores = Scores { energy: v[0], copy: v[1], distribution: v[2], spectrum: v[3], variation: v[4] };
                 Some((fields[..3].join("\t"), scores))
             })
             .collect();
