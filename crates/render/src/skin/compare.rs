@@ -59,13 +59,15 @@ impl Method {
         }
     }
 
-    /// The methods of the accuracy-against-time table, reference last.
+    /// The methods of the accuracy-against-time table: the reference at half its size (its own
+    /// error), then the reference last.
     pub fn table(reference_size: u32) -> Vec<Method> {
         let mut methods = vec![Self::Lambert, Self::Blog, Self::OwnFit];
         methods.extend([32, 64, 256].map(|size| Self::Lut { size }));
         for size in [512, 1024] {
             methods.extend([1, 2, 4].map(|passes| Self::Tsd { passes, size }));
         }
+        methods.push(Self::Reference { size: (reference_size / 2).max(1) });
         methods.push(Self::Reference { size: reference_size });
         methods
     }
@@ -118,15 +120,24 @@ impl Method {
         let graph = PassGraph::for_loaded(&scene, loaded);
         let mut built = setup::build(&scene, loaded, &graph)?;
         if let Self::Reference { size } = self {
-            let key = graph.shadow.map(|s| s.light);
-            let shadows: Vec<bool> = (0..loaded.inputs.lights.len()).map(|i| key == Some(i)).collect();
-            let bake = reference::bake(&loaded.inputs, &shadows, scene.mm_per_unit, *size);
-            let scattered = reference::scatter(&bake, &Profile::default());
+            let (bake, scattered) = reference_light_map(&scene, loaded, *size);
             built.light_map = Some(reference::dilate(&bake.to_texture(&scattered), 4));
             built.features.diffuse = DiffuseMode::LightMap;
         }
         Ok(built)
     }
+}
+
+/// The exact texture-space reference of `scene` at `size x size` texels: the bake (the key light,
+/// the one the pass graph gives the shadow map, ray-cast; the others unshadowed) and its
+/// scattered irradiance under the default profile.
+pub fn reference_light_map(scene: &Scene, loaded: &Loaded, size: u32) -> (reference::ReferenceBake, Vec<[f32; 3]>) {
+    let graph = PassGraph::for_loaded(scene, loaded);
+    let key = graph.shadow.map(|s| s.light);
+    let shadows: Vec<bool> = (0..loaded.inputs.lights.len()).map(|i| key == Some(i)).collect();
+    let bake = reference::bake(&loaded.inputs, &shadows, scene.mm_per_unit, size);
+    let scattered = reference::scatter(&bake, &Profile::default());
+    (bake, scattered)
 }
 
 /// Mean FLIP (LDR, NVIDIA's nv-flip at 67 pixels per degree: a 0.7 m view of a 24-inch 4K

@@ -40,9 +40,9 @@ const CELLS_PER_SUPPORT: f32 = 4.0;
 
 /// One covered source texel, packed for the inner loop.
 #[derive(Clone, Copy, Default)]
-struct Source {
-    position: Vec3,
-    normal: Vec3,
+pub(super) struct Source {
+    pub(super) position: Vec3,
+    pub(super) normal: Vec3,
     u_axis: Vec3,
     v_axis: Vec3,
     /// Footprint sides, mm.
@@ -53,7 +53,7 @@ struct Source {
     first_midpoint: u32,
     /// Beyond this squared distance the narrow pass has nothing to add (mm^2).
     narrow_reach2: f32,
-    irradiance: [f32; 3],
+    pub(super) irradiance: [f32; 3],
 }
 
 /// Per-Gaussian constants.
@@ -73,12 +73,12 @@ struct Gaussian {
     weights: [f32; 3],
 }
 
-struct Kernel {
+pub(super) struct Kernel {
     gaussians: [Gaussian; GAUSSIANS],
 }
 
 impl Kernel {
-    fn new(profile: &Profile) -> Self {
+    pub(super) fn new(profile: &Profile) -> Self {
         let gaussians = std::array::from_fn(|k| {
             let v = profile.variance(k);
             let scale = profile.gaussian(k, 0.0) * 2.0 * std::f64::consts::PI * v;
@@ -129,6 +129,19 @@ impl Kernel {
         let mass = box_mass(g, dx, s.a) * box_mass(g, dy, s.b);
         g.scale32 * exp_neg(dz2 * g.neg_inv_2v) * mass
     }
+}
+
+/// Gaussian `k` alone (no channel weights) integrated over source `s`'s footprint, seen from
+/// `offset` (receiver minus source): one term of the oracle's `texel_weight`.
+pub(super) fn texel_gaussian(kernel: &Kernel, k: usize, s: &Source, offset: Vec3) -> f32 {
+    let g = &kernel.gaussians[k];
+    let d2 = offset.length_squared();
+    let nearest = (d2.sqrt() - s.half_diagonal).max(0.0);
+    if nearest * nearest > g.reach2 {
+        return 0.0;
+    }
+    let (dx, dy) = (offset.dot(s.u_axis), offset.dot(s.v_axis));
+    if k as u32 >= s.first_midpoint { midpoint(g, s, dx, dy, d2) } else { kernel.narrow(k, s, dx, dy, d2) }
 }
 
 /// Mass of the 1-D Gaussian on `[x - a/2, x + a/2]`: the oracle's `box_mass` in f32 (the
@@ -274,7 +287,7 @@ fn key(p: Vec3, cell: f32) -> [i32; 3] {
     [f(p.z), f(p.y), f(p.x)]
 }
 
-fn source(bake: &ReferenceBake, kernel: &Kernel, i: usize) -> Source {
+pub(super) fn source(bake: &ReferenceBake, kernel: &Kernel, i: usize) -> Source {
     let f = bake.footprint[i];
     let (a, b) = (f.u_mm as f64, f.v_mm as f64);
     let first_midpoint = kernel.gaussians.iter().position(|g| a.max(b) < MIDPOINT_RATIO * g.sigma).unwrap_or(GAUSSIANS);
