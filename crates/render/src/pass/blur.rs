@@ -14,7 +14,9 @@ pub(crate) struct BlurUniforms {
     pub(crate) a: f32,
     pub(crate) b: f32,
     pub(crate) dilate: u32,
-    pub(crate) pad0: u32,
+    /// The Poisson disc's per-axis variance per unit radius squared
+    /// ([`passes::poisson_second_moment`] / 2).
+    pub(crate) tap_variance: f32,
     pub(crate) pad1: u32,
     pub(crate) pad2: u32,
 }
@@ -39,7 +41,15 @@ impl Gpu {
         (0..tsd.passes)
             .map(|i| {
                 let inv_size = [1.0 / tsd.size as f32; 2];
-                let raw = BlurUniforms { inv_size, a, b, dilate: (i == 0) as u32, pad0: 0, pad1: 0, pad2: 0 };
+                let raw = BlurUniforms {
+                    inv_size,
+                    a,
+                    b,
+                    dilate: (i == 0) as u32,
+                    tap_variance: passes::poisson_second_moment() / 2.0,
+                    pad1: 0,
+                    pad2: 0,
+                };
                 let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
                 let view = maps[(i % 2) as usize].create_view(&Default::default());
                 self.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -13,7 +13,8 @@ struct BlurUniforms {
     b: f32,
     // 1: this pass dilates.
     dilate: u32,
-    pad0: u32,
+    // The Poisson disc's variance per axis for radius 1 (texels^2).
+    tap_variance: f32,
     pad1: u32,
     pad2: u32,
 }
@@ -53,10 +54,23 @@ fn vs_full_screen(@builtin(vertex_index) index: u32) -> FullScreen {
     return out;
 }
 
+// The disc's radius in texels once the sampler's own spread is taken off: a bilinear tap at a
+// random sub-texel offset mixes two texels per axis with variance 1/6 on average, a nearest tap
+// (the dilating pass) moves by the rounding, variance 1/12. The passes then add up to the
+// variance the radius was chosen for, not more with every pass.
+fn disc_radius(intended: f32) -> f32 {
+    var sampler_variance = 1.0 / 6.0;
+    if blur.dilate == 1u {
+        sampler_variance = 1.0 / 12.0;
+    }
+    let variance = intended * intended * blur.tap_variance - sampler_variance;
+    return sqrt(max(variance, 0.0) / max(blur.tap_variance, 1e-6));
+}
+
 @fragment
 fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
     let centre = textureSampleLevel(source, source_sampler, input.uv, 0.0);
-    let radius = blur.inv_size * (min(centre.a, 0.999) * blur.a + blur.b);
+    let radius = blur.inv_size * disc_radius(min(centre.a, 0.999) * blur.a + blur.b);
     var sum = centre.rgb;
     var written_sum = centre.rgb;
     var written = 1.0;

@@ -157,6 +157,6 @@ pub fn uniform_layouts() -> Vec<UniformLayout> {
             [size, kernel_mm, curvature_gain, max_radius, kernel_from_map, pad0, pad1, pad2]
         ),
         layout!(BASE_WGSL, "Globals", Globals, [scene, base, shadow, prepass, light_map]),
-        layout!(BLUR_WGSL, "BlurUniforms", BlurUniforms, [inv_size, a, b, dilate, pad0, pad1, pad2]),
+        layout!(BLUR_WGSL, "BlurUniforms", BlurUniforms, [inv_size, a, b, dilate, tap_variance, pad1, pad2]),
     ]
 }

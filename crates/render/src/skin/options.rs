@@ -34,7 +34,7 @@
 //! size = 1024                   # light map texels per side
 //! passes = 3                    # Poisson blur passes (the first one dilates)
 //! kernel_map = "kernel.png"     # optional: per-texel kernel size in [0, 1), radius = a * k + b
-//! kernel_scale = [3.0, 2.0]     # (a, b) in texels of a 512 map (the chapter's vBlurScale)
+//! kernel_scale = [3.0, 2.0]     # with kernel_map: (a, b) in texels of a 512 map (the chapter's vBlurScale)
 //! curvature_gain = 2.0          # derived kernel: radius x (1 + gain_mm * 1/r)
 //! backface_bias = 0.3           # the back-face pre-pass keeps texels with N.V > -0.3
 //! reuse_below_px = 0            # distance culling: a head smaller than this reuses the last light map
@@ -177,7 +177,7 @@ pub struct TsdOptions {
     pub passes: u32,
     /// An artist's kernel map, if given.
     pub kernel_map: Option<PathBuf>,
-    /// (a, b): radius = a * k + b texels of a 512 map.
+    /// (a, b): with a kernel map, radius = a * k + b texels of a 512 map.
     pub kernel_scale: [f32; 2],
     /// Derived kernel: radius x (1 + gain * 1/r), gain in mm.
     pub curvature_gain: f32,

@@ -239,13 +239,18 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
         None => None,
         Some(path) => Some(read_kernel(path).map_err(|error| map_error(&scene.file, "tsd.kernel_map", error))?),
     };
-    // The chapter's (a, b) are texels of a 512 map: keep their size on the skin at any resolution.
+    // The chapter's (a, b) map an artist's kernel value to texels of a 512 map: keep their size on
+    // the skin at any resolution. A derived kernel stores its radius over MAX_KERNEL_TEXELS.
     let to_size = plan.size as f32 / 512.0;
+    let kernel_scale = match kernel_map {
+        Some(_) => [options.kernel_scale[0] * to_size, options.kernel_scale[1] * to_size],
+        None => [passes::MAX_KERNEL_TEXELS, 0.0],
+    };
     Ok(TsdSetup {
         size: plan.size,
         passes: plan.blurs,
         kernel_map,
-        kernel_scale: [options.kernel_scale[0] * to_size, options.kernel_scale[1] * to_size],
+        kernel_scale,
         kernel_mm: passes::kernel_mm_for(luminance_variance(), options.passes),
         curvature_gain: options.curvature_gain,
         backface_bias: options.backface_bias,
