@@ -42,34 +42,74 @@ struct Row {
     passes: Vec<(String, f64)>,
 }
 
+/// The scenes measured by default, in `samples/scenes/`, with the label their tables carry.
+const SCENES: [(&str, &str); 3] = [
+    ("skin-compare", "Sample head"),
+    ("skin-nose", "Sample head, close up on the nose"),
+    ("skin-sphere", "Skin sphere of 6 mm radius"),
+];
+
 fn main() {
     if std::env::args().any(|a| a == "--list") {
         println!("skin_methods: bench");
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let scene_file = root.join("samples/scenes/skin-compare.toml");
-    let mut scene = Scene::load(&scene_file).unwrap_or_else(|e| panic!("{e}"));
-    let unshadowed = std::env::var("SKIN_METHODS_UNSHADOWED").is_ok_and(|v| v == "1");
+    let only = std::env::var("SKIN_METHODS_SCENES").ok();
+    let modes: Vec<bool> = match std::env::var("SKIN_METHODS_UNSHADOWED").as_deref() {
+        Ok("1") => vec![true],
+        Ok("0") => vec![false],
+        _ => vec![false, true],
+    };
+    let reference_size = std::env::var("SKIN_METHODS_REFERENCE").ok().and_then(|s| s.parse().ok()).unwrap_or(2048);
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("adapter: {}, reference light map {reference_size}", gpu.adapter_name());
+    let out = root.join("target");
+    std::fs::create_dir_all(&out).unwrap();
+    let mut tables = Vec::new();
+    for (name, label) in SCENES {
+        if only.as_deref().is_some_and(|o| !o.split(',').any(|x| x.trim() == name)) {
+            continue;
+        }
+        for &unshadowed in &modes {
+            let stem = if unshadowed { format!("{name}-unshadowed") } else { name.to_owned() };
+            let table = measure(
+                &gpu,
+                &root.join(format!("samples/scenes/{name}.toml")),
+                label,
+                unshadowed,
+                reference_size,
+                &out.join(&stem),
+            );
+            tables.push(table);
+        }
+    }
+    let all = tables.join("\n");
+    write(&out.join("skin-methods.md"), &all);
+    if std::env::var("SKIN_METHODS_DOCS").is_ok_and(|v| v == "1") {
+        splice_readme(&root.join("README.md"), &all);
+    }
+}
+
+/// Every method of [`Method::table`] on one scene: renders, errors against the reference and
+/// frame times, written to `stem.{md,svg,json}` and one PNG per method; returns the table.
+fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, reference_size: u32, stem: &Path) -> String {
+    let mut scene = Scene::load(scene_file).unwrap_or_else(|e| panic!("{e}"));
     if unshadowed {
         scene.effects.retain(|&e| e != Effect::Shadows && e != Effect::ShadowScattering);
     }
-    let stem = if unshadowed { "skin-methods-unshadowed" } else { "skin-methods" };
-    let (width, height) = size();
-    let reference_size = std::env::var("SKIN_METHODS_REFERENCE").ok().and_then(|s| s.parse().ok()).unwrap_or(1024);
-    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    eprintln!("adapter: {}, {width}x{height}, reference light map {reference_size}", gpu.adapter_name());
+    let (width, height) = size().unwrap_or((scene.output.size[0], scene.output.size[1]));
+    eprintln!("{}{}: {width}x{height}", scene_file.display(), if unshadowed { ", unshadowed" } else { "" });
     let loaded = load::load(&scene, width, height, gpu.max_texture_side()).unwrap();
-
-    let base_ms = frame_ms(&gpu, &loaded.inputs, &SkinSetup::default(), width, height).0;
+    let base_ms = frame_ms(gpu, &loaded.inputs, &SkinSetup::default(), width, height).0;
     eprintln!("base pass (Lambert, no shadows): {base_ms:.2} ms");
     let mut renders = Vec::new();
     for method in Method::table(reference_size) {
         let t = Instant::now();
         let setup = method.setup(&scene, &loaded).unwrap_or_else(|e| panic!("{}: {e}", method.name()));
         let cpu_setup_s = t.elapsed().as_secs_f64();
-        let (ms, passes) = frame_ms(&gpu, &loaded.inputs, &setup, width, height);
-        let images = draw(&gpu, &loaded.inputs, &setup, width, height);
+        let (ms, passes) = frame_ms(gpu, &loaded.inputs, &setup, width, height);
+        let images = draw(gpu, &loaded.inputs, &setup, width, height);
         eprintln!("{:>16}: {ms:8.2} ms ({:.2}x base), cpu setup {cpu_setup_s:.2} s", method.name(), ms / base_ms);
         renders.push((method, images, ms, passes, cpu_setup_s));
     }
@@ -87,18 +127,17 @@ fn main() {
             passes: passes.iter().map(|(n, d)| (n.clone(), d.as_secs_f64() * 1e3)).collect(),
         })
         .collect();
-    let out = root.join("target");
-    std::fs::create_dir_all(&out).unwrap();
-    let mut table = markdown(&rows, base_ms, &gpu.adapter_name(), width, height, reference_size);
-    if unshadowed {
-        table = format!("Unshadowed (the diffuse falloff alone). {table}");
-    }
+    let file = scene_file.file_name().and_then(|f| f.to_str()).unwrap_or("");
+    let what = if unshadowed { ", unshadowed (the diffuse falloff alone)" } else { "" };
+    let caption = format!("{label} (`samples/scenes/{file}`){what}");
+    let table = markdown(&caption, &rows, base_ms, &gpu.adapter_name(), width, height, reference_size);
     println!("{table}");
-    write(&out.join(format!("{stem}.md")), &table);
-    write(&out.join(format!("{stem}.svg")), &svg(&rows));
-    write(&out.join(format!("{stem}.json")), &serde_json::to_string_pretty(&rows).unwrap());
+    let with = |ext: &str| PathBuf::from(format!("{}.{ext}", stem.display()));
+    write(&with("md"), &table);
+    write(&with("svg"), &svg(&rows));
+    write(&with("json"), &serde_json::to_string_pretty(&rows).unwrap());
     for (method, (ldr, _), ..) in &renders {
-        let path = out.join(format!("{stem}-{}.png", method.name()));
+        let path = PathBuf::from(format!("{}-{}.png", stem.display(), method.name()));
         let samples: Vec<u16> =
             ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
         skinkit_maps::io::write_png(
@@ -110,15 +149,28 @@ fn main() {
         )
         .unwrap();
     }
-    eprintln!("wrote {}", out.join(format!("{stem}.{{md,svg,json}}")).display());
+    eprintln!("wrote {}", with("{md,svg,json}").display());
+    table
 }
 
-fn size() -> (u32, u32) {
-    let parsed = std::env::var("SKIN_METHODS_SIZE").ok().and_then(|s| {
+/// Replaces the README's text between `<!-- skin-methods:start -->` and `<!-- skin-methods:end -->`.
+fn splice_readme(readme: &Path, tables: &str) {
+    let text = std::fs::read_to_string(readme).unwrap_or_else(|e| panic!("{}: {e}", readme.display()));
+    let (start, end) = ("<!-- skin-methods:start -->", "<!-- skin-methods:end -->");
+    let (Some(a), Some(b)) = (text.find(start), text.find(end)) else {
+        panic!("{}: no {start} ... {end} markers", readme.display());
+    };
+    let spliced = format!("{}{start}\n{tables}{}", &text[..a], &text[b..]);
+    write(&readme.to_path_buf(), &spliced);
+    eprintln!("README tables updated");
+}
+
+/// `SKIN_METHODS_SIZE=WxH`, when set: the image size for every scene (else each scene's own).
+fn size() -> Option<(u32, u32)> {
+    std::env::var("SKIN_METHODS_SIZE").ok().and_then(|s| {
         let (w, h) = s.split_once('x')?;
         Some((w.parse().ok()?, h.parse().ok()?))
-    });
-    parsed.unwrap_or((768, 768))
+    })
 }
 
 fn write(path: &PathBuf, text: &str) {
@@ -167,9 +219,17 @@ fn frame_ms(
     frames.swap_remove(FRAMES / 2)
 }
 
-fn markdown(rows: &[Row], base_ms: f64, adapter: &str, width: u32, height: u32, reference: u32) -> String {
+fn markdown(
+    caption: &str,
+    rows: &[Row],
+    base_ms: f64,
+    adapter: &str,
+    width: u32,
+    height: u32,
+    reference: u32,
+) -> String {
     let mut s = format!(
-        "Sample head (`samples/scenes/skin-compare.toml`), {width}x{height}, against the {reference}x{reference} \
+        "{caption}, {width}x{height}, against the {reference}x{reference} \
          texture-space reference; {adapter}; base pass {base_ms:.1} ms.\n\n\
          | method | FLIP mean | relative RMSE | frame (ms) | x base pass | CPU setup (s) |\n\
          | --- | ---: | ---: | ---: | ---: | ---: |\n"
