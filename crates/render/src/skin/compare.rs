@@ -64,8 +64,10 @@ impl Method {
     pub fn table(reference_size: u32) -> Vec<Method> {
         let mut methods = vec![Self::Lambert, Self::Blog, Self::OwnFit];
         methods.extend([32, 64, 256].map(|size| Self::Lut { size }));
-        for size in [512, 1024] {
-            methods.extend([1, 2, 4].map(|passes| Self::Tsd { passes, size }));
+        // Passes at one size, sizes at one and at four passes: the error must not grow with either.
+        methods.extend([1, 2, 4, 8].map(|passes| Self::Tsd { passes, size: 1024 }));
+        for size in [512, 2048] {
+            methods.extend([1, 4].map(|passes| Self::Tsd { passes, size }));
         }
         methods.push(Self::Reference { size: (reference_size / 2).max(1) });
         methods.push(Self::Reference { size: reference_size });

@@ -35,7 +35,7 @@
 //! passes = 3                    # Poisson blur passes (the first one dilates)
 //! kernel_map = "kernel.png"     # optional: per-texel kernel size in [0, 1), radius = a * k + b
 //! kernel_scale = [3.0, 2.0]     # with kernel_map: (a, b) in texels of a 512 map (the chapter's vBlurScale)
-//! curvature_gain = 2.0          # derived kernel: radius x (1 + gain_mm * 1/r)
+//! curvature_gain = 0.0          # derived kernel: radius x (1 + gain_mm * 1/r); Gosselin's widening on curved skin, off (see README)
 //! backface_bias = 0.3           # the back-face pre-pass keeps texels with N.V > -0.3
 //! reuse_below_px = 0            # distance culling: a head smaller than this reuses the last light map
 //! ```
@@ -194,7 +194,7 @@ impl Default for TsdOptions {
             passes: 3,
             kernel_map: None,
             kernel_scale: [3.0, 2.0],
-            curvature_gain: 2.0,
+            curvature_gain: 0.0,
             backface_bias: 0.3,
             reuse_below_px: 0.0,
         }
