@@ -81,14 +81,24 @@ fn main() {
                 reference_size,
                 &out.join(&stem),
             );
+            if docs() {
+                let plot = out.join(format!("{stem}.svg"));
+                std::fs::copy(&plot, root.join(format!("docs/skin-methods-{stem}.svg")))
+                    .unwrap_or_else(|e| panic!("{}: {e}", plot.display()));
+            }
             tables.push(table);
         }
     }
     let all = tables.join("\n");
     write(&out.join("skin-methods.md"), &all);
-    if std::env::var("SKIN_METHODS_DOCS").is_ok_and(|v| v == "1") {
+    if docs() {
         splice_readme(&root.join("README.md"), &all);
     }
+}
+
+/// `SKIN_METHODS_DOCS=1`: the tables go into the README and the plots into `docs/`.
+fn docs() -> bool {
+    std::env::var("SKIN_METHODS_DOCS").is_ok_and(|v| v == "1")
 }
 
 /// Every method of [`Method::table`] on one scene: renders, errors against the reference and
