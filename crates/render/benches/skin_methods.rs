@@ -1,8 +1,8 @@
-//! Accuracy against time of every skin diffuse method (issue 6): the sample head of
-//! `samples/scenes/skin-compare.toml` drawn by each [`Method`] of the table, each render's error
-//! against the exact texture-space reference (FLIP mean on the tone-mapped sRGB images, relative
-//! RMSE on linear radiance) and its frame time on this adapter relative to the base pass (the
-//! same scene, Lambert, no shadows).
+//! Accuracy against time of every skin diffuse method (issues 6 and 17): the committed skin
+//! scenes ([`SCENES`]: the sample head, the head close up on the nose, a 6 mm sphere) drawn by
+//! each [`Method`] of the table, each render's error against the exact texture-space reference
+//! (FLIP mean on the tone-mapped sRGB images, relative RMSE on linear radiance) and its frame
+//! time on this adapter relative to the base pass (the same scene, Lambert, no shadows).
 //!
 //! Frame times are GPU timestamps summed over a frame's passes (median of `FRAMES` frames after
 //! one warm-up), so CPU-side table builds are not in them; the reference's CPU bake and scatter
@@ -10,11 +10,14 @@
 //! Vulkan on the CPU): the ratios say what each effect costs relative to the base pass there, not
 //! real-time rates on hardware.
 //!
-//! Writes `target/skin-methods.md` (the README's table), `target/skin-methods.svg` (error against
-//! time, a log-time scatter plot) and `target/skin-methods.json`; `SKIN_METHODS_SIZE=WxH` changes
-//! the image size (default 768x768), `SKIN_METHODS_REFERENCE=N` the reference light map (1024),
-//! and `SKIN_METHODS_UNSHADOWED=1` drops the scene's `shadows` (every method and the reference
-//! unshadowed: the diffuse falloff alone), writing `target/skin-methods-unshadowed.*`.
+//! Writes `target/<scene>[-unshadowed].{md,svg,json}` (table, error against log time, rows) and
+//! one PNG per method, and `target/skin-methods.md` with every table. Settings:
+//! - `SKIN_METHODS_SCENES=skin-sphere,skin-nose`: these scenes only;
+//! - `SKIN_METHODS_UNSHADOWED=1` (or `0`): only without (with) the scene's shadows;
+//! - `SKIN_METHODS_REFERENCE=N`: the reference's light map (2048; its half is a row too);
+//! - `SKIN_METHODS_ONLY=lambert,lut-256`: these methods only (the reference always);
+//! - `SKIN_METHODS_SIZE=WxH`: one image size for every scene (else each scene's own);
+//! - `SKIN_METHODS_DOCS=1`: the tables into the README, the plots into `docs/`.
 //!
 //! Run: `WGPU_BACKEND=vulkan cargo bench -p skinkit-render --bench skin_methods`.
 
@@ -114,7 +117,12 @@ fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, referenc
     let base_ms = frame_ms(gpu, &loaded.inputs, &SkinSetup::default(), width, height).0;
     eprintln!("base pass (Lambert, no shadows): {base_ms:.2} ms");
     let mut renders = Vec::new();
-    for method in Method::table(reference_size) {
+    let only = std::env::var("SKIN_METHODS_ONLY").ok();
+    let wanted = |m: &Method| {
+        matches!(m, Method::Reference { size } if *size == reference_size)
+            || only.as_deref().is_none_or(|o| o.split(',').any(|x| x.trim() == m.name()))
+    };
+    for method in Method::table(reference_size).into_iter().filter(wanted) {
         let t = Instant::now();
         let setup = method.setup(&scene, &loaded).unwrap_or_else(|e| panic!("{}: {e}", method.name()));
         let cpu_setup_s = t.elapsed().as_secs_f64();

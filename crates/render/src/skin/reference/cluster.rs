@@ -19,9 +19,11 @@
 //!   receiver's offset from `c` and `D = sum_j A_j E_j (c_j - c)` the light's lean within the
 //!   cluster: the mean light with the Gaussian widened by the cluster's own variance, plus a
 //!   dipole. A cluster no wider than half a sigma leaves terms of order `(m / v)^2`.
-//! - **Sums.** Per Gaussian, sources sorted by grid cell; each receiver cell gathers the sources
-//!   within the support (and the Gaussian's skip radius) of its box once, in (cell, index) order.
-//!   Receivers are summed in f64 in a fixed order: the same bits whatever the thread count.
+//! - **Sums.** Per Gaussian, sources in tiers of doubling reach (the Gaussian's skip radius plus
+//!   the source's own size), each tier sorted by cells of its reach; each receiver cell gathers
+//!   the sources within reach of its box once, in (tier, cell, index) order, eight at a time into
+//!   independent f32 lanes. Receivers are summed in f64 in a fixed order: the same bits whatever
+//!   the thread count. The tree holds about 200 bytes a texel (1.1 GB at 2048 texels).
 //!
 //! Measured against the texel path: see "Speed" in the parent module's docs.
 
