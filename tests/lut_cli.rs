@@ -67,13 +67,13 @@ fn lut_shadow_writes_json_and_the_table() {
     assert!(o.status.success(), "{}", text(&o.stderr));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON document");
     assert_eq!(json["width"], 32);
-    assert_eq!(json["definitions"]["skinkit.filter"], "box");
+    assert_eq!(json["definitions"]["skinkit.filter"], "disc");
     assert_eq!(json["definitions"]["skinkit.w_max_mm"], 16.0);
 
     let image = lut_file::read(&path).unwrap();
     assert_eq!((image.width, image.height), (32, 8));
     assert_eq!(image.text("skinkit.table"), Some("shadow"));
-    assert_eq!(image.float("skinkit.new_penumbra"), Some(0.25));
+    assert_eq!(image.float("skinkit.new_penumbra"), Some(0.05));
     let spec = ShadowLutSpec { width: 32, height: 8, w_max_mm: 16.0, ..ShadowLutSpec::default() };
     assert_eq!(image.texels, ShadowLut::build(&spec).unwrap().texels);
 }

@@ -53,15 +53,15 @@ fn blog_direct(ndl: vec3<f32>, inv_r: f32) -> vec3<f32> {
     return c0 + (c1 - c0) * blend;
 }
 
-// Our fit: gain(k) * mix of two box-smoothed ramps of widths (a + b k) k, k = clamp(1/r, 0, 1).
+// Our fit: gain(k) * mix of two box-smoothed ramps of widths a k / (1 + |b| k), k = clamp(1/r, 0, 1).
 // Coefficients per channel from `skin::fit::OWN_FIT` (least squares on 101 N.L x 33 1/r).
-const OWN_A1 = vec3<f32>(0.24740593, 0.14063562, 0.121133916);
-const OWN_B1 = vec3<f32>(-0.08434079, 0.0015598512, 0.0009509524);
-const OWN_A2 = vec3<f32>(2.838782, 0.64982563, 0.41730535);
-const OWN_B2 = vec3<f32>(-0.31943515, 0.009347675, 0.0029524032);
-const OWN_MIX = vec3<f32>(0.08001484, 0.13931698, 0.15580092);
-const OWN_GAIN_C = vec3<f32>(-0.027246065, 0.00013974897, 2.6722859e-5);
-const OWN_GAIN_D = vec3<f32>(-0.064642295, -0.013529932, -0.0068437806);
+const OWN_A1 = vec3<f32>(1.119658, 0.19147016, 0.13902761);
+const OWN_B1 = vec3<f32>(3.4801114, 0.0030810947, -2.3454774e-8);
+const OWN_A2 = vec3<f32>(4.6450677, 0.85098916, 0.51528525);
+const OWN_B2 = vec3<f32>(0.48916852, 0.0025143863, 0.004884143);
+const OWN_MIX = vec3<f32>(0.27000952, 0.22228076, 0.20613755);
+const OWN_GAIN_C = vec3<f32>(1.7764238, 0.06646401, 0.024659198);
+const OWN_GAIN_D = vec3<f32>(3.7490337, 0.10559194, 0.048895348);
 const OWN_MIN_WIDTH: f32 = 1e-6;
 
 // max(x, 0) convolved with a box of half-width w > 0.
@@ -73,9 +73,9 @@ fn own_ramp(x: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
 fn own_direct(ndl: vec3<f32>, inv_r: f32) -> vec3<f32> {
     let x = clamp(ndl, vec3<f32>(-1.0), vec3<f32>(1.0));
     let k = clamp(inv_r, 0.0, 1.0);
-    let w1 = max((OWN_A1 + OWN_B1 * k) * k, vec3<f32>(OWN_MIN_WIDTH));
-    let w2 = max((OWN_A2 + OWN_B2 * k) * k, vec3<f32>(OWN_MIN_WIDTH));
-    let gain = 1.0 + (OWN_GAIN_C + OWN_GAIN_D * k) * k;
+    let w1 = max(OWN_A1 * k / (1.0 + abs(OWN_B1) * k), vec3<f32>(OWN_MIN_WIDTH));
+    let w2 = max(OWN_A2 * k / (1.0 + abs(OWN_B2) * k), vec3<f32>(OWN_MIN_WIDTH));
+    let gain = 1.0 - OWN_GAIN_C * k * k / (1.0 + abs(OWN_GAIN_D) * k * k);
     let r1 = own_ramp(x, w1);
     let r2 = own_ramp(x, w2);
     return gain * (r1 + (r2 - r1) * OWN_MIX);

@@ -79,7 +79,7 @@ pub struct ShadowMapPlan {
     pub light: usize,
     /// Side in texels.
     pub size: u32,
-    /// Box filter side.
+    /// Box filter side, or with shadow scattering the taps on its disc.
     pub filter: u32,
 }
 
@@ -88,6 +88,8 @@ pub struct ShadowMapPlan {
 pub struct TsdPlan {
     /// Light map side in texels.
     pub size: u32,
+    /// How the light map is blurred.
+    pub kernel: crate::skin::options::TsdKernel,
     /// Blur passes.
     pub blurs: u32,
 }
@@ -116,9 +118,8 @@ pub struct PassGraph {
 }
 
 impl PassGraph {
-    /// The graph of `scene` whose mesh's bounding sphere has `radius` mesh units: only what its
-    /// effects and lights ask for.
-    pub fn build(scene: &Scene, radius: f32) -> PassGraph {
+    /// The graph of `scene`: only what its effects and lights ask for.
+    pub fn build(scene: &Scene) -> PassGraph {
         let mut notes = Vec::new();
         let pre = &scene.skin.preintegrated;
         let diffuse = diffuse_mode(scene);
@@ -132,22 +133,16 @@ impl PassGraph {
         let sh_ambient = scene.has(Effect::ShAmbient);
         let derivative = diffuse.reads_curvature() && pre.curvature == CurvatureSource::Derivative;
         let zonal_table = sh_ambient && diffuse.reads_curvature();
-        let tsd = (diffuse == DiffuseMode::LightMap)
-            .then_some(TsdPlan { size: scene.skin.tsd.size, blurs: scene.skin.tsd.passes });
+        let tsd = (diffuse == DiffuseMode::LightMap).then_some(TsdPlan {
+            size: scene.skin.tsd.size,
+            kernel: scene.skin.tsd.kernel,
+            blurs: crate::skin::tsd::blur_count(scene.skin.tsd.kernel, scene.skin.tsd.passes),
+        });
         let vertex_curvature = (diffuse.reads_curvature() && !derivative) || zonal_table || tsd.is_some();
         let shadow = key_light.map(|light| {
             let options = &scene.skin.shadow;
             match shadow_scattering {
-                true => ShadowMapPlan {
-                    light,
-                    size: scattering_map_size(
-                        options.map_size,
-                        options.scatter_filter,
-                        options.scatter_width_mm,
-                        radius * scene.mm_per_unit,
-                    ),
-                    filter: options.scatter_filter,
-                },
+                true => ShadowMapPlan { light, size: options.map_size, filter: options.scatter_taps },
                 false => ShadowMapPlan { light, size: options.map_size, filter: options.filter },
             }
         });
@@ -169,12 +164,6 @@ impl PassGraph {
             passes: ordered_passes(shadows, translucent_shadows, tsd.map(|t| t.blurs)),
             notes,
         }
-    }
-
-    /// [`PassGraph::build`] for the scene's loaded mesh.
-    pub fn for_loaded(scene: &Scene, loaded: &crate::load::Loaded) -> PassGraph {
-        let (_, radius) = crate::passes::bounding_sphere(&loaded.inputs.vertices);
-        PassGraph::build(scene, radius)
     }
 
     /// The pass names, in order.
@@ -224,12 +213,4 @@ fn key_light(scene: &Scene, notes: &mut Vec<String>) -> Option<usize> {
             None
         }
     }
-}
-
-/// The shadow map side whose `filter` texels span `width_mm` across a sphere of `radius_mm`
-/// (the light's projection covers its diameter), at most `map_size` and at least 16.
-pub fn scattering_map_size(map_size: u32, filter: u32, width_mm: f32, radius_mm: f32) -> u32 {
-    let texel_mm = width_mm / filter.max(1) as f32;
-    let side = (2.0 * radius_mm / texel_mm).ceil();
-    if side.is_finite() { (side as u32).clamp(16, map_size.max(16)) } else { map_size }
 }

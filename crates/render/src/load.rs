@@ -31,6 +31,8 @@ use crate::mesh::{Mesh, MeshError};
 use crate::passes::{DiffuseMode, Features};
 use crate::scene::{self, Albedo, Scene};
 use crate::shading::{self, GreenAxis, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex};
+use crate::skin::options::TsdKernel;
+use crate::skin::tsd;
 
 /// Errors from turning a scene into render inputs.
 #[derive(Debug, thiserror::Error)]
@@ -325,11 +327,6 @@ fn names(list: &[&str]) -> Vec<String> {
     list.iter().map(|s| s.to_string()).collect()
 }
 
-/// The light map a TSD graph's base pass reads (the blurs ping-pong between A and B).
-fn last_light_map(blurs: u32) -> &'static str {
-    if blurs.is_multiple_of(2) { "light map A" } else { "light map B" }
-}
-
 /// What pass `kind` does, reads and writes.
 fn describe(kind: PassKind, scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> (String, Vec<String>, Vec<String>) {
     let key = graph.shadow.map_or(0, |s| s.light);
@@ -365,12 +362,21 @@ fn describe(kind: PassKind, scene: &Scene, loaded: &Loaded, graph: &PassGraph) -
             }
             let what = "diffuse irradiance of every light into texture space (key light through the shadow map), \
                         kernel size in alpha";
-            (what.into(), reads, names(&["light map A"]))
+            (what.into(), reads, names(&[tsd::LIGHT_MAP_NAMES[0]]))
         }
         PassKind::TsdBlur(i) => {
-            let (from, to) = if i % 2 == 0 { ("light map A", "light map B") } else { ("light map B", "light map A") };
-            let what = if i == 0 { "12-tap Poisson blur, dilating the UV borders" } else { "12-tap Poisson blur" };
-            (what.into(), names(&[from]), names(&[to]))
+            let kernel = graph.tsd.map_or(TsdKernel::Single, |t| t.kernel);
+            let (from, to) = tsd::blur_maps(kernel, i);
+            let mut reads = names(&[tsd::LIGHT_MAP_NAMES[from]]);
+            let what = match (i, kernel) {
+                (0, _) => "12-tap Poisson blur, dilating the UV borders".into(),
+                (_, TsdKernel::Single) => "12-tap Poisson blur".into(),
+                (_, TsdKernel::Gaussians) => {
+                    reads.push(tsd::LIGHT_MAP_NAMES[1].into());
+                    "12-tap Poisson blur by one Gaussian's increment, the weighted light map B added".to_string()
+                }
+            };
+            (what, reads, names(&[tsd::LIGHT_MAP_NAMES[to]]))
         }
         PassKind::Base => (describe_base(loaded, graph), base_reads(graph), names(&["colour target", "depth"])),
     }
@@ -388,7 +394,7 @@ fn base_reads(graph: &PassGraph) -> Vec<String> {
     ];
     reads.extend(optional.into_iter().filter(|(on, _)| *on).map(|(_, name)| name.to_string()));
     if let Some(tsd) = graph.tsd {
-        reads.push(last_light_map(tsd.blurs).into());
+        reads.push(tsd::LIGHT_MAP_NAMES[tsd::final_map(tsd.kernel, tsd.blurs)].into());
     }
     reads
 }
@@ -508,12 +514,12 @@ fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Re
     }
     if graph.shadow_lut {
         let n = crate::skin::setup::SHADOW_LUT_SIDE;
-        out.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), box-filter penumbra"));
+        out.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), penumbra of a disc of taps"));
     }
     if let Some(tsd) = graph.tsd {
         let n = tsd.size as u64;
         out.push(resource("tsd depth", format!("{n}x{n} Depth32Float in texture space (culling pre-pass)"), 4 * n * n));
-        for name in ["light map A", "light map B"] {
+        for name in &tsd::LIGHT_MAP_NAMES[..tsd::map_count(tsd.kernel)] {
             out.push(resource(
                 name,
                 format!("{n}x{n} Rgba16Float: diffuse irradiance, kernel size in alpha"),

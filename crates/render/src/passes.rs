@@ -113,10 +113,12 @@ pub struct ShadowSetup {
     pub light: usize,
     /// Shadow map side.
     pub map_size: u32,
-    /// Box filter side (odd).
+    /// Box filter side (odd), or with shadow scattering the taps on its disc.
     pub filter: u32,
     /// Normal-offset bias in texels.
     pub bias: f32,
+    /// Shadow scattering's disc of taps on the receiver: its radius in mesh units (0 without).
+    pub disc_radius: f32,
     /// The light's view-projection (wgpu depth 0..1).
     pub view_proj: Mat4,
     /// One shadow-map texel in mesh units (at the mesh's centre for a point light).
@@ -143,13 +145,16 @@ pub struct TranslucentCaster {
 pub struct TsdSetup {
     /// Light map side.
     pub size: u32,
-    /// Blur passes.
+    /// How the light map is blurred.
+    pub kernel: crate::skin::options::TsdKernel,
+    /// Blur passes (with the Gaussians, per Gaussian: [`crate::skin::tsd::blur_count`]).
     pub passes: u32,
     /// An artist's kernel map (red channel in [0, 1)), if any.
     pub kernel_map: Option<Texture>,
     /// (a, b) of radius = a * k + b, in texels of this light map.
     pub kernel_scale: [f32; 2],
-    /// The derived kernel: Poisson radius in mm for flat skin.
+    /// The derived kernel: Poisson radius in mm for flat skin (with the Gaussians, the radius
+    /// every pass scales, [`crate::skin::tsd::GAUSSIANS_KERNEL_MM`]).
     pub kernel_mm: f32,
     /// Derived kernel: radius x (1 + gain * 1/r), mm.
     pub curvature_gain: f32,
@@ -157,6 +162,13 @@ pub struct TsdSetup {
     pub backface_bias: f32,
     /// Distance culling threshold in pixels of projected diameter.
     pub reuse_below_px: f32,
+}
+
+impl TsdSetup {
+    /// The blur passes this setup runs.
+    pub fn blurs(&self) -> u32 {
+        crate::skin::tsd::blur_count(self.kernel, self.passes)
+    }
 }
 
 /// The largest derived Poisson radius, in light-map texels (alpha = radius / this).
@@ -228,7 +240,7 @@ impl SkinSetup {
     /// [`crate::graph::ordered_passes`]; for a scene's setup the same list as its graph's).
     pub fn passes(&self) -> Vec<crate::graph::PassKind> {
         let translucent = self.shadow.as_ref().is_some_and(|s| !s.translucent.is_empty());
-        crate::graph::ordered_passes(self.shadow.is_some(), translucent, self.tsd.as_ref().map(|t| t.passes))
+        crate::graph::ordered_passes(self.shadow.is_some(), translucent, self.tsd.as_ref().map(TsdSetup::blurs))
     }
 }
 

@@ -128,7 +128,7 @@ impl ViewSession {
             loaded.inputs.brdf.lobes.clear();
         }
         loaded.inputs.specular = if toggles.vertex_specular { SpecularMode::Vertex } else { SpecularMode::Pixel };
-        let graph = PassGraph::for_loaded(&scene, &loaded);
+        let graph = PassGraph::build(&scene);
         let skin = setup::build(&scene, &loaded, &graph)?;
         Ok(gpu.prepare_with(&loaded.inputs, &skin)?)
     }

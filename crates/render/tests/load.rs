@@ -146,7 +146,7 @@ fn graph_of(body: &str) -> (Vec<String>, Vec<String>, Vec<String>) {
     let tmp = tempfile::tempdir().unwrap();
     let scene = scene(tmp.path(), body);
     let loaded = load(&scene, 8, 8, 8192).unwrap();
-    let graph = PassGraph::for_loaded(&scene, &loaded);
+    let graph = PassGraph::build(&scene);
     let p = plan(&scene, &loaded, &graph, 8, 8, OutputFormat::Srgb8);
     assert_eq!(p.passes.iter().map(|p| p.kind).collect::<Vec<_>>(), graph.passes);
     let passes = p.passes.iter().map(|p| p.name.clone()).collect();
@@ -227,6 +227,11 @@ fn texture_space_diffusion_runs_its_pre_pass_light_map_and_blurs() {
     assert!(!resources.iter().any(|r| r == "shadow map" || r.contains("LUT")), "{resources:?}");
     let (passes, _, _) = graph_of(&format!("effects = [\"tsd\", \"shadows\"]\n[tsd]\npasses = 0\n{SHADOW_LIGHT}"));
     assert_eq!(passes, ["shadow map", "tsd back-face pre-pass", "tsd light map", "base"]);
+    // The profile's Gaussians: a dilating pass, then `passes` per Gaussian increment (four), and
+    // a third light map that keeps the dilated irradiance.
+    let (passes, resources, _) = graph_of("effects = [\"tsd\"]\n[tsd]\nkernel = \"gaussians\"\npasses = 2");
+    assert_eq!(passes.iter().filter(|p| p.starts_with("tsd blur")).count(), 9, "{passes:?}");
+    assert!(resources.iter().any(|r| r == "light map C"), "{resources:?}");
 }
 
 #[test]
@@ -259,6 +264,8 @@ fn contradicting_or_incomplete_effects_are_refused_by_name() {
     assert!(e.contains("tsd.size"), "{e}");
     let e = refused("[tsd]\nblur = 3");
     assert!(e.contains("blur"), "{e}");
+    let e = refused("[tsd]\nkernel = \"gaussians\"\nkernel_map = \"k.png\"");
+    assert!(e.contains("tsd.kernel") && e.contains("single"), "{e}");
 }
 
 #[test]

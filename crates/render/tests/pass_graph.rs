@@ -35,7 +35,7 @@ fn gpu() -> Option<Gpu> {
 /// Renders `scene` once with timestamps and checks the passes that ran against the plan's.
 fn check(gpu: &Gpu, scene: &Scene, what: &str) {
     let loaded = load::load(scene, SIZE, SIZE, gpu.max_texture_side()).unwrap_or_else(|e| panic!("{what}: {e}"));
-    let graph = PassGraph::for_loaded(scene, &loaded);
+    let graph = PassGraph::build(scene);
     let plan = load::plan(scene, &loaded, &graph, SIZE, SIZE, OutputFormat::Srgb8);
     let explained: Vec<String> = plan.passes.iter().map(|p| p.name.clone()).collect();
     let skin = setup::build(scene, &loaded, &graph).unwrap_or_else(|e| panic!("{what}: {e}"));

@@ -14,7 +14,7 @@ use skinkit_render::skin::setup;
 fn render_once(gpu: &Gpu, file: &Path) -> Vec<u8> {
     let scene = Scene::load(file).unwrap();
     let loaded = load::load(&scene, 64, 64, gpu.max_texture_side()).unwrap();
-    let graph = PassGraph::for_loaded(&scene, &loaded);
+    let graph = PassGraph::build(&scene);
     let skin = setup::build(&scene, &loaded, &graph).unwrap();
     let prepared = gpu.prepare_with(&loaded.inputs, &skin).unwrap();
     let target = gpu.create_target(64, 64, OutputFormat::Srgb8).unwrap();

@@ -11,6 +11,7 @@ use skinkit_render::passes::{self, DiffuseMode, Features, ShadowSetup, SkinSetup
 use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
 };
+use skinkit_render::skin::options::TsdKernel;
 
 const SIZE: u32 = 96;
 
@@ -69,7 +70,17 @@ fn shadow_setup(inputs: &RenderInputs, filter: u32) -> ShadowSetup {
     let (centre, radius) = passes::bounding_sphere(&inputs.vertices);
     let map_size = 256;
     let (view_proj, texel) = passes::light_view_proj(&inputs.lights[0], centre, radius, map_size);
-    ShadowSetup { light: 0, map_size, filter, bias: 1.0, view_proj, texel, new_penumbra: 0.25, translucent: Vec::new() }
+    ShadowSetup {
+        light: 0,
+        map_size,
+        filter,
+        bias: 1.0,
+        disc_radius: 0.0,
+        view_proj,
+        texel,
+        new_penumbra: 0.25,
+        translucent: Vec::new(),
+    }
 }
 
 fn render(gpu: &Gpu, inputs: &RenderInputs, skin: &SkinSetup) -> Vec<[f32; 4]> {
@@ -143,6 +154,7 @@ fn box_filtered_shadow_edge_is_a_monotone_ramp_as_wide_as_the_filter() {
 fn tsd_setup(passes: u32) -> TsdSetup {
     TsdSetup {
         size: 128,
+        kernel: TsdKernel::Single,
         passes,
         kernel_map: None,
         kernel_scale: [3.0, 2.0],
@@ -184,6 +196,56 @@ fn texture_space_diffusion_keeps_uniform_light_and_softens_a_shadow_edge() {
     let hard = width(&middle_row(&render(&gpu, &blocked, &tsd_skin(&blocked, 0, true))));
     let soft = width(&middle_row(&render(&gpu, &blocked, &tsd_skin(&blocked, 4, true))));
     assert!(soft > hard, "four blur passes must widen the edge: {hard} vs {soft} pixels");
+}
+
+#[test]
+fn tsd_gaussians_keep_uniform_light_and_scatter_red_farther_than_blue() {
+    // The profile's Gaussians on a 20 mm floor (128 texels of 0.16 mm): the weights of each
+    // channel sum to 1, so uniform light stays Lambert; at a shadow edge red's penumbra is wider
+    // than blue's (red's widest Gaussian has sigma 2.7 mm, blue's 0.75 mm with weight 0.007).
+    let gpu = gpu();
+    let gaussians = |scene: &RenderInputs, shadows: bool| {
+        let stretch = passes::uv_stretch(&scene.vertices, &scene.indices, 10.0);
+        let mut skin = tsd_skin(scene, 2, shadows);
+        skin.vertex_skin = stretch.iter().map(|&s| [0.0, s]).collect();
+        skin.mm_per_unit = 10.0;
+        let tsd = skin.tsd.as_mut().unwrap();
+        (tsd.kernel, tsd.kernel_mm) = (TsdKernel::Gaussians, skinkit_render::skin::tsd::GAUSSIANS_KERNEL_MM);
+        skin
+    };
+    let row = |pixels: &[[f32; 4]], c: usize| -> Vec<f32> {
+        let y = SIZE as usize / 2;
+        (0..SIZE as usize).map(|x| pixels[y * SIZE as usize + x][c]).collect()
+    };
+    let open = inputs(floor_and_blocker(false));
+    let lambert = render(&gpu, &open, &SkinSetup::default());
+    let tsd = render(&gpu, &open, &gaussians(&open, false));
+    for c in 0..3 {
+        let (want, got) = (row(&lambert, c), row(&tsd, c));
+        for x in 4..SIZE as usize - 4 {
+            assert!((got[x] - want[x]).abs() < 3e-3 * want[x], "channel {c} x {x}: {} vs {}", got[x], want[x]);
+        }
+    }
+    let blocked = inputs(floor_and_blocker(true));
+    let edge = render(&gpu, &blocked, &gaussians(&blocked, true));
+    let width = |c: usize| {
+        let r = row(&edge, c);
+        let lit = r.iter().cloned().fold(0.0f32, f32::max);
+        r.iter().filter(|&&v| v > 0.05 * lit && v < 0.95 * lit).count()
+    };
+    // On a flat floor (UV stretch the same along u and v) more passes only make each
+    // Gaussian's shape smoother: the edge stays where one pass put it.
+    let edge_at = |passes: u32| {
+        let mut skin = gaussians(&blocked, true);
+        skin.tsd.as_mut().unwrap().passes = passes;
+        let r = row(&render(&gpu, &blocked, &skin), 0);
+        let lit = r.iter().cloned().fold(0.0f32, f32::max);
+        r.iter().map(|v| v / lit).sum::<f32>()
+    };
+    let (one, eight) = (edge_at(1), edge_at(8));
+    assert!((one - eight).abs() < 1.0, "the lit share of the row moved by {} pixels from 1 to 8 passes", one - eight);
+    let (red, blue) = (width(0), width(2));
+    assert!(red > blue + 2, "red's penumbra must be wider than blue's: {red} vs {blue} pixels");
 }
 
 #[test]

@@ -199,8 +199,12 @@ fn skin_factors_match_a_2d_sphere_integral() {
                 assert!((f64::from(ours[l][k]) - brute[l][k]).abs() < 2e-4, "1/r {inv_r} l {l}: {ours:?} vs {brute:?}");
             }
         }
-        // The skin moves energy below the horizon: A_0 above Lambert's pi, A_1 below 2 pi / 3.
-        assert!(ours[0][0] > LAMBERT_ZONAL[0] && ours[1][0] < LAMBERT_ZONAL[1], "{ours:?}");
+        // The skin moves light below the horizon and keeps it: a sphere under uniform light stays
+        // uniform, so A_0 is Lambert's pi, and A_1 falls below Lambert's 2 pi / 3.
+        for k in 0..3 {
+            assert!((ours[0][k] - LAMBERT_ZONAL[0]).abs() < 1e-4, "{ours:?}");
+        }
+        assert!(ours[1][0] < LAMBERT_ZONAL[1] - 0.05, "{ours:?}");
     }
 }
 
@@ -294,7 +298,7 @@ fn blog_zonal_is_lambert_at_16_mm_and_close_to_ours_over_its_range() {
         println!("1/r {inv_r:.4}: blog {:?} ours {:?}", &blog[..2], &ours[..2]);
     }
     // The errors stated in the module docs: the blog follows a table with more red scattering.
-    let stated = [[0.13, 0.0070, 0.0016], [0.23, 0.010, 0.0037]];
+    let stated = [[0.154, 0.0104, 0.00334], [0.0195, 0.00314, 0.00097]];
     for l in 0..2 {
         for c in 0..3 {
             assert!((worst[l][c] / stated[l][c] - 1.0).abs() < 0.05, "{worst:?}");
@@ -359,12 +363,12 @@ fn per_channel_normals_pick_each_channel() {
 }
 
 #[test]
-fn nine_samples_interpolate_the_factors_closely() {
-    // The table's resolution stated in `ZonalTable`'s docs: 9 samples over [0, 1] mm^-1.
-    let table = ZonalTable::build(0.0, 1.0, 9).unwrap();
+fn the_tables_samples_interpolate_the_factors_closely() {
+    // The table's resolution stated in `ZonalTable`'s docs: 33 samples over [0, 1] mm^-1.
+    let table = ZonalTable::build(0.0, 1.0, 33).unwrap();
     let mut worst = 0.0f32;
-    for i in 0..8 {
-        let inv_r = (i as f32 + 0.5) / 8.0;
+    for i in 0..32 {
+        let inv_r = (i as f32 + 0.5) / 32.0;
         let (lerped, exact) = (table.sample(inv_r), skin_zonal(inv_r));
         for l in 0..3 {
             for c in 0..3 {
@@ -372,5 +376,6 @@ fn nine_samples_interpolate_the_factors_closely() {
             }
         }
     }
-    assert!(worst < 2.5e-3, "{worst}");
+    eprintln!("33 samples: worst relative error {worst:.2e}");
+    assert!(worst < 1.1e-3, "{worst}");
 }

@@ -30,7 +30,9 @@ pub enum Command {
 /// The ring integral's angular range.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 pub enum Integrate {
-    /// [-pi, pi]: the paper's equation (needed for the spherical-harmonic form).
+    /// Over a sphere's surface: keeps the profile's weights (the renderer's default).
+    Sphere,
+    /// The ring over [-pi, pi]: the paper's equation (the spherical-harmonic form's).
     Full,
     /// [-pi/2, pi/2]: the paper's listing.
     Half,
@@ -55,8 +57,8 @@ pub struct DiffuseArgs {
     /// Columns x rows (at most 4096 each).
     #[arg(long, value_parser = flags::size_at_most(lut::MAX_SIDE as usize), default_value = "256x256", value_name = "WxH")]
     pub size: (usize, usize),
-    /// Over which angles the ring integral runs.
-    #[arg(long, value_enum, default_value = "full")]
+    /// What the profile is integrated over: a sphere, or the paper's ring.
+    #[arg(long, value_enum, default_value = "sphere")]
     pub integrate: Integrate,
     /// Normalisation of the profile's Gaussians.
     #[arg(long, value_enum, default_value = "2d")]
@@ -118,6 +120,7 @@ fn run_diffuse(args: DiffuseArgs, out: &Output) -> Result<i32> {
             ProfileNormalisation::OneD => Normalisation::OneD,
         },
         domain: match args.integrate {
+            Integrate::Sphere => Domain::Sphere,
             Integrate::Full => Domain::Full,
             Integrate::Half => Domain::Half,
         },

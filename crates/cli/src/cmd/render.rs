@@ -221,7 +221,7 @@ fn explain(job: &Job) -> Result<Explained> {
         Err(_) => (None, EXPLAIN_TEXTURE_SIDE),
     };
     let loaded = load::load(&r.scene, r.width, r.height, limit)?;
-    let graph = PassGraph::for_loaded(&r.scene, &loaded);
+    let graph = PassGraph::build(&r.scene);
     let plan = load::plan(&r.scene, &loaded, &graph, r.width, r.height, target_format);
     let mut warnings = loaded.warnings;
     warnings.extend(plan.notes.iter().cloned());
@@ -242,7 +242,7 @@ fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: 
     let t = Instant::now();
     let mut loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
     loaded.inputs.tone = tone;
-    let graph = PassGraph::for_loaded(&scene, &loaded);
+    let graph = PassGraph::build(&scene);
     let plan = load::plan(&scene, &loaded, &graph, width, height, target_format);
     loaded.warnings.extend(plan.notes.iter().cloned());
     loaded.warnings.iter().for_each(|warning| out.warn(warning));

@@ -118,7 +118,7 @@ impl Gpu {
         };
         let tsd = skin.tsd.as_ref().map(|t| self.tsd_resources(t, &textures, &uniforms, shadow_view, opacity_view));
         let light_map = match (&tsd, &textures.light_map) {
-            (Some(tsd), _) => Some(tsd.maps[(tsd.passes % 2) as usize].create_view(&Default::default())),
+            (Some(tsd), _) => Some(tsd.maps[tsd.final_map].create_view(&Default::default())),
             (None, Some(map)) => Some(map.create_view(&Default::default())),
             (None, None) => None,
         };

@@ -25,6 +25,8 @@ pub(crate) struct MeshPipeline<'a> {
     pub(crate) buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     pub(crate) fragment_entry: Option<&'static str>,
     pub(crate) target: Option<wgpu::TextureFormat>,
+    /// A second colour target (TSD's light map writes the stretch map beside it).
+    pub(crate) second_target: Option<wgpu::TextureFormat>,
     pub(crate) depth: Option<wgpu::DepthStencilState>,
     pub(crate) features: Features,
 }
@@ -85,12 +87,11 @@ impl Gpu {
     pub(crate) fn mesh_pipeline(&self, spec: &MeshPipeline) -> wgpu::RenderPipeline {
         let constants = spec.features.constants();
         let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
-        let targets = [spec.target.map(|format| wgpu::ColorTargetState {
-            format,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-        let targets: &[Option<wgpu::ColorTargetState>] = if spec.target.is_some() { &targets } else { &[] };
+        let targets: Vec<Option<wgpu::ColorTargetState>> = [spec.target, spec.second_target]
+            .into_iter()
+            .flatten()
+            .map(|format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL }))
+            .collect();
         self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(spec.label),
             layout: Some(&self.pipeline_layout),
@@ -107,7 +108,7 @@ impl Gpu {
                 module: &self.shader,
                 entry_point: Some(entry),
                 compilation_options: options.clone(),
-                targets,
+                targets: &targets,
             }),
             multiview_mask: None,
             cache: None,

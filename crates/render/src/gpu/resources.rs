@@ -9,6 +9,9 @@ use wgpu::util::DeviceExt;
 
 /// Light maps are Rgba16Float: filterable everywhere, HDR irradiance, kernel size in alpha.
 pub(crate) const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// TSD's stretch map: per texel, how much wider than the light map's isotropic kernel the blur
+/// is along u and along v.
+pub(crate) const STRETCH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 

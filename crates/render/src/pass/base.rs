@@ -86,6 +86,7 @@ pub(crate) fn pipeline(format: OutputFormat, features: Features) -> MeshPipeline
         buffers: &MESH_BUFFERS,
         fragment_entry: Some("fs_main"),
         target: Some(format.texture_format()),
+        second_target: None,
         depth: depth_state(true, wgpu::CompareFunction::Less),
         features,
     }

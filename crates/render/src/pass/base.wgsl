@@ -150,15 +150,16 @@ fn curvature(skin: vec2<f32>, world: vec3<f32>, geo_n: vec3<f32>) -> f32 {
     return 0.0;
 }
 
-// The filtered penumbra's width on this surface in mm: filter taps x texel, stretched by the
-// slope of the surface to the light.
-fn penumbra_mm(cos_light: f32) -> f32 {
-    return globals.shadow.taps * globals.shadow.texel * globals.scene.mm_per_unit / max(cos_light, 0.05);
+// The shadow table's row: the diameter of shadow scattering's disc in mm.
+fn penumbra_mm() -> f32 {
+    return 2.0 * globals.shadow.disc_radius * globals.scene.mm_per_unit;
 }
 
-// The sharp penumbra P'(P^-1(s)) (a ramp `new_penumbra` as wide), for the specular.
+// The sharp penumbra P'(P^-1(s)) (a ramp `new_penumbra` as wide as the disc), for the specular:
+// near the edge the disc's lit share is s = 0.5 + (2 / pi) t, t the edge's distance in radii, and
+// a narrow new penumbra only needs it there.
 fn sharp_shadow(s: f32) -> f32 {
-    return clamp(0.5 + (s - 0.5) / globals.base.new_penumbra, 0.0, 1.0);
+    return clamp(0.5 + (s - 0.5) * 0.7853982 / globals.base.new_penumbra, 0.0, 1.0);
 }
 
 fn shadow_scattered(s: f32, width_mm: f32) -> vec3<f32> {
@@ -280,13 +281,14 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
         // With a light map the key light's shadow is already in it (and its specular is
         // attenuated by the light map below): no shadow-map lookups here.
         if SHADOWS && DIFFUSE_MODE != 4u && i == key {
-            let s = shadow_visibility(input.world, geo_n, input.frame_t, input.frame_b);
-            shadow_diffuse = vec3<f32>(s);
-            shadow_specular = s;
             if SHADOW_SCATTERING {
-                let cos_light = dot(geo_n, light_direction(i, input.world));
-                shadow_diffuse = shadow_scattered(s, penumbra_mm(cos_light));
+                let s = disc_visibility(input.world, geo_n, light_direction(i, input.world));
+                shadow_diffuse = shadow_scattered(s, penumbra_mm());
                 shadow_specular = sharp_shadow(s);
+            } else {
+                let s = shadow_visibility(input.world, geo_n, input.frame_t, input.frame_b);
+                shadow_diffuse = vec3<f32>(s);
+                shadow_specular = s;
             }
             let through = translucent_transmittance(input.world, geo_n);
             shadow_diffuse *= through;

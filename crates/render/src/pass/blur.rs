@@ -1,10 +1,12 @@
-//! TSD's blur (`blur.wgsl`): a Poisson disc scaled per texel by the light map's kernel size,
-//! ping-ponged between the two light maps; the first pass also dilates across UV seams.
+//! TSD's blur (`blur.wgsl`): a Poisson disc scaled per texel by the light map's kernel size and
+//! per pass by its stage ([`crate::skin::tsd`]), between the light maps; the first pass also
+//! dilates across UV seams.
 
 use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, colour_attachment};
 use crate::pass::light_map::UNWRITTEN_TEXEL;
 use crate::pass::tsd::TsdResources;
 use crate::passes;
+use crate::skin::tsd;
 
 /// The blur's uniforms (`BlurUniforms` in blur.wgsl).
 #[repr(C)]
@@ -19,12 +21,23 @@ pub(crate) struct BlurUniforms {
     pub(crate) tap_variance: f32,
     pub(crate) pad1: u32,
     pub(crate) pad2: u32,
+    /// Scales the blurred source per channel (w unused).
+    pub(crate) source_scale: [f32; 4],
+    /// Weight of light map B added after the blur per channel (w unused).
+    pub(crate) irradiance_weight: [f32; 4],
 }
 
 impl Gpu {
-    /// One bind group per blur pass: pass `i` reads `maps[i % 2]`, the first with a nearest
-    /// sampler (it dilates), the others bilinear.
-    pub(crate) fn blur_groups(&self, tsd: &passes::TsdSetup, maps: &[wgpu::Texture; 2]) -> Vec<wgpu::BindGroup> {
+    /// One bind group per blur pass and the map it writes: pass `i` reads the map of
+    /// [`tsd::blur_maps`] (and light map B, which the Gaussians add back), the first with a
+    /// nearest sampler (it dilates), the others bilinear.
+    pub(crate) fn blur_groups(
+        &self,
+        setup: &passes::TsdSetup,
+        maps: &[wgpu::Texture],
+        stretch: &wgpu::Texture,
+    ) -> Vec<(wgpu::BindGroup, usize)> {
+        let stretch = stretch.create_view(&Default::default());
         let sampler = |label, filter| {
             self.device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some(label),
@@ -37,22 +50,31 @@ impl Gpu {
         };
         let nearest = sampler("tsd dilation sampler", wgpu::FilterMode::Nearest);
         let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
-        let (a, b) = (tsd.kernel_scale[0], tsd.kernel_scale[1]);
-        (0..tsd.passes)
-            .map(|i| {
-                let inv_size = [1.0 / tsd.size as f32; 2];
+        let (a, b) = (setup.kernel_scale[0], setup.kernel_scale[1]);
+        let rgb0 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+        tsd::stages(setup.kernel, setup.passes)
+            .into_iter()
+            .enumerate()
+            .map(|(i, stage)| {
+                let inv_size = [1.0 / setup.size as f32; 2];
                 let raw = BlurUniforms {
                     inv_size,
-                    a,
-                    b,
-                    dilate: (i == 0) as u32,
+                    a: a * stage.scale,
+                    b: b * stage.scale,
+                    dilate: stage.dilate as u32,
                     tap_variance: passes::poisson_second_moment() / 2.0,
                     pad1: 0,
                     pad2: 0,
+                    source_scale: rgb0(stage.source_scale),
+                    irradiance_weight: rgb0(stage.irradiance_weight),
                 };
                 let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
-                let view = maps[(i % 2) as usize].create_view(&Default::default());
-                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                let (from, to) = tsd::blur_maps(setup.kernel, i as u32);
+                let view = maps[from].create_view(&Default::default());
+                // Map B is the target of the first pass: that one binds its own source instead
+                // (its weight is 0).
+                let added = maps[if i == 0 || maps.len() < 3 { from } else { 1 }].create_view(&Default::default());
+                let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("tsd blur bind group"),
                     layout: &self.blur_layout,
                     entries: &[
@@ -62,14 +84,17 @@ impl Gpu {
                             binding: 2,
                             resource: wgpu::BindingResource::Sampler(if i == 0 { &nearest } else { &linear }),
                         },
+                        wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&added) },
+                        wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&stretch) },
                     ],
-                })
+                });
+                (group, to)
             })
             .collect()
     }
 
-    /// TSD blur `i`: over the whole map, from `maps[i % 2]` into the other (the first also
-    /// dilates into the texels the light map left unwritten).
+    /// TSD blur `i`: over the whole map, into the map its bind group was made for (the first
+    /// also dilates into the texels the light map left unwritten).
     pub(crate) fn encode_blur(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -77,7 +102,8 @@ impl Gpu {
         i: usize,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let view = tsd.maps[(i + 1) % 2].create_view(&Default::default());
+        let (group, to) = &tsd.blur_groups[i];
+        let view = tsd.maps[*to].create_view(&Default::default());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd blur"),
             color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
@@ -87,7 +113,7 @@ impl Gpu {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline(PipelineKey::Blur));
-        pass.set_bind_group(0, &tsd.blur_groups[i], &[]);
+        pass.set_bind_group(0, group, &[]);
         pass.draw(0..3, 0..1);
     }
 }
@@ -120,6 +146,26 @@ pub(crate) fn blur_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLa
                 binding: 2,
                 visibility: wgpu::ShaderStages::FRAGMENT,
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 3,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 4,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
                 count: None,
             },
         ],

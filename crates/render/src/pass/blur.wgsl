@@ -1,6 +1,8 @@
 // Texture-space diffusion's blur (Gosselin et al. 2004): a 12-tap Poisson disc plus the centre,
 // the disc scaled per texel by the kernel size stored in the light map's alpha
-// (radius = a * k + b texels), ping-ponged between two light maps. The first pass also dilates:
+// (radius = a * k + b texels), between the light maps; with the profile's Gaussians (d'Eon and
+// Luebke 2007) each pass also scales its result and adds the kept irradiance, weighted per
+// channel (src/skin/tsd.rs). The first pass also dilates:
 // a texel with an unwritten tap (alpha 1, the clear value) takes the tap of smallest kernel size
 // instead, so bilinear fetches across UV seams read lit texels, not black.
 
@@ -17,11 +19,18 @@ struct BlurUniforms {
     tap_variance: f32,
     pad1: u32,
     pad2: u32,
+    // Scales the blurred source per channel.
+    source_scale: vec4<f32>,
+    // Weight of the kept irradiance (light map B) added after the blur, per channel.
+    irradiance_weight: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> blur: BlurUniforms;
 @group(0) @binding(1) var source: texture_2d<f32>;
 @group(0) @binding(2) var source_sampler: sampler;
+@group(0) @binding(3) var irradiance: texture_2d<f32>;
+// Per texel, the kernel's widening along u and v (the light-map pass's stretch map).
+@group(0) @binding(4) var stretch: texture_2d<f32>;
 
 const POISSON: array<vec2<f32>, 12> = array<vec2<f32>, 12>(
     vec2<f32>(-0.326212, -0.40581),
@@ -58,19 +67,22 @@ fn vs_full_screen(@builtin(vertex_index) index: u32) -> FullScreen {
 // random sub-texel offset mixes two texels per axis with variance 1/6 on average, a nearest tap
 // (the dilating pass) moves by the rounding, variance 1/12. The passes then add up to the
 // variance the radius was chosen for, not more with every pass.
-fn disc_radius(intended: f32) -> f32 {
+fn disc_radius(intended: vec2<f32>) -> vec2<f32> {
     var sampler_variance = 1.0 / 6.0;
     if blur.dilate == 1u {
         sampler_variance = 1.0 / 12.0;
     }
     let variance = intended * intended * blur.tap_variance - sampler_variance;
-    return sqrt(max(variance, 0.0) / max(blur.tap_variance, 1e-6));
+    return sqrt(max(variance, vec2<f32>(0.0)) / max(blur.tap_variance, 1e-6));
 }
 
 @fragment
 fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
     let centre = textureSampleLevel(source, source_sampler, input.uv, 0.0);
-    let radius = blur.inv_size * disc_radius(min(centre.a, 0.999) * blur.a + blur.b);
+    // The isotropic radius in texels, widened along u and v where a texel spans fewer mm there
+    // than the light map's mean stretch assumed.
+    let widening = textureSampleLevel(stretch, source_sampler, input.uv, 0.0).rg;
+    let radius = blur.inv_size * disc_radius((min(centre.a, 0.999) * blur.a + blur.b) * widening);
     var sum = centre.rgb;
     var written_sum = centre.rgb;
     var written = 1.0;
@@ -95,5 +107,12 @@ fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
         // "more complicated scheme"; its own code copies one tap instead).
         return vec4<f32>(written_sum / written, centre.a);
     }
-    return vec4<f32>(sum / 13.0, centre.a);
+    // Every pass averages only the written taps: the texels outside the charts hold no light,
+    // and averaging them in would darken the charts' borders a little more with every pass.
+    var mean = sum / 13.0;
+    if centre.a < 1.0 {
+        mean = written_sum / written;
+    }
+    let added = textureSampleLevel(irradiance, source_sampler, input.uv, 0.0).rgb;
+    return vec4<f32>(blur.source_scale.rgb * mean + blur.irradiance_weight.rgb * added, centre.a);
 }

@@ -1,15 +1,17 @@
 //! TSD's light map (`light_map.wgsl`): every light's diffuse irradiance in texture space, the
-//! blur's kernel size in alpha.
+//! blur's kernel size in alpha, and the stretch map (the kernel's widening along u and v).
 
 use crate::gpu::{
-    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, colour_attachment, depth_attachment,
-    depth_state,
+    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, STRETCH_FORMAT, colour_attachment,
+    depth_attachment, depth_state,
 };
 use crate::pass::tsd::TsdResources;
 use crate::passes::{self, Features};
 
 /// What the light maps hold where no texel was drawn (the first blur dilates into them).
 pub(crate) const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+/// The stretch map where no texel was drawn: the isotropic kernel.
+const UNSTRETCHED: wgpu::Color = wgpu::Color { r: 1.0, g: 1.0, b: 0.0, a: 0.0 };
 
 /// The light map's uniforms (`LightMapUniforms` in light_map.wgsl).
 #[repr(C)]
@@ -51,6 +53,7 @@ pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
         buffers: &MESH_BUFFERS,
         fragment_entry: Some("fs_light_map"),
         target: Some(LIGHT_MAP_FORMAT),
+        second_target: Some(STRETCH_FORMAT),
         depth: depth_state(false, wgpu::CompareFunction::Equal),
         features,
     }
@@ -67,9 +70,13 @@ impl Gpu {
     ) {
         let depth_view = tsd.depth.create_view(&Default::default());
         let view = tsd.maps[0].create_view(&Default::default());
+        let stretch = tsd.stretch.create_view(&Default::default());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd light map"),
-            color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
+            color_attachments: &[
+                Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL))),
+                Some(colour_attachment(&stretch, wgpu::LoadOp::Clear(UNSTRETCHED))),
+            ],
             depth_stencil_attachment: Some(depth_attachment(&depth_view, wgpu::LoadOp::Load)),
             timestamp_writes,
             occlusion_query_set: None,

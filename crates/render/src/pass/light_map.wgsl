@@ -17,10 +17,19 @@ struct LightMapUniforms {
     pad2: u32,
 }
 
-// Diffuse irradiance of every light at the texel (the key light through its shadow map), and the
-// blur kernel size in alpha (never 1: the cleared value marks unwritten texels for dilation).
+struct LightMapOut {
+    // Irradiance, and the kernel size in alpha.
+    @location(0) light: vec4<f32>,
+    // The kernel's widening along u and v: the mean mm per texel the kernel size assumed over
+    // the mm a texel spans along each axis (1 with an artist's kernel map, given in texels).
+    @location(1) stretch: vec4<f32>,
+}
+
+// Diffuse irradiance of every light at the texel (the key light through its shadow map), the
+// blur kernel size in alpha (never 1: the cleared value marks unwritten texels for dilation),
+// and the stretch map.
 @fragment
-fn fs_light_map(input: TextureSpaceOut) -> @location(0) vec4<f32> {
+fn fs_light_map(input: TextureSpaceOut) -> LightMapOut {
     let geo_n = normalize_or(input.frame_n, vec3<f32>(0.0, 0.0, 1.0));
     let n = to_object(decode_normal(textureSampleLevel(normal_map, map_sampler, input.uv, 0.0)), input.frame_t,
         input.frame_b, geo_n);
@@ -36,6 +45,7 @@ fn fs_light_map(input: TextureSpaceOut) -> @location(0) vec4<f32> {
         e += light_irradiance(i, input.world) * max(dot(n, light_direction(i, input.world)), 0.0) * visibility;
     }
     var k = 0.0;
+    var widening = vec2<f32>(1.0);
     if globals.light_map.kernel_from_map == 1u {
         k = textureSampleLevel(kernel_map, map_sampler, input.uv, 0.0).r;
     } else {
@@ -43,6 +53,12 @@ fn fs_light_map(input: TextureSpaceOut) -> @location(0) vec4<f32> {
         let texel_mm = max(input.skin.y, 1e-6) / globals.light_map.size;
         let radius = globals.light_map.kernel_mm * (1.0 + globals.light_map.curvature_gain * inv_r) / texel_mm;
         k = radius / globals.light_map.max_radius;
+        // The mm one texel spans along u (x) and v (y) of this triangle.
+        let along = vec2<f32>(length(dpdx(input.world)), length(dpdy(input.world))) * globals.scene.mm_per_unit;
+        widening = clamp(texel_mm / max(along, vec2<f32>(1e-9)), vec2<f32>(0.125), vec2<f32>(8.0));
     }
-    return vec4<f32>(e, clamp(k, 0.0, 0.999));
+    var out: LightMapOut;
+    out.light = vec4<f32>(e, clamp(k, 0.0, 0.999));
+    out.stretch = vec4<f32>(widening, 0.0, 1.0);
+    return out;
 }

@@ -27,6 +27,10 @@ pub(crate) struct ShadowUniforms {
     pub(crate) taps: f32,
     pub(crate) texel: f32,
     pub(crate) normal_offset: f32,
+    pub(crate) disc_radius: f32,
+    pub(crate) pad0: f32,
+    pub(crate) pad1: f32,
+    pub(crate) pad2: f32,
 }
 
 /// The shadow map's uniforms; an identity placeholder without one (never read: the shadow
@@ -39,6 +43,10 @@ pub(crate) fn uniforms(shadow: Option<&passes::ShadowSetup>) -> ShadowUniforms {
             taps: s.filter as f32,
             texel: s.texel,
             normal_offset: s.bias,
+            disc_radius: s.disc_radius,
+            pad0: 0.0,
+            pad1: 0.0,
+            pad2: 0.0,
         },
         None => ShadowUniforms {
             view_proj: glam::Mat4::IDENTITY.to_cols_array_2d(),
@@ -46,6 +54,10 @@ pub(crate) fn uniforms(shadow: Option<&passes::ShadowSetup>) -> ShadowUniforms {
             taps: 1.0,
             texel: 0.0,
             normal_offset: 0.0,
+            disc_radius: 0.0,
+            pad0: 0.0,
+            pad1: 0.0,
+            pad2: 0.0,
         },
     }
 }
@@ -58,6 +70,7 @@ pub(crate) fn pipeline() -> MeshPipeline<'static> {
         buffers: &POSITION_BUFFER,
         fragment_entry: None,
         target: None,
+        second_target: None,
         depth: depth_state(true, wgpu::CompareFunction::Less),
         features: Features::default(),
     }

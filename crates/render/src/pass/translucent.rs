@@ -30,6 +30,7 @@ pub(crate) fn pipeline() -> MeshPipeline<'static> {
         buffers: &CASTER_BUFFERS,
         fragment_entry: Some("fs_translucent"),
         target: Some(LIGHT_MAP_FORMAT),
+        second_target: None,
         depth: depth_state(false, wgpu::CompareFunction::Less),
         features: Features::default(),
     }

@@ -3,21 +3,25 @@
 //! culling that decides whether they run this frame. The vertex stage of the pre-pass and the
 //! light-map pass is `tsd.wgsl`.
 
-use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PreparedScene, SceneTextures, Target, extent};
+use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PreparedScene, STRETCH_FORMAT, SceneTextures, Target, extent};
 use crate::passes;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Texture-space diffusion: the UV-space depth of the culling pre-pass, two light maps for the
 /// ping-pong blur, and the bind groups of each pass.
 pub(crate) struct TsdResources {
-    pub(crate) passes: u32,
+    /// The light map the base pass reads (the last blur's target).
+    pub(crate) final_map: usize,
     pub(crate) reuse_below_px: f32,
     pub(crate) depth: wgpu::Texture,
-    pub(crate) maps: [wgpu::Texture; 2],
+    /// [`crate::skin::tsd::LIGHT_MAP_NAMES`], as many as the kernel needs.
+    pub(crate) maps: Vec<wgpu::Texture>,
+    /// The stretch map the light-map pass writes and every blur reads.
+    pub(crate) stretch: wgpu::Texture,
     /// The base bind group's layout, for the texture-space passes (no light map bound).
     pub(crate) bind_group: wgpu::BindGroup,
-    /// Blur pass i reads `maps[i % 2]` and writes `maps[(i + 1) % 2]`.
-    pub(crate) blur_groups: Vec<wgpu::BindGroup>,
+    /// Per blur pass, its bind group and the map it writes ([`crate::skin::tsd::blur_maps`]).
+    pub(crate) blur_groups: Vec<(wgpu::BindGroup, usize)>,
     /// Whether a light map from an earlier frame exists (distance culling reuses it).
     pub(crate) ready: AtomicBool,
 }
@@ -35,28 +39,33 @@ impl Gpu {
     ) -> TsdResources {
         let size = tsd.size;
         let depth = self.depth_texture("tsd texture-space depth", size, size, false);
-        let map = |label| {
+        let map = |label: &str, format| {
             self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: extent(size, size),
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: LIGHT_MAP_FORMAT,
+                format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
             })
         };
-        let maps = [map("tsd light map A"), map("tsd light map B")];
+        let maps: Vec<wgpu::Texture> = crate::skin::tsd::LIGHT_MAP_NAMES[..crate::skin::tsd::map_count(tsd.kernel)]
+            .iter()
+            .map(|name| map(&format!("tsd {name}"), LIGHT_MAP_FORMAT))
+            .collect();
+        let stretch = map("tsd stretch map", STRETCH_FORMAT);
         let bind_group = self.create_bind_group(textures, uniforms, shadow, opacity, None);
-        let blur_groups = self.blur_groups(tsd, &maps);
+        let blur_groups = self.blur_groups(tsd, &maps, &stretch);
         TsdResources {
-            passes: tsd.passes,
+            final_map: crate::skin::tsd::final_map(tsd.kernel, tsd.blurs()),
             reuse_below_px: tsd.reuse_below_px,
             depth,
             maps,
+            stretch,
             bind_group,
             blur_groups,
             ready: AtomicBool::new(false),

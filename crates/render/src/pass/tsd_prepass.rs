@@ -29,6 +29,7 @@ pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
         buffers: &MESH_BUFFERS,
         fragment_entry: Some("fs_tsd_prepass"),
         target: None,
+        second_target: None,
         depth: depth_state(true, wgpu::CompareFunction::Always),
         features,
     }

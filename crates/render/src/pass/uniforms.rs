@@ -148,7 +148,12 @@ pub fn uniform_layouts() -> Vec<UniformLayout> {
                 sh
             ]
         ),
-        layout!(BASE_WGSL, "ShadowUniforms", ShadowUniforms, [view_proj, inv_size, taps, texel, normal_offset]),
+        layout!(
+            BASE_WGSL,
+            "ShadowUniforms",
+            ShadowUniforms,
+            [view_proj, inv_size, taps, texel, normal_offset, disc_radius, pad0, pad1, pad2]
+        ),
         layout!(BASE_WGSL, "PrepassUniforms", PrepassUniforms, [backface_bias, pad0, pad1, pad2]),
         layout!(
             BASE_WGSL,
@@ -157,6 +162,11 @@ pub fn uniform_layouts() -> Vec<UniformLayout> {
             [size, kernel_mm, curvature_gain, max_radius, kernel_from_map, pad0, pad1, pad2]
         ),
         layout!(BASE_WGSL, "Globals", Globals, [scene, base, shadow, prepass, light_map]),
-        layout!(BLUR_WGSL, "BlurUniforms", BlurUniforms, [inv_size, a, b, dilate, tap_variance, pad1, pad2]),
+        layout!(
+            BLUR_WGSL,
+            "BlurUniforms",
+            BlurUniforms,
+            [inv_size, a, b, dilate, tap_variance, pad1, pad2, source_scale, irradiance_weight]
+        ),
     ]
 }

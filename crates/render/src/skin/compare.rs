@@ -1,5 +1,5 @@
 //! Every way skinkit draws skin's diffuse light, side by side: Lambert, the blog's closed form,
-//! our fit, the pre-integrated LUT at several sizes, texture-space diffusion at several blur
+//! our fit, the pre-integrated LUT at several sizes (and as the paper's ring defines it), texture-space diffusion at several blur
 //! counts and light-map sizes, and the exact texture-space reference ([`super::reference`]) they
 //! are all measured against. [`Method::setup`] turns one method and a scene into what the GPU
 //! draws; [`flip_mean`] and [`rmse`] give the errors of a render against the reference's.
@@ -8,8 +8,8 @@
 //! shadow-casting light draws none); the pre-integrated methods add shadow scattering, as the
 //! paper's complete local model does.
 
-use super::options::Analytic;
-use super::profile::Profile;
+use super::options::{Analytic, TsdKernel};
+use super::profile::{Domain, Profile};
 use super::{reference, setup};
 use crate::effect::Effect;
 use crate::graph::PassGraph;
@@ -32,9 +32,16 @@ pub enum Method {
         /// Texels per side.
         size: u32,
     },
+    /// The pre-integrated LUT as the paper defines it (the full ring, not the sphere).
+    RingLut {
+        /// Texels per side.
+        size: u32,
+    },
     /// Texture-space diffusion.
     Tsd {
-        /// Blur passes.
+        /// How the light map is blurred.
+        kernel: TsdKernel,
+        /// Blur passes (per Gaussian with [`TsdKernel::Gaussians`]).
         passes: u32,
         /// Light-map side.
         size: u32,
@@ -54,7 +61,9 @@ impl Method {
             Self::Blog => "blog-fit".into(),
             Self::OwnFit => "own-fit".into(),
             Self::Lut { size } => format!("lut-{size}"),
-            Self::Tsd { passes, size } => format!("tsd-{passes}x{size}"),
+            Self::RingLut { size } => format!("lut-ring-{size}"),
+            Self::Tsd { kernel: TsdKernel::Single, passes, size } => format!("tsd-{passes}x{size}"),
+            Self::Tsd { kernel: TsdKernel::Gaussians, passes, size } => format!("tsd-gaussians-{passes}x{size}"),
             Self::Reference { size } => format!("reference-{size}"),
         }
     }
@@ -64,11 +73,15 @@ impl Method {
     pub fn table(reference_size: u32) -> Vec<Method> {
         let mut methods = vec![Self::Lambert, Self::Blog, Self::OwnFit];
         methods.extend([32, 64, 256].map(|size| Self::Lut { size }));
+        methods.push(Self::RingLut { size: 256 });
         // Passes at one size, sizes at one and at four passes: the error must not grow with either.
-        methods.extend([1, 2, 4, 8].map(|passes| Self::Tsd { passes, size: 1024 }));
+        let tsd = |kernel, passes, size| Self::Tsd { kernel, passes, size };
+        methods.extend([1, 2, 4, 8].map(|passes| tsd(TsdKernel::Single, passes, 1024)));
         for size in [512, 2048] {
-            methods.extend([1, 4].map(|passes| Self::Tsd { passes, size }));
+            methods.extend([1, 4].map(|passes| tsd(TsdKernel::Single, passes, size)));
         }
+        // The profile's Gaussians per channel (d'Eon and Luebke), passes per Gaussian.
+        methods.extend([1, 4].map(|passes| tsd(TsdKernel::Gaussians, passes, 1024)));
         methods.push(Self::Reference { size: (reference_size / 2).max(1) });
         methods.push(Self::Reference { size: reference_size });
         methods
@@ -86,17 +99,21 @@ impl Method {
                 effects.push(Effect::PreintegratedAnalytic);
                 scene.skin.preintegrated.analytic = if *self == Self::Blog { Analytic::Blog } else { Analytic::Own };
             }
-            Self::Lut { size } => {
+            Self::Lut { size } | Self::RingLut { size } => {
                 effects.push(Effect::Preintegrated);
                 scene.skin.preintegrated.lut_size = [*size, *size];
+                if matches!(self, Self::RingLut { .. }) {
+                    scene.skin.preintegrated.domain = Domain::Full;
+                }
             }
-            Self::Tsd { passes, size } => {
+            Self::Tsd { kernel, passes, size } => {
                 effects.push(Effect::Tsd);
+                scene.skin.tsd.kernel = *kernel;
                 scene.skin.tsd.passes = *passes;
                 scene.skin.tsd.size = *size;
             }
         }
-        let preintegrated = matches!(self, Self::Blog | Self::OwnFit | Self::Lut { .. });
+        let preintegrated = matches!(self, Self::Blog | Self::OwnFit | Self::Lut { .. } | Self::RingLut { .. });
         if shadows {
             effects.push(Effect::Shadows);
             if preintegrated {
@@ -119,7 +136,7 @@ impl Method {
     /// As [`setup::build`].
     pub fn setup(&self, scene: &Scene, loaded: &Loaded) -> Result<SkinSetup, LoadError> {
         let scene = self.scene(scene);
-        let graph = PassGraph::for_loaded(&scene, loaded);
+        let graph = PassGraph::build(&scene);
         let mut built = setup::build(&scene, loaded, &graph)?;
         if let Self::Reference { size } = self {
             let (bake, scattered) = reference_light_map(&scene, loaded, *size);
@@ -134,7 +151,7 @@ impl Method {
 /// the one the pass graph gives the shadow map, ray-cast; the others unshadowed) and its
 /// scattered irradiance under the default profile.
 pub fn reference_light_map(scene: &Scene, loaded: &Loaded, size: u32) -> (reference::ReferenceBake, Vec<[f32; 3]>) {
-    let graph = PassGraph::for_loaded(scene, loaded);
+    let graph = PassGraph::build(scene);
     let key = graph.shadow.map(|s| s.light);
     let shadows: Vec<bool> = (0..loaded.inputs.lights.len()).map(|i| key == Some(i)).collect();
     let bake = reference::bake(&loaded.inputs, &shadows, scene.mm_per_unit, size);

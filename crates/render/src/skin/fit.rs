@@ -1,9 +1,8 @@
 //! Closed forms of the pre-integrated diffuse falloff D(N.L, 1/r) (Penner and Borshukov 2011,
 //! equation 1.1), cheap enough to replace the lookup table in a shader.
 //!
-//! The truth is [`reference_direct`]: [`ring_integral`] with the default definitions (2-D
-//! normalised sum of Gaussians, the full ring `[-pi, pi]`, curvature `1/r` in 1/mm), evaluated
-//! with [`REFERENCE_STEPS`] midpoint samples.
+//! The truth is [`reference_direct`]: the falloff with the default definitions (2-D normalised sum
+//! of Gaussians over a sphere's surface, [`super::sphere`], curvature `1/r` in 1/mm).
 //!
 //! Two closed forms are measured against it:
 //!
@@ -20,12 +19,12 @@
 //! - [`own_direct`]: our fit, per channel a mixture of two smoothed ramps times a gain,
 //!
 //!   `D = g(k) * (ramp(N.L, w1(k)) + (ramp(N.L, w2(k)) - ramp(N.L, w1(k))) * beta)`, with
-//!   `k = clamp(1/r, 0, 1)`, `w_i(k) = (a_i + b_i k) k`, `g(k) = 1 + (c + d k) k` and
+//!   `k = clamp(1/r, 0, 1)`, `w_i(k) = a_i k / (1 + |b_i| k)`, `g(k) = 1 - c k^2 / (1 + |d| k^2)` and
 //!   `ramp(x, w) = (clamp(x, -w, w) + w)^2 / (4 w) + max(x - w, 0)`,
 //!
 //!   the clamped ramp `max(x, 0)` convolved with a box of half-width `w` (so it is exactly 0 for
-//!   `x < -w`, exactly `x` above `w`, C1 everywhere). Blurring the clamped cosine along the ring
-//!   by a narrow kernel does this near the terminator, and dims it by a factor elsewhere (the
+//!   `x < -w`, exactly `x` above `w`, C1 everywhere). Blurring the clamped cosine over the
+//!   surface by a narrow kernel does this near the terminator, and dims it by a factor elsewhere (the
 //!   gain); two widths stand for the profile's narrow and wide Gaussians. At `1/r = 0` both
 //!   widths are [`OWN_MIN_WIDTH`], which gives the clamped N.L to within that width. The seven
 //!   coefficients per channel ([`OWN_FIT`]) are the least-squares fit ([`fit_own_direct`],
@@ -37,13 +36,17 @@
 //!
 //! | grid | closed form | max | rms |
 //! | --- | --- | --- | --- |
-//! | [`FitGrid::BLOG_RANGE`] (201 N.L x 29 1/r in [0.0625, 0.5]) | blog | 0.138, 0.027, 0.011 | 0.047, 0.0084, 0.0026 |
-//! | | own | 0.0035, 0.00079, 0.00047 | 0.0013, 0.00014, 0.000069 |
-//! | [`FitGrid::FULL`] (201 x 41 in [0, 1]) | blog (clamped) | 0.138, 0.027, 0.015 | 0.053, 0.0081, 0.0027 |
-//! | | own | 0.0090, 0.0017, 0.00096 | 0.0016, 0.00036, 0.00018 |
+//! | [`FitGrid::BLOG_RANGE`] (201 N.L x 29 1/r in [0.0625, 0.5]) | blog | 0.20, 0.018, 0.0075 | 0.043, 0.0065, 0.0017 |
+//! | | own | 0.0095, 0.00125, 0.00057 | 0.0035, 0.00032, 0.00013 |
+//! | [`FitGrid::FULL`] (201 x 41 in [0, 1]) | blog (clamped) | 0.29, 0.051, 0.025 | 0.068, 0.011, 0.0039 |
+//! | | own | 0.013, 0.0026, 0.0013 | 0.0036, 0.00070, 0.00032 |
+//!
+//! Red is the hard channel: its wide Gaussians reach across a small sphere, so its widths and
+//! dimming saturate with curvature (hence the rational forms; widths linear in `k` and a
+//! quadratic gain left red's rms error at 0.009 over the whole range).
 //!
 //! The blog's largest errors are in red near the terminator at r = 2 mm: its table scatters
-//! far more light past N.L = 0 than ours, so it is brighter there by up to 0.14. Its table was
+//! far more light past N.L = 0 than ours, so it is brighter there by up to 0.20. Its table was
 //! most likely built with the pre-integrated paper's listing normalisation
 //! ([`super::profile::Normalisation::OneD`], full ring): against that table the blog's rms error
 //! falls to 0.030, 0.0069, 0.0017 (max 0.19, 0.022, 0.0058), and its zonal factors agree with it
@@ -55,12 +58,8 @@
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
-use super::profile::{Domain, Profile, ring_integral};
-
-/// Midpoint samples of the ring integral behind [`reference_direct`]: its error against 65536
-/// samples is below 1e-5 for `1/r >= 0.0625` and below 4e-4 anywhere (largest at N.L = 0 for
-/// `1/r` near 0.005, where the narrowest Gaussian spans a few samples).
-pub const REFERENCE_STEPS: usize = 8192;
+use super::profile::Profile;
+use super::sphere::SphereFalloff;
 
 /// The lower end of the blog's range of 1/r, mm^-1 (r = 16 mm).
 pub const BLOG_INV_R_MIN: f32 = 0.0625;
@@ -70,9 +69,9 @@ pub const BLOG_INV_R_MAX: f32 = 0.5;
 /// The WGSL snippet with `blog_direct` and `own_direct` (no bindings, no entry points).
 pub const SKIN_FIT_WGSL: &str = include_str!("../../shaders/skin_fit.wgsl");
 
-/// The true falloff D(N.L, 1/r) per channel: equation 1.1 with the default definitions.
+/// The true falloff D(N.L, 1/r) per channel, with the default definitions.
 pub fn reference_direct(n_dot_l: f64, inv_r_mm: f64) -> [f64; 3] {
-    ring_integral(&Profile::default(), Domain::Full, n_dot_l, inv_r_mm, REFERENCE_STEPS)
+    SphereFalloff::new(&Profile::default(), inv_r_mm).at(n_dot_l)
 }
 
 /// `x` with NaN replaced by `fallback`.
@@ -150,16 +149,30 @@ pub const OWN_FIT_PARAMS: usize = 7;
 pub const OWN_MIN_WIDTH: f32 = 1e-6;
 
 /// The fitted coefficients of [`own_direct`], `OWN_FIT[i][channel]`, i in order: `a1, b1`
-/// (first width `(a1 + b1 k) k`), `a2, b2` (second width), `beta` (mix), `c, d` (gain
-/// `1 + (c + d k) k`). Reproduced by [`fit_own_direct`] on [`FitGrid::FIT`].
+/// (first width `a1 k / (1 + |b1| k)`), `a2, b2` (second width), `beta` (mix), `c, d` (gain
+/// `1 - c k^2 / (1 + |d| k^2)`). Reproduced by [`fit_own_direct`] on [`FitGrid::FIT`] from
+/// [`OWN_FIT_START`].
 pub const OWN_FIT: [[f32; 3]; OWN_FIT_PARAMS] = [
-    [0.24740593, 0.14063562, 0.121133916],
-    [-0.08434079, 0.0015598512, 0.0009509524],
-    [2.838782, 0.64982563, 0.41730535],
-    [-0.31943515, 0.009347675, 0.0029524032],
-    [0.08001484, 0.13931698, 0.15580092],
-    [-0.027246065, 0.00013974897, 2.6722859e-5],
-    [-0.064642295, -0.013529932, -0.0068437806],
+    [1.119658, 0.19147016, 0.13902761],
+    [3.4801114, 0.0030810947, -2.3454774e-8],
+    [4.6450677, 0.85098916, 0.51528525],
+    [0.48916852, 0.0025143863, 0.004884143],
+    [0.27000952, 0.22228076, 0.20613755],
+    [1.7764238, 0.06646401, 0.024659198],
+    [3.7490337, 0.10559194, 0.048895348],
+];
+
+/// Where [`fit_own_direct`] starts to land on [`OWN_FIT`]: per channel, the widths, mix and gain
+/// read off fits at single curvatures (red's widths and dimming saturate as the sphere shrinks
+/// below the profile's reach; green's and blue's stay nearly linear).
+pub const OWN_FIT_START: [[f64; 3]; OWN_FIT_PARAMS] = [
+    [0.7, 0.19, 0.14],
+    [1.8, 0.0, 0.0],
+    [3.7, 0.85, 0.52],
+    [0.1, 0.0, 0.0],
+    [0.26, 0.22, 0.2],
+    [1.5, 0.06, 0.02],
+    [3.3, 0.0, 0.0],
 ];
 
 /// The smoothed ramp of [`own_direct`]: `max(x, 0)` convolved with a box of half-width `w > 0`.
@@ -181,9 +194,9 @@ pub fn own_direct(n_dot_l: f32, inv_r_mm: f32) -> [f32; 3] {
     let k = or_if_nan(inv_r_mm, 0.0).clamp(0.0, 1.0);
     let p = &OWN_FIT;
     std::array::from_fn(|c| {
-        let w1 = ((p[0][c] + p[1][c] * k) * k).max(OWN_MIN_WIDTH);
-        let w2 = ((p[2][c] + p[3][c] * k) * k).max(OWN_MIN_WIDTH);
-        let gain = 1.0 + (p[5][c] + p[6][c] * k) * k;
+        let w1 = (p[0][c] * k / (1.0 + p[1][c].abs() * k)).max(OWN_MIN_WIDTH);
+        let w2 = (p[2][c] * k / (1.0 + p[3][c].abs() * k)).max(OWN_MIN_WIDTH);
+        let gain = 1.0 - p[5][c] * k * k / (1.0 + p[6][c].abs() * k * k);
         let (r1, r2) = (ramp(x, w1), ramp(x, w2));
         gain * (r1 + (r2 - r1) * p[4][c])
     })
@@ -193,9 +206,9 @@ pub fn own_direct(n_dot_l: f32, inv_r_mm: f32) -> [f32; 3] {
 pub fn own_form(p: &[f64; OWN_FIT_PARAMS], n_dot_l: f64, inv_r_mm: f64) -> f64 {
     let (x, k) = (n_dot_l.clamp(-1.0, 1.0), inv_r_mm.clamp(0.0, 1.0));
     let min = f64::from(OWN_MIN_WIDTH);
-    let w1 = ((p[0] + p[1] * k) * k).max(min);
-    let w2 = ((p[2] + p[3] * k) * k).max(min);
-    let gain = 1.0 + (p[5] + p[6] * k) * k;
+    let w1 = (p[0] * k / (1.0 + p[1].abs() * k)).max(min);
+    let w2 = (p[2] * k / (1.0 + p[3].abs() * k)).max(min);
+    let gain = 1.0 - p[5] * k * k / (1.0 + p[6].abs() * k * k);
     let (r1, r2) = (ramp64(x, w1), ramp64(x, w2));
     gain * (r1 + (r2 - r1) * p[4])
 }

@@ -13,7 +13,7 @@
 //! | `skinkit.normalisation` | text | `2d` or `1d` (diffuse) |
 //! | `skinkit.domain` | text | `full` or `half` (diffuse) |
 //! | `skinkit.inv_r_min`, `skinkit.inv_r_max` | f32 | curvature range, 1/mm (diffuse) |
-//! | `skinkit.filter` | text | `box` (shadow: the shadow-map filter, linear-ramp penumbra) |
+//! | `skinkit.filter` | text | `disc` (shadow: the lit share of a disc of taps on the skin) |
 //! | `skinkit.new_penumbra` | f32 | new penumbra width / filtered width (shadow) |
 //! | `skinkit.w_min_mm`, `skinkit.w_max_mm` | f32 | penumbra width range, mm (shadow) |
 //! | `skinkit.profile_slice` | text | `marginal` (shadow) |
@@ -111,6 +111,7 @@ impl LutImage {
         let domain = match self.required_text("skinkit.domain", name)? {
             "full" => Domain::Full,
             "half" => Domain::Half,
+            "sphere" => Domain::Sphere,
             other => return Err(decode_error(name, format!("unknown skinkit.domain `{other}`"))),
         };
         let (width, height) = (self.width as u32, self.height as u32);
@@ -186,13 +187,17 @@ pub fn shadow_attributes(lut: &ShadowLut) -> BTreeMap<String, LutAttribute> {
         "y",
         "penumbra width w (mm) = w_min_mm + j (w_max_mm - w_min_mm) / (height - 1) at row centres, row 0 at the top",
     );
-    text(&mut a, "filter", "box");
-    text(&mut a, "penumbra", "P(t) = clamp(0.5 + t, 0, 1), P^-1(s) = s - 0.5; new penumbra a linear ramp");
+    text(&mut a, "filter", "disc");
+    text(
+        &mut a,
+        "penumbra",
+        "P(t) = 1 - (acos t - t sqrt(1 - t^2)) / pi, edge at t w / 2 from the disc's centre; new penumbra a linear ramp; ends stretched to 0 and 1",
+    );
     text(&mut a, "profile_slice", "marginal");
     float(&mut a, "new_penumbra", s.new_penumbra);
     float(&mut a, "w_min_mm", s.w_min_mm);
     float(&mut a, "w_max_mm", s.w_max_mm);
-    text(&mut a, "equation", "Penner-Borshukov 2011 sec. 1.6, P_S(s, w) = int P'(P^-1(s) w + x) R1(x) dx");
+    text(&mut a, "equation", "Penner-Borshukov 2011 sec. 1.6, P_S(s, w) = int P'(P^-1(s) w / 2 + x) R1(x) dx");
     a
 }
 

@@ -4,12 +4,14 @@
 //! measured against; the scene's scattering settings and what the GPU passes are given.
 //!
 //! - [`profile`]: the sum-of-Gaussians diffusion profile and equation 1.1 by brute force.
+//! - [`sphere`]: the same falloff over a sphere's surface, to about 1e-6.
 //! - [`lut`], [`shadow`], [`lut_file`]: the pre-integrated diffuse and shadow-scattering tables
 //!   and their EXR files (`skinkit lut`).
 //! - [`fit`]: the blog's closed form and our own fit of the diffuse table.
 //! - [`sh`]: order-2 SH environments and the skin's zonal convolution factors.
 //! - [`curvature`]: per-vertex 1/r from the mesh.
 //! - [`reference`]: the exact texture-space convolution.
+//! - [`tsd`]: texture-space diffusion's blur passes (single kernel or the profile's Gaussians).
 //! - [`options`], [`setup`], [`compare`]: scene settings, the GPU setup of a scene's pass graph,
 //!   and every method side by side.
 
@@ -24,3 +26,5 @@ pub mod reference;
 pub mod setup;
 pub mod sh;
 pub mod shadow;
+pub mod sphere;
+pub mod tsd;

@@ -11,7 +11,9 @@
 //! pre-integrated paper prints 0.366, a typo; its own listing says 0.336). Each channel sums to 1.
 //!
 //! [`ring_integral`] is equation 1.1 of the pre-integrated paper evaluated by brute-force
-//! quadrature: the slow, exact definition every LUT, fit and shader path is measured against.
+//! quadrature, and [`sphere_integral`] the same falloff over a sphere's surface instead of a ring:
+//! the slow, exact definitions every LUT, fit and shader path is measured against ([`falloff`]
+//! picks one by [`Domain`]).
 
 /// Variances of the six Gaussians, in mm^2.
 pub const VARIANCES_MM2: [f64; 6] = [0.0064, 0.0484, 0.187, 0.567, 1.99, 7.41];
@@ -52,30 +54,39 @@ impl Normalisation {
     }
 }
 
-/// Over which angles the ring integral of equation 1.1 runs.
+/// What the pre-integration of equation 1.1 runs over: a ring (over which angles), or a whole
+/// sphere.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Domain {
-    /// `[-pi, pi]`: the paper's equation, the whole ring (needed for the SH projection).
-    #[default]
+    /// `[-pi, pi]`: the paper's equation, the whole ring (the SH projection's).
     Full,
     /// `[-pi/2, pi/2]`: the paper's listing.
     Half,
+    /// The surface of a sphere of radius `r` ([`sphere_integral`]): the light leaving a point of
+    /// a sphere lit from one side, the profile spread over the surface by chord distance. Unlike
+    /// the ring, whose 1-D cut weights each 2-D Gaussian by `1 / sqrt(2 pi v)` instead of its
+    /// share, this keeps the profile's own weights: the cap within chord `d` of a point has area
+    /// `pi d^2` exactly, as the disc of radius `d` on the plane. The default: it is what the
+    /// texture-space reference computes on a sphere.
+    #[default]
+    Sphere,
 }
 
 impl Domain {
-    /// The name written in files and reports: `full` or `half`.
+    /// The name written in files and reports: `full`, `half` or `sphere`.
     pub fn name(self) -> &'static str {
         match self {
             Self::Full => "full",
             Self::Half => "half",
+            Self::Sphere => "sphere",
         }
     }
 
-    /// Half the angular extent: pi or pi / 2.
+    /// Half the angular extent: pi or pi / 2 (pi for the sphere: its polar angle's range).
     pub fn half_extent(self) -> f64 {
         match self {
-            Self::Full => std::f64::consts::PI,
+            Self::Full | Self::Sphere => std::f64::consts::PI,
             Self::Half => std::f64::consts::FRAC_PI_2,
         }
     }
@@ -152,6 +163,7 @@ impl Profile {
 /// numerator (the listing's normalisation; the extracted equation's `R(2 sin(x/2))` is an
 /// extraction error), so flat skin (`inv_r_mm = 0`) gives exactly `max(0, n_dot_l)`.
 /// `n_dot_l` is clamped to [-1, 1]; a negative or non-finite `inv_r_mm` counts as 0.
+/// [`Domain::Sphere`] counts as the full ring here ([`falloff`] dispatches it to the sphere).
 pub fn ring_integral(profile: &Profile, domain: Domain, n_dot_l: f64, inv_r_mm: f64, steps: usize) -> [f64; 3] {
     let n_dot_l = if n_dot_l.is_nan() { 0.0 } else { n_dot_l.clamp(-1.0, 1.0) };
     let inv_r = if inv_r_mm.is_finite() && inv_r_mm > 0.0 { inv_r_mm } else { 0.0 };
@@ -171,6 +183,51 @@ pub fn ring_integral(profile: &Profile, domain: Domain, n_dot_l: f64, inv_r_mm: 
         for c in 0..3 {
             light[c] += cosine * weight[c];
             total[c] += weight[c];
+        }
+    }
+    std::array::from_fn(|c| if total[c] > 0.0 { light[c] / total[c] } else { n_dot_l.max(0.0) })
+}
+
+/// Equation 1.1 over `domain`, by brute force: [`sphere_integral`] for [`Domain::Sphere`], else
+/// [`ring_integral`]; `steps` samples per angle.
+pub fn falloff(profile: &Profile, domain: Domain, n_dot_l: f64, inv_r_mm: f64, steps: usize) -> [f64; 3] {
+    match domain {
+        Domain::Sphere => sphere_integral(profile, n_dot_l, inv_r_mm, steps),
+        Domain::Full | Domain::Half => ring_integral(profile, domain, n_dot_l, inv_r_mm, steps),
+    }
+}
+
+/// The pre-integrated falloff on a sphere, by brute force: the light leaving a point of a sphere
+/// of radius `r = 1 / inv_r_mm` lit from one direction at `theta = acos(n_dot_l)` from its normal,
+///
+/// `D = int max(0, N(p) . L) R(|p - o|) dA / int R(|p - o|) dA`
+///
+/// over the sphere's surface, with `p` at polar angle `phi` from the shading point `o` and
+/// azimuth `psi` (so `N(p) . L = cos(theta) cos(phi) + sin(theta) sin(phi) cos(psi)`, the chord
+/// `|p - o| = 2 r sin(phi / 2)`, `dA = r^2 sin(phi) dphi dpsi`), by `steps` midpoint samples of
+/// each angle. Same conventions as [`ring_integral`] for flat skin and odd inputs.
+pub fn sphere_integral(profile: &Profile, n_dot_l: f64, inv_r_mm: f64, steps: usize) -> [f64; 3] {
+    let n_dot_l = if n_dot_l.is_nan() { 0.0 } else { n_dot_l.clamp(-1.0, 1.0) };
+    let inv_r = if inv_r_mm.is_finite() && inv_r_mm > 0.0 { inv_r_mm } else { 0.0 };
+    if inv_r == 0.0 {
+        return [n_dot_l.max(0.0); 3];
+    }
+    let (cos_t, sin_t) = (n_dot_l, (1.0 - n_dot_l * n_dot_l).max(0.0).sqrt());
+    let r = 1.0 / inv_r;
+    let steps = steps.max(2);
+    let (d_phi, d_psi) = (std::f64::consts::PI / steps as f64, std::f64::consts::TAU / steps as f64);
+    let (mut light, mut total) = ([0.0f64; 3], [0.0f64; 3]);
+    for k in 0..steps {
+        let phi = (k as f64 + 0.5) * d_phi;
+        let weight = profile.eval(2.0 * r * (0.5 * phi).sin());
+        let area = phi.sin();
+        let lit: f64 = (0..steps)
+            .map(|m| (cos_t * phi.cos() + sin_t * phi.sin() * ((m as f64 + 0.5) * d_psi).cos()).max(0.0))
+            .sum::<f64>()
+            / steps as f64;
+        for c in 0..3 {
+            light[c] += lit * area * weight[c];
+            total[c] += area * weight[c];
         }
     }
     std::array::from_fn(|c| if total[c] > 0.0 { light[c] / total[c] } else { n_dot_l.max(0.0) })

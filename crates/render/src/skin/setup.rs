@@ -12,7 +12,7 @@ use glam::Vec3;
 use skinkit_maps::io::{self, Limits};
 
 use super::lut::{DiffuseLut, DiffuseLutSpec};
-use super::options::{Sky, Zonal};
+use super::options::{Sky, TsdKernel, Zonal};
 use super::profile::{VARIANCES_MM2, WEIGHTS};
 use super::sh::{self, Sh9, ZonalTable};
 use super::shadow::{ShadowLut, ShadowLutSpec};
@@ -25,9 +25,9 @@ use crate::shading::Texture;
 /// 1/r range of the diffuse LUT and the zonal table, 1/mm (r >= 1 mm: ears and nostrils).
 pub const INV_R_RANGE: (f32, f32) = (0.0, 1.0);
 
-/// Samples of 1/r in the zonal table (linear interpolation between 9 samples is already within
-/// 0.2% of the exact factors).
-pub const ZONAL_SAMPLES: usize = 17;
+/// Samples of 1/r in the zonal table (linear interpolation between them is within 0.11% of the
+/// exact factors; see [`super::sh::ZonalTable`]).
+pub const ZONAL_SAMPLES: usize = 33;
 
 /// Side of the shadow-scattering LUT.
 pub const SHADOW_LUT_SIDE: u32 = 64;
@@ -84,6 +84,10 @@ pub fn build(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSe
             map_size: plan.size,
             filter: plan.filter,
             bias: options.bias,
+            disc_radius: match graph.features.shadow_scattering {
+                true => 0.5 * options.scatter_width_mm / scene.mm_per_unit,
+                false => 0.0,
+            },
             view_proj,
             texel,
             new_penumbra: options.new_penumbra,
@@ -248,10 +252,14 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
     };
     Ok(TsdSetup {
         size: plan.size,
-        passes: plan.blurs,
+        kernel: options.kernel,
+        passes: options.passes,
         kernel_map,
         kernel_scale,
-        kernel_mm: passes::kernel_mm_for(luminance_variance(), options.passes),
+        kernel_mm: match options.kernel {
+            TsdKernel::Single => passes::kernel_mm_for(luminance_variance(), options.passes),
+            TsdKernel::Gaussians => super::tsd::GAUSSIANS_KERNEL_MM,
+        },
         curvature_gain: options.curvature_gain,
         backface_bias: options.backface_bias,
         reuse_below_px: options.reuse_below_px,

@@ -17,8 +17,8 @@
 //!   sum_l A_l sum_m L_lm Y_lm(n)` with `A_l = 2 pi int_0^pi f(cos t) P_l(cos t) sin t dt
 //!   = sqrt(4 pi / (2l + 1)) zh_l`, `zh_l = 2 pi int f Y_l0 sin t dt` the zonal harmonic
 //!   coefficient. For the clamped cosine `A = (pi, 2 pi / 3, pi / 4)` ([`LAMBERT_ZONAL`]).
-//! - Skin: `f = D(cos t, 1/r)` over the whole sphere, t in [0, pi]: the full ring domain lets D
-//!   be non-zero below the horizon (the blog's point about equation 19). [`skin_zonal`] projects
+//! - Skin: `f = D(cos t, 1/r)` over the whole sphere, t in [0, pi]: the falloff is non-zero
+//!   below the horizon (the blog's point about equation 19). [`skin_zonal`] projects
 //!   [`super::fit::reference_direct`] by Gauss-Legendre quadrature in `cos t`.
 //! - The blog's `zh0`, `zh1` ([`blog_zonal`]) are these `zh_l` themselves, not ratios to
 //!   Lambert: at r = 16 mm they reach Lambert's `sqrt(pi) / 2 = 0.8862` and
@@ -30,9 +30,10 @@
 //!   normalisation ([`super::profile::Normalisation::OneD`]) over the full ring: against its
 //!   factors the blog is within 3.0%, 0.26%, 0.15% (A_0, red, green, blue) and 1.7%, 0.21%,
 //!   0.13% (A_1) for 1/r in [0.0625, 0.5] (the half ring misses A_1 red at r = 2 mm by 17%).
-//!   Against ours ([`skin_zonal`], 2-D normalisation, far less red scattered) it is off by up to
-//!   13%, 0.70%, 0.16% (A_0) and 23%, 1.0%, 0.37% (A_1), worst at r = 2 mm, where the blog's
-//!   red A_0 = 3.63 and A_1 = 1.57 against our 3.20 and 2.03 (Lambert: 3.14, 2.09).
+//!   Against ours ([`skin_zonal`], the sphere falloff, which keeps `A_0` at Lambert's pi: a
+//!   uniformly lit sphere stays uniform) it is off by up to 15%, 1.0%, 0.33% (A_0) and 2.0%,
+//!   0.31%, 0.097% (A_1), worst at r = 2 mm, where the blog's red A_0 = 3.63 and A_1 = 1.57
+//!   against our 3.14 and 1.60 (Lambert: 3.14, 2.09).
 
 use glam::Vec3;
 
@@ -241,10 +242,12 @@ pub fn zonal_factors(f: impl Fn(f64) -> [f64; 3] + Sync, cells: usize) -> [[f64;
 
 /// The skin's convolution factors `A_l(1/r)` per channel (`[l][channel]`) from the true falloff
 /// ([`super::fit::reference_direct`]) over the whole sphere. `1/r` is in mm^-1; negative or NaN
-/// counts as 0 (Lambert). Costs twice [`ZONAL_STEPS`] ring integrals: tabulate it ([`ZonalTable`]).
+/// counts as 0 (Lambert). Costs twice [`ZONAL_STEPS`] falloff evaluations: tabulate it
+/// ([`ZonalTable`]).
 pub fn skin_zonal(inv_r_mm: f32) -> [[f32; 3]; 3] {
     let inv_r = if inv_r_mm.is_nan() { 0.0 } else { f64::from(inv_r_mm).max(0.0) };
-    zonal_factors(|c| super::fit::reference_direct(c, inv_r), ZONAL_STEPS).map(|a| a.map(|v| v as f32))
+    let falloff = super::sphere::SphereFalloff::new(&super::profile::Profile::default(), inv_r);
+    zonal_factors(|c| falloff.at(c), ZONAL_STEPS).map(|a| a.map(|v| v as f32))
 }
 
 /// Skin irradiance at unit normal `n` under `sh`: `sum_l A_l,c(1/r) sum_m L_lm,c Y_lm(n)`.
@@ -256,8 +259,8 @@ pub fn skin_irradiance(sh: &Sh9, n: Vec3, inv_r_mm: f32) -> [f32; 3] {
 /// [`skin_zonal`] sampled at `n` values of 1/r, evenly from `inv_r_min` to `inv_r_max`
 /// inclusive, for a GPU texture: width `n` (1/r along u, texel centres on the samples), 3 rows
 /// (row l holds `A_l`), RGB ([`ZonalTable::texels`]). Linear interpolation between 9 samples
-/// over [0, 1] mm^-1 is within 0.2% of [`skin_zonal`] (the error falls as `1 / n^2`); each
-/// sample costs one [`skin_zonal`].
+/// over [0, 1] mm^-1 is within 1.5% of [`skin_zonal`], between 33 within 0.11% (the error falls
+/// as `1 / n^2`); each sample costs one [`skin_zonal`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ZonalTable {
     /// 1/r of the first sample, mm^-1.

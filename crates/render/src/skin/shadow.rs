@@ -1,23 +1,29 @@
 //! The pre-integrated shadow scattering `P_S(s, w)` of Penner and Borshukov (2011), section 1.6:
-//! a shadow value `s` from a filtered shadow map is mapped back to its place in the penumbra, and
+//! a shadow value `s`, the lit share of a filter's footprint, is mapped back to its place in the penumbra, and
 //! replaced by a narrower penumbra blurred by the skin diffusion profile,
 //!
-//! `P_S(s, w) = int P'(P^-1(s) w + x) R1(x) dx / int R1(x) dx`, `x` in mm.
+//! `P_S(s, w) = int P'(P^-1(s) w / 2 + x) R1(x) dx / int R1(x) dx`, `x` in mm.
 //!
 //! # Definitions
 //!
-//! - The shadow filter is the renderer's percentage-closer filter: a box of k x k shadow-map texels
-//!   with nearest depth compares. Across a straight shadow edge a box filter gives a linear ramp,
-//!   `P(t) = clamp(0.5 + t, 0, 1)` with `t` the distance from the edge in units of the penumbra
-//!   width `w`, so `P^-1(s) = s - 0.5`. At `s = 0` and `s = 1` (outside the penumbra, where `P`
-//!   is not invertible) the ramp's ends are used: the table says how much light the nearest
-//!   penumbra scatters to its end.
-//! - The new penumbra `P'` is again a linear ramp (what a box filter `new_penumbra * w` wide would
-//!   give), centred on the same edge: `P'(y) = clamp(0.5 + y / (new_penumbra * w), 0, 1)`. A ramp
-//!   rather than a smoothstep keeps the table exact at `w -> 0` (a step) and has a closed form.
-//!   The default `new_penumbra = 0.25` leaves three quarters of the filtered penumbra to the
-//!   scattered light while the hard part still spans a shadow-map texel for k >= 4 (the paper asks
-//!   for a filter wide enough to hold most of the profile and a smaller new penumbra).
+//! - The shadow filter is shadow scattering's disc of taps: the lit share `s` of a disc of
+//!   diameter `w` (mm) on the receiver's tangent plane, each tap compared at full shadow-map
+//!   resolution. A straight edge at signed distance `t w / 2` from the disc's centre (lit side
+//!   `t > 0`) leaves `P(t) = 1 - (acos t - t sqrt(1 - t^2)) / pi` of it lit; `P^-1` is found by
+//!   bisection. A disc on the skin rather than a box of shadow-map texels makes `w` the same in
+//!   every direction and on every slope to the light, so the table needs no per-pixel stretch, and
+//!   the casters' silhouettes keep the map's resolution. (The paper filters the shadow map itself;
+//!   with the map coarsened until its box spans the profile, the nose's shadow on the sample head
+//!   shrank by millimetres and the table's error was 3.4x Lambert's sharp shadow.)
+//! - The new penumbra `P'` is a linear ramp `new_penumbra * w` wide (what a box filter that wide
+//!   would give), centred on the same edge: `P'(y) = clamp(0.5 + y / (new_penumbra * w), 0, 1)`.
+//!   A directional light's true penumbra is a step; the default `new_penumbra = 0.05` keeps a
+//!   quarter-millimetre ramp at the default 5 mm disc. A ramp has a closed form and is exact at
+//!   `w -> 0` (a step).
+//! - Beyond the disc (`s = 0` or `1`) the edge's distance is unknown. The integral there is the
+//!   light a nearby edge would scatter; the table is stretched per channel so that those ends are
+//!   exactly 0 and 1, so skin far from any shadow keeps its colour and the shading is continuous
+//!   where the disc leaves the edge.
 //! - `R1` is the profile's 1-D marginal ([`super::profile::Profile::marginal`]), not its radial
 //!   slice: light crossing a straight edge is the 2-D profile integrated along the edge, a 1-D
 //!   convolution with the marginal. The paper's listing weights by the radial slice `R(|x|)`
@@ -65,10 +71,10 @@ pub struct ShadowLutSpec {
 }
 
 impl Default for ShadowLutSpec {
-    /// 256x256, penumbrae from 0.5 mm to 32 mm (a sharp contact shadow to a soft nose shadow; the
-    /// profile's widest Gaussian has sigma 2.7 mm), new penumbra a quarter of the filtered one.
+    /// 256x256, discs from 0.5 mm to 32 mm across (the profile's widest Gaussian has sigma
+    /// 2.7 mm), new penumbra a twentieth of the disc.
     fn default() -> Self {
-        Self { width: 256, height: 256, w_min_mm: 0.5, w_max_mm: 32.0, new_penumbra: 0.25 }
+        Self { width: 256, height: 256, w_min_mm: 0.5, w_max_mm: 32.0, new_penumbra: 0.05 }
     }
 }
 
@@ -108,7 +114,7 @@ impl ShadowLutSpec {
     /// A string naming every parameter (floats by their bits) and the builder version.
     pub fn cache_key(&self) -> String {
         format!(
-            "skinkit-shadow-lut/v{}/{}x{}/box-ramp/marginal/w:{:08x}-{:08x}/new:{:08x}",
+            "skinkit-shadow-lut/v{}/{}x{}/disc/marginal/w:{:08x}-{:08x}/new:{:08x}",
             super::lut::BUILDER_VERSION,
             self.width,
             self.height,
@@ -163,9 +169,22 @@ impl ShadowLut {
     }
 }
 
-/// `P_S(s, w)` per channel in closed form (module docs).
+/// `P_S(s, w)` per channel in closed form (module docs), stretched so that a fully lit disc
+/// (`s = 1`) gives 1 and a fully shadowed one 0: beyond the disc the edge's distance is unknown
+/// and the far field must not change colour.
 fn scattered(s: f64, w_mm: f64, new_penumbra: f64) -> [f32; 3] {
-    let y = (s.clamp(0.0, 1.0) - 0.5) * w_mm;
+    let lo = scattered_at(0.0, w_mm, new_penumbra);
+    let hi = scattered_at(1.0, w_mm, new_penumbra);
+    let p = scattered_at(s, w_mm, new_penumbra);
+    std::array::from_fn(|c| {
+        let span = hi[c] - lo[c];
+        let v = if span > 1e-9 { (p[c] - lo[c]) / span } else { p[c] };
+        v.clamp(0.0, 1.0) as f32
+    })
+}
+
+fn scattered_at(s: f64, w_mm: f64, new_penumbra: f64) -> [f64; 3] {
+    let y = disc_offset(s.clamp(0.0, 1.0)) * 0.5 * w_mm;
     let a = new_penumbra * w_mm;
     let mut out = [0.0f64; 3];
     for (v, weights) in VARIANCES_MM2.iter().zip(WEIGHTS.iter()) {
@@ -174,7 +193,23 @@ fn scattered(s: f64, w_mm: f64, new_penumbra: f64) -> [f32; 3] {
             out[c] += weights[c] * e;
         }
     }
-    out.map(|p| p.clamp(0.0, 1.0) as f32)
+    out
+}
+
+/// The lit share of a unit disc whose centre is `t` from a straight shadow edge (lit side `t > 0`).
+fn disc_coverage(t: f64) -> f64 {
+    let t = t.clamp(-1.0, 1.0);
+    1.0 - (t.acos() - t * (1.0 - t * t).sqrt()) / std::f64::consts::PI
+}
+
+/// The inverse of [`disc_coverage`] by bisection: the centre's signed distance, in radii.
+fn disc_offset(s: f64) -> f64 {
+    let (mut lo, mut hi) = (-1.0f64, 1.0f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if disc_coverage(mid) < s { lo = mid } else { hi = mid }
+    }
+    0.5 * (lo + hi)
 }
 
 /// `E[clamp(0.5 + (y + X) / a, 0, 1)]` for `X ~ N(0, sigma^2)`.
