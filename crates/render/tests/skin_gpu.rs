@@ -211,6 +211,7 @@ fn tsd_gaussians_keep_uniform_light_and_scatter_red_farther_than_blue() {
         skin.mm_per_unit = 10.0;
         let tsd = skin.tsd.as_mut().unwrap();
         (tsd.kernel, tsd.kernel_mm) = (TsdKernel::Gaussians, skinkit_render::skin::tsd::GAUSSIANS_KERNEL_MM);
+        tsd.kernel_scale = [passes::MAX_KERNEL_TEXELS, 0.0];
         skin
     };
     let row = |pixels: &[[f32; 4]], c: usize| -> Vec<f32> {
@@ -246,6 +247,19 @@ fn tsd_gaussians_keep_uniform_light_and_scatter_red_farther_than_blue() {
     assert!((one - eight).abs() < 1.0, "the lit share of the row moved by {} pixels from 1 to 8 passes", one - eight);
     let (red, blue) = (width(0), width(2));
     assert!(red > blue + 2, "red's penumbra must be wider than blue's: {red} vs {blue} pixels");
+    // The same floor with its v range halved: a texel spans twice the mm along v as along u, and
+    // the mean stretch sits between them. The stretch map widens the kernel along u (across this
+    // edge) back to its size in mm, so the edge keeps its width; without it the edge would be
+    // about 1.4x narrower.
+    let (mut squashed, indices) = floor_and_blocker(true);
+    for v in &mut squashed[..4] {
+        v.uv[1] *= 0.5;
+    }
+    let squashed = inputs((squashed, indices));
+    let r = row(&render(&gpu, &squashed, &gaussians(&squashed, true)), 0);
+    let lit = r.iter().cloned().fold(0.0f32, f32::max);
+    let squashed_red = r.iter().filter(|&&v| v > 0.05 * lit && v < 0.95 * lit).count();
+    assert!(squashed_red.abs_diff(red) <= 2 + red / 10, "red's penumbra: {squashed_red} pixels squashed, {red} square");
 }
 
 #[test]
