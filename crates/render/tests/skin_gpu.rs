@@ -235,16 +235,18 @@ fn tsd_gaussians_keep_uniform_light_and_scatter_red_farther_than_blue() {
         r.iter().filter(|&&v| v > 0.05 * lit && v < 0.95 * lit).count()
     };
     // On a flat floor (UV stretch the same along u and v) more passes only make each
-    // Gaussian's shape smoother: the edge stays where one pass put it.
+    // Gaussian's shape smoother: the edge keeps its place (the row's lit share) and its width.
     let edge_at = |passes: u32| {
         let mut skin = gaussians(&blocked, true);
         skin.tsd.as_mut().unwrap().passes = passes;
         let r = row(&render(&gpu, &blocked, &skin), 0);
         let lit = r.iter().cloned().fold(0.0f32, f32::max);
-        r.iter().map(|v| v / lit).sum::<f32>()
+        let band = r.iter().filter(|&&v| v > 0.05 * lit && v < 0.95 * lit).count();
+        (r.iter().map(|v| v / lit).sum::<f32>(), band)
     };
-    let (one, eight) = (edge_at(1), edge_at(8));
+    let ((one, one_band), (eight, eight_band)) = (edge_at(1), edge_at(8));
     assert!((one - eight).abs() < 1.0, "the lit share of the row moved by {} pixels from 1 to 8 passes", one - eight);
+    assert!(one_band.abs_diff(eight_band) <= 2, "the red penumbra: {one_band} pixels at 1 pass, {eight_band} at 8");
     let (red, blue) = (width(0), width(2));
     assert!(red > blue + 2, "red's penumbra must be wider than blue's: {red} vs {blue} pixels");
     // The same floor with its v range halved: a texel spans twice the mm along v as along u, and
