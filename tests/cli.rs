@@ -289,7 +289,7 @@ fn demo_reports_every_mold_with_both_solvers() {
     assert_eq!((ws, hs), (3 * 768, 2 * 768));
     let methods = renders["skin"]["methods"].as_array().unwrap();
     let names: Vec<&str> = methods.iter().map(|m| m["method"].as_str().unwrap()).collect();
-    assert_eq!(names, ["lambert", "blog-fit", "own-fit", "lut-256", "tsd-3x1024", "reference-512"]);
+    assert_eq!(names, ["lambert", "blog-fit", "own-fit", "lut-256", "tsd-1x1024", "reference-512"]);
     for m in methods {
         let flip = m["flip_mean"].as_f64().unwrap();
         let last = m["method"] == "reference-512";

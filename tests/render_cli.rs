@@ -240,11 +240,18 @@ fn explain_shows_the_graph_each_scene_asks_for() {
     for name in ["diffuse LUT", "shadow LUT", "shadow map", "per-vertex curvature"] {
         assert!(resources.iter().any(|r| r == name), "{name}: {resources:?}");
     }
-    let tsd = explain_json(&shadowed_head_scene(tmp.path(), "effects = [\"tsd\", \"shadows\"]\n[tsd]\npasses = 2"));
+    let tsd = explain_json(&shadowed_head_scene(
+        tmp.path(),
+        "effects = [\"tsd\", \"shadows\"]\n[tsd]\nkernel = \"single\"\npasses = 2",
+    ));
     assert_eq!(
         names(&tsd, "passes"),
         ["shadow map", "tsd back-face pre-pass", "tsd light map", "tsd blur 1", "tsd blur 2", "base"]
     );
+    // The default kernel, the profile's Gaussians: a dilating blur and one per Gaussian increment.
+    let gaussians = explain_json(&shadowed_head_scene(tmp.path(), "effects = [\"tsd\", \"shadows\"]"));
+    let blurs = names(&gaussians, "passes").iter().filter(|p| p.starts_with("tsd blur")).count();
+    assert_eq!(blurs, 5);
     assert!(!names(&tsd, "resources").iter().any(|r| r.contains("LUT")));
     // `shadows` with no shadow-casting light: no shadow map, and the warning says why.
     let none = explain_json(&head_scene(tmp.path(), None, "effects = [\"shadows\"]"));

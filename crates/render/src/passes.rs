@@ -190,10 +190,20 @@ pub const POISSON: [[f32; 2]; 12] = [
     [-0.791559, -0.59771],
 ];
 
-/// The mean squared distance of the 13 taps (centre included) from the centre, in radii^2: one
-/// blur pass of radius rho adds `rho^2 * this / 2` of variance per axis.
+/// The mean of the 13 taps (centre included), in radii: the disc is off centre by about 0.1 of its
+/// radius along v, so the blur moves its taps back by this to keep the map in place.
+pub fn poisson_mean() -> [f32; 2] {
+    let sum = POISSON.iter().fold([0.0f32; 2], |s, p| [s[0] + p[0], s[1] + p[1]]);
+    sum.map(|v| v / 13.0)
+}
+
+/// The mean squared distance of the 13 taps (centre included) from their mean
+/// ([`poisson_mean`]), in radii^2: one blur pass of radius rho adds `rho^2 * this / 2` of
+/// variance per axis.
 pub fn poisson_second_moment() -> f32 {
-    POISSON.iter().map(|[x, y]| x * x + y * y).sum::<f32>() / 13.0
+    let [mx, my] = poisson_mean();
+    let raw = POISSON.iter().map(|[x, y]| x * x + y * y).sum::<f32>() / 13.0;
+    raw - (mx * mx + my * my)
 }
 
 /// The derived kernel radius (mm) for `passes` blur passes so that their combined variance per

@@ -219,7 +219,7 @@ fn ambient_reads_the_zonal_table_only_over_a_preintegrated_diffuse() {
 
 #[test]
 fn texture_space_diffusion_runs_its_pre_pass_light_map_and_blurs() {
-    let (passes, resources, _) = graph_of("effects = [\"tsd\"]\n[tsd]\npasses = 3\nsize = 256");
+    let (passes, resources, _) = graph_of("effects = [\"tsd\"]\n[tsd]\nkernel = \"single\"\npasses = 3\nsize = 256");
     assert_eq!(passes, ["tsd back-face pre-pass", "tsd light map", "tsd blur 1", "tsd blur 2", "tsd blur 3", "base"]);
     for name in ["tsd depth", "light map A", "light map B", "per-vertex curvature"] {
         assert!(resources.iter().any(|r| r == name), "{name} missing: {resources:?}");

@@ -80,7 +80,7 @@ const SKIN_METHODS: [(&str, &str, &str, bool); 6] = [
         false,
     ),
     ("lut-256", r#"["preintegrated", "shadows", "shadow-scattering"]"#, "", false),
-    ("tsd-3x1024", r#"["tsd", "shadows"]"#, "[tsd]\npasses = 3\nsize = 1024\n", false),
+    ("tsd-1x1024", r#"["tsd", "shadows"]"#, "[tsd]\npasses = 1\nsize = 1024\n", false),
     ("reference-512", r#"["shadows"]"#, "", true),
 ];
 

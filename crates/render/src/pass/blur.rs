@@ -19,8 +19,8 @@ pub(crate) struct BlurUniforms {
     /// The Poisson disc's per-axis variance per unit radius squared
     /// ([`passes::poisson_second_moment`] / 2).
     pub(crate) tap_variance: f32,
-    pub(crate) pad1: u32,
-    pub(crate) pad2: u32,
+    /// [`passes::poisson_mean`].
+    pub(crate) tap_mean: [f32; 2],
     /// Scales the blurred source per channel (w unused).
     pub(crate) source_scale: [f32; 4],
     /// Weight of light map B added after the blur per channel (w unused).
@@ -63,8 +63,7 @@ impl Gpu {
                     b: b * stage.scale,
                     dilate: stage.dilate as u32,
                     tap_variance: passes::poisson_second_moment() / 2.0,
-                    pad1: 0,
-                    pad2: 0,
+                    tap_mean: passes::poisson_mean(),
                     source_scale: rgb0(stage.source_scale),
                     irradiance_weight: rgb0(stage.irradiance_weight),
                 };

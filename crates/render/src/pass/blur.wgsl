@@ -15,10 +15,10 @@ struct BlurUniforms {
     b: f32,
     // 1: this pass dilates.
     dilate: u32,
-    // The Poisson disc's variance per axis for radius 1 (texels^2).
+    // The Poisson disc's variance per axis for radius 1 (texels^2), about its mean.
     tap_variance: f32,
-    pad1: u32,
-    pad2: u32,
+    // The mean of the 13 taps (centre included), in radii.
+    tap_mean: vec2<f32>,
     // Scales the blurred source per channel.
     source_scale: vec4<f32>,
     // Weight of the kept irradiance (light map B) added after the blur, per channel.
@@ -83,12 +83,18 @@ fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
     // than the light map's mean stretch assumed.
     let widening = textureSampleLevel(stretch, source_sampler, input.uv, 0.0).rg;
     let radius = blur.inv_size * disc_radius((min(centre.a, 0.999) * blur.a + blur.b) * widening);
-    var sum = centre.rgb;
-    var written_sum = centre.rgb;
-    var written = 1.0;
+    // The 13 taps (the centre and the disc) moved by minus their mean, so that a pass blurs
+    // without shifting the map (Gosselin's disc is off centre by 0.1 radius along v).
+    var sum = vec3<f32>(0.0);
+    var written_sum = vec3<f32>(0.0);
+    var written = 0.0;
     var smallest = centre;
-    for (var tap = 0u; tap < 12u; tap++) {
-        let s = textureSampleLevel(source, source_sampler, input.uv + POISSON[tap] * radius, 0.0);
+    for (var tap = 0u; tap < 13u; tap++) {
+        var offset = -blur.tap_mean;
+        if tap > 0u {
+            offset += POISSON[tap - 1u];
+        }
+        let s = textureSampleLevel(source, source_sampler, input.uv + offset * radius, 0.0);
         sum += s.rgb;
         if s.a < 1.0 {
             written_sum += s.rgb;
@@ -105,12 +111,12 @@ fn fs_blur(input: FullScreen) -> @location(0) vec4<f32> {
         }
         // A written texel next to unwritten ones averages only what was written (the chapter's
         // "more complicated scheme"; its own code copies one tap instead).
-        return vec4<f32>(written_sum / written, centre.a);
+        return vec4<f32>(written_sum / max(written, 1.0), centre.a);
     }
     // Every pass averages only the written taps: the texels outside the charts hold no light,
     // and averaging them in would darken the charts' borders a little more with every pass.
     var mean = sum / 13.0;
-    if centre.a < 1.0 {
+    if centre.a < 1.0 && written > 0.0 {
         mean = written_sum / written;
     }
     let added = textureSampleLevel(irradiance, source_sampler, input.uv, 0.0).rgb;

@@ -166,7 +166,7 @@ pub fn uniform_layouts() -> Vec<UniformLayout> {
             BLUR_WGSL,
             "BlurUniforms",
             BlurUniforms,
-            [inv_size, a, b, dilate, tap_variance, pad1, pad2, source_scale, irradiance_weight]
+            [inv_size, a, b, dilate, tap_variance, tap_mean, source_scale, irradiance_weight]
         ),
     ]
 }

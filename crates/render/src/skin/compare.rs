@@ -62,8 +62,8 @@ impl Method {
             Self::OwnFit => "own-fit".into(),
             Self::Lut { size } => format!("lut-{size}"),
             Self::RingLut { size } => format!("lut-ring-{size}"),
-            Self::Tsd { kernel: TsdKernel::Single, passes, size } => format!("tsd-{passes}x{size}"),
-            Self::Tsd { kernel: TsdKernel::Gaussians, passes, size } => format!("tsd-gaussians-{passes}x{size}"),
+            Self::Tsd { kernel: TsdKernel::Gaussians, passes, size } => format!("tsd-{passes}x{size}"),
+            Self::Tsd { kernel: TsdKernel::Single, passes, size } => format!("tsd-single-{passes}x{size}"),
             Self::Reference { size } => format!("reference-{size}"),
         }
     }
@@ -76,12 +76,12 @@ impl Method {
         methods.push(Self::RingLut { size: 256 });
         // Passes at one size, sizes at one and at four passes: the error must not grow with either.
         let tsd = |kernel, passes, size| Self::Tsd { kernel, passes, size };
-        methods.extend([1, 2, 4, 8].map(|passes| tsd(TsdKernel::Single, passes, 1024)));
+        methods.extend([1, 2, 4, 8].map(|passes| tsd(TsdKernel::Gaussians, passes, 1024)));
         for size in [512, 2048] {
-            methods.extend([1, 4].map(|passes| tsd(TsdKernel::Single, passes, size)));
+            methods.extend([1, 4].map(|passes| tsd(TsdKernel::Gaussians, passes, size)));
         }
-        // The profile's Gaussians per channel (d'Eon and Luebke), passes per Gaussian.
-        methods.extend([1, 4].map(|passes| tsd(TsdKernel::Gaussians, passes, 1024)));
+        // Gosselin's single kernel of the luminance variance, for comparison.
+        methods.extend([1, 2, 4, 8].map(|passes| tsd(TsdKernel::Single, passes, 1024)));
         methods.push(Self::Reference { size: (reference_size / 2).max(1) });
         methods.push(Self::Reference { size: reference_size });
         methods

@@ -32,8 +32,8 @@
 //!
 //! [tsd]                         # read by tsd (Gosselin et al. 2004; d'Eon and Luebke 2007)
 //! size = 1024                   # light map texels per side
-//! kernel = "single"             # one kernel for all channels; "gaussians": the profile's, per channel
-//! passes = 3                    # Poisson blur passes (per Gaussian with "gaussians"; the first dilates)
+//! kernel = "gaussians"          # the profile's Gaussians per channel; "single": one kernel for all
+//! passes = 1                    # Poisson blur passes (per Gaussian with "gaussians"; the first dilates)
 //! kernel_map = "kernel.png"     # optional: per-texel kernel size in [0, 1), radius = a * k + b
 //! kernel_scale = [3.0, 2.0]     # with kernel_map: (a, b) in texels of a 512 map (the chapter's vBlurScale)
 //! curvature_gain = 0.0          # derived kernel: radius x (1 + gain_mm * 1/r); Gosselin's widening on curved skin, off (see README)
@@ -177,14 +177,11 @@ impl Default for ShadowOptions {
 pub enum TsdKernel {
     /// The profile's sum of Gaussians, each channel with its own weights (d'Eon and Luebke):
     /// the light map blurred by each Gaussian's increment in turn, widest first, the weighted
-    /// irradiance added back after each (so red scatters farther than blue). Not the default:
-    /// with the light map's one isotropic stretch per texel, its larger red variance is spread
-    /// wrongly where the UV map stretches unevenly (the benchmark's sphere and head), and its
-    /// error then grows with passes.
+    /// irradiance added back after each (so red scatters farther than blue).
+    #[default]
     Gaussians,
     /// One kernel for all three channels, of the profile's luminance variance (Gosselin); the
     /// only kind a kernel map can drive.
-    #[default]
     Single,
 }
 
@@ -213,8 +210,8 @@ impl Default for TsdOptions {
     fn default() -> Self {
         Self {
             size: 1024,
-            kernel: TsdKernel::Single,
-            passes: 3,
+            kernel: TsdKernel::Gaussians,
+            passes: 1,
             kernel_map: None,
             kernel_scale: [3.0, 2.0],
             curvature_gain: 0.0,
