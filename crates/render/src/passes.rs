@@ -206,6 +206,18 @@ pub fn poisson_second_moment() -> f32 {
     raw - (mx * mx + my * my)
 }
 
+/// The 13 taps' variance along u and along v about their mean ([`poisson_mean`]), in radii^2:
+/// the disc is not isotropic (0.352 along u, 0.285 along v), so a blur that should add the same
+/// variance along both axes sizes its radius per axis.
+pub fn poisson_axis_variance() -> [f32; 2] {
+    let mean = poisson_mean();
+    std::array::from_fn(|axis| {
+        let centre = mean[axis] * mean[axis];
+        let taps = POISSON.iter().map(|p| (p[axis] - mean[axis]).powi(2)).sum::<f32>();
+        (taps + centre) / 13.0
+    })
+}
+
 /// The derived kernel radius (mm) for `passes` blur passes so that their combined variance per
 /// axis equals `variance_mm2` (the profile's luminance-weighted variance).
 pub fn kernel_mm_for(variance_mm2: f32, passes: u32) -> f32 {

@@ -124,3 +124,16 @@ fn the_layout_check_catches_a_moved_member() {
     let rust: Vec<String> = blur.members.iter().map(|(n, _)| n.to_string()).collect();
     assert_ne!(names, rust);
 }
+
+#[test]
+fn blur_radius_table_constants_match_the_rust_side() {
+    use skinkit_render::skin::tsd::{RADIUS_TABLE_LEN, RADIUS_TABLE_MAX_VARIANCE};
+    let source = skinkit_render::pass::BLUR_WGSL;
+    for line in [
+        format!("const RADIUS_TABLE_LEN: u32 = {RADIUS_TABLE_LEN}u;"),
+        format!("const RADIUS_TABLE_MAX_VARIANCE: f32 = {RADIUS_TABLE_MAX_VARIANCE:?};"),
+        format!("radius_table: array<vec4<f32>, {}>,", RADIUS_TABLE_LEN / 2),
+    ] {
+        assert!(source.contains(&line), "blur.wgsl lacks `{line}`");
+    }
+}

@@ -30,7 +30,7 @@ pub(crate) use frame::tone_code;
 pub(crate) use pipelines::{MESH_BUFFERS, MeshPipeline, POSITION_BUFFER, PipelineKey, depth_state};
 pub use readback::{Rendered, padded_row_bytes};
 pub(crate) use resources::{
-    DEPTH_FORMAT, LIGHT_MAP_FORMAT, STRETCH_FORMAT, SceneTextures, colour_attachment, depth_attachment, extent,
+    DEPTH_FORMAT, OPACITY_FORMAT, STRETCH_FORMAT, SceneTextures, colour_attachment, depth_attachment, extent,
 };
 
 use std::sync::Mutex;

@@ -7,8 +7,11 @@ use crate::passes::{SkinSetup, Table};
 use crate::shading::{RenderInputs, Texture};
 use wgpu::util::DeviceExt;
 
-/// Light maps are Rgba16Float: filterable everywhere, HDR irradiance, kernel size in alpha.
-pub(crate) const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// TSD's light maps where the device filters Rgba32Float ([`Gpu::light_map_format`]): HDR
+/// irradiance, kernel size in alpha.
+const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The shadow's opacity map of translucent casters: filterable everywhere.
+pub(crate) const OPACITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// TSD's stretch map: per texel, how much wider than the light map's isotropic kernel the blur
 /// is along u and along v.
 pub(crate) const STRETCH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
@@ -24,6 +27,18 @@ impl Gpu {
     pub fn table_format(&self) -> wgpu::TextureFormat {
         if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
             TABLE_FORMAT
+        } else {
+            wgpu::TextureFormat::Rgba16Float
+        }
+    }
+
+    /// Rgba32Float for TSD's light maps where the device filters it, else Rgba16Float. Every
+    /// blur pass rounds the map to its format, and a half float's rounding (lavapipe truncates)
+    /// darkens it by about 2^-12 per pass: red, which goes through every pass of the widest
+    /// Gaussians, lost 0.4 % more at 8 passes per Gaussian than at one on the sample head.
+    pub fn light_map_format(&self) -> wgpu::TextureFormat {
+        if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
+            LIGHT_MAP_FORMAT
         } else {
             wgpu::TextureFormat::Rgba16Float
         }

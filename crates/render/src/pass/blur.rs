@@ -2,7 +2,7 @@
 //! per pass by its stage ([`crate::skin::tsd`]), between the light maps; the first pass also
 //! dilates across UV seams.
 
-use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PipelineKey, colour_attachment};
+use crate::gpu::{Gpu, PipelineKey, colour_attachment};
 use crate::pass::light_map::UNWRITTEN_TEXEL;
 use crate::pass::tsd::TsdResources;
 use crate::passes;
@@ -16,8 +16,7 @@ pub(crate) struct BlurUniforms {
     pub(crate) a: f32,
     pub(crate) b: f32,
     pub(crate) dilate: u32,
-    /// The Poisson disc's per-axis variance per unit radius squared
-    /// ([`passes::poisson_second_moment`] / 2).
+    /// The per-axis variance a unit radius stands for ([`passes::poisson_second_moment`] / 2).
     pub(crate) tap_variance: f32,
     /// [`passes::poisson_mean`].
     pub(crate) tap_mean: [f32; 2],
@@ -25,6 +24,12 @@ pub(crate) struct BlurUniforms {
     pub(crate) source_scale: [f32; 4],
     /// Weight of light map B added after the blur per channel (w unused).
     pub(crate) irradiance_weight: [f32; 4],
+    /// [`passes::poisson_axis_variance`].
+    pub(crate) axis_variance: [f32; 2],
+    pub(crate) pad0: f32,
+    pub(crate) pad1: f32,
+    /// [`tsd::radius_table`].
+    pub(crate) radius_table: [[f32; 4]; tsd::RADIUS_TABLE_LEN / 2],
 }
 
 impl Gpu {
@@ -52,6 +57,7 @@ impl Gpu {
         let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
         let (a, b) = (setup.kernel_scale[0], setup.kernel_scale[1]);
         let rgb0 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+        let radius_table = tsd::radius_table();
         tsd::stages(setup.kernel, setup.passes)
             .into_iter()
             .enumerate()
@@ -66,6 +72,10 @@ impl Gpu {
                     tap_mean: passes::poisson_mean(),
                     source_scale: rgb0(stage.source_scale),
                     irradiance_weight: rgb0(stage.irradiance_weight),
+                    axis_variance: passes::poisson_axis_variance(),
+                    pad0: 0.0,
+                    pad1: 0.0,
+                    radius_table,
                 };
                 let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
                 let (from, to) = tsd::blur_maps(setup.kernel, i as u32);
@@ -178,7 +188,7 @@ pub(crate) fn pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
             entry_point: Some("fs_blur"),
             compilation_options: Default::default(),
             targets: &[Some(wgpu::ColorTargetState {
-                format: LIGHT_MAP_FORMAT,
+                format: gpu.light_map_format(),
                 blend: None,
                 write_mask: wgpu::ColorWrites::ALL,
             })],

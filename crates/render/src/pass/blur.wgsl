@@ -15,7 +15,7 @@ struct BlurUniforms {
     b: f32,
     // 1: this pass dilates.
     dilate: u32,
-    // The Poisson disc's variance per axis for radius 1 (texels^2), about its mean.
+    // The variance per axis (texels^2) a radius of 1 stands for: the disc's mean over u and v.
     tap_variance: f32,
     // The mean of the 13 taps (centre included), in radii.
     tap_mean: vec2<f32>,
@@ -23,7 +23,17 @@ struct BlurUniforms {
     source_scale: vec4<f32>,
     // Weight of the kept irradiance (light map B) added after the blur, per channel.
     irradiance_weight: vec4<f32>,
+    // The disc's own variance along u and v for radius 1 (it is not isotropic).
+    axis_variance: vec2<f32>,
+    pad0: f32,
+    pad1: f32,
+    // Bilinear pass radius along (u, v) for variances 0 to RADIUS_TABLE_MAX_VARIANCE texels^2,
+    // two entries per vec4 (src/skin/tsd.rs, `radius_table`).
+    radius_table: array<vec4<f32>, 32>,
 }
+
+const RADIUS_TABLE_LEN: u32 = 64u;
+const RADIUS_TABLE_MAX_VARIANCE: f32 = 4.0;
 
 @group(0) @binding(0) var<uniform> blur: BlurUniforms;
 @group(0) @binding(1) var source: texture_2d<f32>;
@@ -63,17 +73,33 @@ fn vs_full_screen(@builtin(vertex_index) index: u32) -> FullScreen {
     return out;
 }
 
-// The disc's radius in texels once the sampler's own spread is taken off: a bilinear tap at a
-// random sub-texel offset mixes two texels per axis with variance 1/6 on average, a nearest tap
-// (the dilating pass) moves by the rounding, variance 1/12. The passes then add up to the
-// variance the radius was chosen for, not more with every pass.
-fn disc_radius(intended: vec2<f32>) -> vec2<f32> {
-    var sampler_variance = 1.0 / 6.0;
-    if blur.dilate == 1u {
-        sampler_variance = 1.0 / 12.0;
+// The bilinear pass's radius along `axis` that adds `variance` texels^2 along it, the sampler's
+// own spread included (`radius_for_variance` in src/skin/tsd.rs, which tests it): a tap at
+// offset o mixes two texels, adding f (1 - f) for f the fraction of o. Below a texel that share
+// grows linearly with the radius and is most of the pass's variance, so it is read from the
+// table; above the table it averages 1/6.
+fn axis_radius(variance: f32, axis: u32) -> f32 {
+    if variance >= RADIUS_TABLE_MAX_VARIANCE {
+        return sqrt((variance - 1.0 / 6.0) / blur.axis_variance[axis]);
     }
-    let variance = intended * intended * blur.tap_variance - sampler_variance;
-    return sqrt(max(variance, vec2<f32>(0.0)) / max(blur.tap_variance, 1e-6));
+    let x = max(variance, 0.0) / RADIUS_TABLE_MAX_VARIANCE * f32(RADIUS_TABLE_LEN - 1u);
+    let i = min(u32(x), RADIUS_TABLE_LEN - 2u);
+    let t = x - f32(i);
+    let lo = blur.radius_table[i / 2u][(i % 2u) * 2u + axis];
+    let j = i + 1u;
+    let hi = blur.radius_table[j / 2u][(j % 2u) * 2u + axis];
+    return mix(lo, hi, t);
+}
+
+// The disc's radius in texels along u and v for the variance a nominal radius stands for, so
+// that the passes add up to that variance whatever their count. The dilating pass's nearest
+// taps move by their rounding instead, variance 1/12 on average.
+fn disc_radius(nominal: vec2<f32>) -> vec2<f32> {
+    let variance = nominal * nominal * blur.tap_variance;
+    if blur.dilate == 1u {
+        return sqrt(max(variance - 1.0 / 12.0, vec2<f32>(0.0)) / blur.axis_variance);
+    }
+    return vec2<f32>(axis_radius(variance.x, 0u), axis_radius(variance.y, 1u));
 }
 
 @fragment

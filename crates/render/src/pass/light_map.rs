@@ -2,8 +2,8 @@
 //! blur's kernel size in alpha, and the stretch map (the kernel's widening along u and v).
 
 use crate::gpu::{
-    Gpu, LIGHT_MAP_FORMAT, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, STRETCH_FORMAT, colour_attachment,
-    depth_attachment, depth_state,
+    Gpu, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, STRETCH_FORMAT, colour_attachment, depth_attachment,
+    depth_state,
 };
 use crate::pass::tsd::TsdResources;
 use crate::passes::{self, Features};
@@ -46,13 +46,13 @@ pub(crate) fn uniforms(tsd: Option<&passes::TsdSetup>) -> LightMapUniforms {
 }
 
 /// The light map's pipeline: depth test "equal" against the pre-pass, so only kept texels shade.
-pub(crate) fn pipeline(features: Features) -> MeshPipeline<'static> {
+pub(crate) fn pipeline(features: Features, format: wgpu::TextureFormat) -> MeshPipeline<'static> {
     MeshPipeline {
         label: "tsd light map pipeline",
         vertex_entry: "vs_texture_space",
         buffers: &MESH_BUFFERS,
         fragment_entry: Some("fs_light_map"),
-        target: Some(LIGHT_MAP_FORMAT),
+        target: Some(format),
         second_target: Some(STRETCH_FORMAT),
         depth: depth_state(false, wgpu::CompareFunction::Equal),
         features,

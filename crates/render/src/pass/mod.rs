@@ -82,7 +82,7 @@ pub(crate) fn build_pipeline(gpu: &Gpu, key: PipelineKey) -> wgpu::RenderPipelin
         PipelineKey::Shadow => gpu.mesh_pipeline(&shadow::pipeline()),
         PipelineKey::Translucent => gpu.mesh_pipeline(&translucent::pipeline()),
         PipelineKey::TsdPrepass(features) => gpu.mesh_pipeline(&tsd_prepass::pipeline(features)),
-        PipelineKey::LightMap(features) => gpu.mesh_pipeline(&light_map::pipeline(features)),
+        PipelineKey::LightMap(features) => gpu.mesh_pipeline(&light_map::pipeline(features, gpu.light_map_format())),
         PipelineKey::Blur => blur::pipeline(gpu),
     }
 }

@@ -2,8 +2,7 @@
 //! filtered lookup the base and light-map passes read it with.
 
 use crate::gpu::{
-    Gpu, LIGHT_MAP_FORMAT, MeshPipeline, POSITION_BUFFER, PipelineKey, PreparedScene, SceneTextures, depth_state,
-    extent,
+    Gpu, MeshPipeline, OPACITY_FORMAT, POSITION_BUFFER, PipelineKey, PreparedScene, SceneTextures, depth_state, extent,
 };
 use crate::pass::translucent::CasterBuffers;
 use crate::passes::{self, Features};
@@ -92,7 +91,7 @@ impl Gpu {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: LIGHT_MAP_FORMAT,
+                format: OPACITY_FORMAT,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })

@@ -1,7 +1,7 @@
 //! Translucent shadows (`translucent.wgsl`, Gosselin et al.): the translucent casters' summed
 //! opacity seen from the key light, tested against the shadow map's depth.
 
-use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, MeshPipeline, PipelineKey, colour_attachment, depth_state};
+use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, PipelineKey, colour_attachment, depth_state};
 use crate::pass::shadow::ShadowResources;
 use crate::passes::Features;
 
@@ -29,7 +29,7 @@ pub(crate) fn pipeline() -> MeshPipeline<'static> {
         vertex_entry: "vs_translucent",
         buffers: &CASTER_BUFFERS,
         fragment_entry: Some("fs_translucent"),
-        target: Some(LIGHT_MAP_FORMAT),
+        target: Some(OPACITY_FORMAT),
         second_target: None,
         depth: depth_state(false, wgpu::CompareFunction::Less),
         features: Features::default(),

@@ -3,7 +3,7 @@
 //! culling that decides whether they run this frame. The vertex stage of the pre-pass and the
 //! light-map pass is `tsd.wgsl`.
 
-use crate::gpu::{Gpu, LIGHT_MAP_FORMAT, PreparedScene, STRETCH_FORMAT, SceneTextures, Target, extent};
+use crate::gpu::{Gpu, PreparedScene, STRETCH_FORMAT, SceneTextures, Target, extent};
 use crate::passes;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -55,7 +55,7 @@ impl Gpu {
         };
         let maps: Vec<wgpu::Texture> = crate::skin::tsd::LIGHT_MAP_NAMES[..crate::skin::tsd::map_count(tsd.kernel)]
             .iter()
-            .map(|name| map(&format!("tsd {name}"), LIGHT_MAP_FORMAT))
+            .map(|name| map(&format!("tsd {name}"), self.light_map_format()))
             .collect();
         let stretch = map("tsd stretch map", STRETCH_FORMAT);
         let bind_group = self.create_bind_group(textures, uniforms, shadow, opacity, None);

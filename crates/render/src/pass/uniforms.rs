@@ -166,7 +166,20 @@ pub fn uniform_layouts() -> Vec<UniformLayout> {
             BLUR_WGSL,
             "BlurUniforms",
             BlurUniforms,
-            [inv_size, a, b, dilate, tap_variance, tap_mean, source_scale, irradiance_weight]
+            [
+                inv_size,
+                a,
+                b,
+                dilate,
+                tap_variance,
+                tap_mean,
+                source_scale,
+                irradiance_weight,
+                axis_variance,
+                pad0,
+                pad1,
+                radius_table
+            ]
         ),
     ]
 }

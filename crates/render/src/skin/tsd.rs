@@ -14,11 +14,14 @@
 
 use super::options::TsdKernel;
 use super::profile::{VARIANCES_MM2, WEIGHTS};
-use crate::passes::poisson_second_moment;
+use crate::passes::{POISSON, poisson_axis_variance, poisson_mean, poisson_second_moment};
 
 /// The radius the light map's alpha stores for [`TsdKernel::Gaussians`], mm: each pass scales it
 /// by [`BlurStage::scale`] (with the single kernel, alpha stores that kernel's own radius).
-pub const GAUSSIANS_KERNEL_MM: f32 = 1.0;
+/// Alpha holds it over [`crate::passes::MAX_KERNEL_TEXELS`] and is clamped below 1, so it must fit
+/// in 64 texels of the finest light map: 0.1 mm does down to 1.6 micrometres a texel. At 1 mm it
+/// clamped on the 6 mm sphere, whose texels are 0.01-0.02 mm at 2048, and the error doubled there.
+pub const GAUSSIANS_KERNEL_MM: f32 = 0.1;
 
 /// Names of the light maps, by index.
 pub const LIGHT_MAP_NAMES: [&str; 3] = ["light map A", "light map B", "light map C"];
@@ -108,4 +111,71 @@ pub fn stages(kernel: TsdKernel, passes: u32) -> Vec<BlurStage> {
             out
         }
     }
+}
+
+/// Entries of [`radius_table`], for variances evenly spaced over `[0, RADIUS_TABLE_MAX_VARIANCE]`.
+pub const RADIUS_TABLE_LEN: usize = 64;
+
+/// The largest per-axis variance, texels^2, that [`radius_table`] covers; above it the sampler's
+/// share is its mean, 1/6, to 0.6 % ([`radius_for_variance`]).
+pub const RADIUS_TABLE_MAX_VARIANCE: f32 = 4.0;
+
+/// The variance along `axis` (0: u, 1: v), in texels^2, that one bilinear blur pass of the 13
+/// centred taps adds when its disc's radius along that axis is `radius` texels.
+///
+/// A tap at offset `o` texels from the texel centre it is drawn for mixes the texels `floor(o)`
+/// and `floor(o) + 1` with weights `1 - f` and `f` (`f` the fraction of `o`): its mean is `o` and
+/// its second moment `o^2 + f (1 - f)`. The taps' mean is 0, so the pass's variance is the taps'
+/// mean of that. Below a texel the sampler's share `f (1 - f)`, linear in the radius, is most of
+/// it; far above, it averages 1/6.
+pub fn pass_variance(radius: f32, axis: usize) -> f32 {
+    let mean = poisson_mean()[axis];
+    let offsets = std::iter::once(0.0).chain(POISSON.iter().map(|p| p[axis])).map(|p| f64::from(radius * (p - mean)));
+    let sum: f64 = offsets
+        .map(|o| {
+            let f = o - o.floor();
+            o * o + f * (1.0 - f)
+        })
+        .sum();
+    (sum / 13.0) as f32
+}
+
+/// The radius along `axis`, texels, at which a bilinear pass adds `variance` texels^2 along it:
+/// [`pass_variance`] inverted by bisection (it rises with the radius).
+fn exact_radius(variance: f32, axis: usize) -> f32 {
+    let (mut lo, mut hi) = (0.0f32, 1.0f32);
+    while pass_variance(hi, axis) < variance {
+        hi *= 2.0;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if pass_variance(mid, axis) < variance { lo = mid } else { hi = mid }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The bilinear pass's radius for a variance, per axis: entry `i` holds the radii along u and v for
+/// the variance `i / (RADIUS_TABLE_LEN - 1) * RADIUS_TABLE_MAX_VARIANCE`, two entries per `vec4`
+/// as the blur's uniforms carry them. Linear interpolation in it is within 0.9 % of the variance.
+pub fn radius_table() -> [[f32; 4]; RADIUS_TABLE_LEN / 2] {
+    let entry = |i: usize, axis| exact_radius(table_variance(i), axis);
+    std::array::from_fn(|j| [entry(2 * j, 0), entry(2 * j, 1), entry(2 * j + 1, 0), entry(2 * j + 1, 1)])
+}
+
+fn table_variance(i: usize) -> f32 {
+    i as f32 / (RADIUS_TABLE_LEN - 1) as f32 * RADIUS_TABLE_MAX_VARIANCE
+}
+
+/// The radius along `axis` a bilinear pass is given for `variance` texels^2, as the blur shader
+/// computes it: interpolated in `table` ([`radius_table`]) up to its end, above it the disc's
+/// own variance plus the sampler's mean share of 1/6.
+pub fn radius_for_variance(table: &[[f32; 4]; RADIUS_TABLE_LEN / 2], variance: f32, axis: usize) -> f32 {
+    if variance >= RADIUS_TABLE_MAX_VARIANCE {
+        return ((variance - 1.0 / 6.0) / poisson_axis_variance()[axis]).sqrt();
+    }
+    let x = variance.max(0.0) / RADIUS_TABLE_MAX_VARIANCE * (RADIUS_TABLE_LEN - 1) as f32;
+    let i = (x as usize).min(RADIUS_TABLE_LEN - 2);
+    let at = |i: usize| table[i / 2][(i % 2) * 2 + axis];
+    let t = x - i as f32;
+    at(i) + (at(i + 1) - at(i)) * t
 }
