@@ -10,11 +10,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_maps::Grid;
 
-use crate::neighbourhood::{Neighbourhood, distance2};
+use crate::neighbourhood::{LANES, Lanes, Neighbourhood, distance2};
 use crate::{Error, Result};
 
-/// Floats summed between two checks of [`ExemplarLevel::distance2_below`].
-const EXIT_CHUNK: usize = 12;
+/// Floats summed between two checks of [`ExemplarLevel::distance2_below`] (whole lanes).
+const EXIT_CHUNK: usize = 2 * LANES;
 
 /// Candidates per rayon task in the exhaustive scan.
 const SCAN_CHUNK: usize = 256;
@@ -155,30 +155,27 @@ impl ExemplarLevel {
     /// [`Self::distance2`], abandoned once the partial sum exceeds `bound`: the result is the exact
     /// distance (same bits) when it is at most `bound`, and some value above `bound` otherwise.
     pub fn distance2_below(&self, i: usize, query: &[f32], bound: f32) -> f32 {
-        let mut d = 0.0f32;
+        let mut lanes = Lanes::default();
         for (a, b) in self.feature(i).chunks(EXIT_CHUNK).zip(query.chunks(EXIT_CHUNK)) {
-            for (p, q) in a.iter().zip(b) {
-                d += (p - q) * (p - q);
-            }
+            lanes.add(a, b);
+            let d = lanes.total();
             if d > bound {
-                break;
+                return d;
             }
         }
-        d
+        lanes.total()
     }
 
     /// [`Self::distance2`] over the texel slots of the feature whose `active` entry is true (one
     /// entry per texel, 3 floats each); the others are left out of the sum.
     pub fn distance2_masked(&self, i: usize, query: &[f32], active: &[bool]) -> f32 {
-        // Summed float by float in index order, as `distance2`.
-        let pairs = self.feature(i).chunks_exact(3).zip(query.chunks_exact(3)).zip(active);
-        let mut d = 0.0f32;
-        for ((a, b), _) in pairs.filter(|(_, on)| **on) {
-            for (p, q) in a.iter().zip(b) {
-                d += (p - q) * (p - q);
-            }
+        // The same lanes as `distance2`, so with every slot active the bits are the same.
+        let mut lanes = Lanes::default();
+        let floats = self.feature(i).iter().zip(query).enumerate();
+        for (j, (&p, &q)) in floats.filter(|(j, _)| active[j / 3]) {
+            lanes.add_one(j, p, q);
         }
-        d
+        lanes.total()
     }
 
     /// The candidate nearest to `query` by exhaustive scan (parallel over candidates; ties go to

@@ -78,9 +78,52 @@ impl Neighbourhood {
     }
 }
 
-/// Squared L2 distance, summed in index order (so every caller gets the same bits).
+/// Lanes of a squared distance's partial sums ([`Lanes`]).
+pub const LANES: usize = 8;
+
+/// The partial sums of a squared distance: float `j` of a feature adds to lane `j % LANES`, and
+/// [`Lanes::total`] adds the lanes in one fixed order. Every distance in the crate goes through
+/// it, so every caller gets the same bits for the same pair, and the compiler can keep the lanes
+/// in SIMD registers (a single running sum cannot be reordered, and ran one float at a time).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Lanes([f32; LANES]);
+
+impl Lanes {
+    /// Adds `(a - b)^2` of the floats of `a` and `b`, which start at a multiple of [`LANES`].
+    #[inline]
+    pub fn add(&mut self, a: &[f32], b: &[f32]) {
+        let (full_a, rest_a) = a.as_chunks::<LANES>();
+        let (full_b, rest_b) = b.as_chunks::<LANES>();
+        for (x, y) in full_a.iter().zip(full_b) {
+            for l in 0..LANES {
+                let d = x[l] - y[l];
+                self.0[l] += d * d;
+            }
+        }
+        for (l, (p, q)) in rest_a.iter().zip(rest_b).enumerate() {
+            self.0[l] += (p - q) * (p - q);
+        }
+    }
+
+    /// Adds `(a - b)^2` for float `j` (at lane `j % LANES`) only.
+    #[inline]
+    pub fn add_one(&mut self, j: usize, a: f32, b: f32) {
+        self.0[j % LANES] += (a - b) * (a - b);
+    }
+
+    /// The sum of the lanes, pairwise in a fixed order.
+    #[inline]
+    pub fn total(&self) -> f32 {
+        let l = &self.0;
+        ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]))
+    }
+}
+
+/// Squared L2 distance, summed in [`Lanes`] (so every caller gets the same bits).
 pub fn distance2(a: &[f32], b: &[f32]) -> f32 {
-    a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum()
+    let mut lanes = Lanes::default();
+    lanes.add(a, b);
+    lanes.total()
 }
 
 #[cfg(test)]
