@@ -25,12 +25,16 @@ pub(crate) struct CorrectionLevel<'a> {
     pub(crate) config: &'a SynthConfig,
 }
 
+/// The most times the copy cap's cut is repeated after the last pass ([`CorrectionLevel::run`]).
+const CAP_ROUNDS: usize = 4;
+
 /// Per-thread buffers of a correction pass.
 #[derive(Default)]
 struct Scratch {
     query: Vec<f32>,
     sources: Vec<usize>,
     candidates: Vec<usize>,
+    forbidden: Vec<usize>,
     seen: Seen,
 }
 
@@ -59,40 +63,74 @@ impl CorrectionLevel<'_> {
     /// `CORRECTION_STRIDE^2` sub-passes by `(x mod s, y mod s)`, in row-major order of the
     /// residues; a sub-pass chooses all its texels in parallel from the state the previous
     /// sub-passes left, then writes them, so the result does not depend on the thread count.
+    ///
+    /// With a copy cap, the last pass cuts the blocks that were too large when it began; blocks
+    /// under the cap can still merge during that pass (the grass photo as height reached 10.8 %
+    /// of its exemplar under a 6 % cap), so the cut is then repeated, re-choosing only the cut
+    /// texels, until no block exceeds the cap or [`CAP_ROUNDS`] rounds have run.
     pub(crate) fn run(&self, out: &mut Grid<Vec3>, coords: &mut Grid<[u32; 2]>, report: &dyn Fn(usize)) {
         let full = self.search.full.as_ref().expect("built for corrections");
-        let (w, h) = out.size();
-        let s = CORRECTION_STRIDE;
+        let (s, h) = (CORRECTION_STRIDE, out.size().1);
         for pass in 0..self.config.corrections {
             let last = pass + 1 == self.config.corrections;
             let breaks = self.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed));
-            for sub in 0..s * s {
-                let (ox, oy) = (sub % s, sub / s);
-                let rows: Vec<usize> = (oy..h).step_by(s).collect();
-                let (read_out, read_coords) = (&*out, &*coords);
-                let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
-                let occurrence = Occurrence::of(full, read_coords, lambda);
-                let chosen: Vec<Vec<usize>> = rows
-                    .par_iter()
-                    .map_init(Scratch::default, |scratch, &y| {
-                        (ox..w)
-                            .step_by(s)
-                            .map(|x| {
-                                let forbid = breaks.as_ref().is_some_and(|b| b[y * w + x]);
+            let causal = if self.config.start == Start::Scanline { h } else { 0 };
+            self.pass(out, coords, breaks.as_deref(), false, &|sub| {
+                report(causal + h * pass + (sub + 1) * h / (s * s))
+            });
+        }
+        let Some(cap) = self.copy_cap.filter(|_| self.config.corrections > 0) else { return };
+        for _ in 0..CAP_ROUNDS {
+            let breaks = cap_breaks(full, coords, cap, self.config.seed);
+            if !breaks.contains(&true) {
+                break;
+            }
+            self.pass(out, coords, Some(&breaks), true, &|_| {});
+        }
+    }
+
+    /// One correction pass in its sub-passes; with `only_cut`, only the texels `breaks` marks are
+    /// chosen again (each away from its current source), the others keep theirs.
+    fn pass(
+        &self,
+        out: &mut Grid<Vec3>,
+        coords: &mut Grid<[u32; 2]>,
+        breaks: Option<&[bool]>,
+        only_cut: bool,
+        report: &dyn Fn(usize),
+    ) {
+        let full = self.search.full.as_ref().expect("built for corrections");
+        let (w, h) = out.size();
+        let s = CORRECTION_STRIDE;
+        let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
+        for sub in 0..s * s {
+            let (ox, oy) = (sub % s, sub / s);
+            let rows: Vec<usize> = (oy..h).step_by(s).collect();
+            let (read_out, read_coords) = (&*out, &*coords);
+            let occurrence = Occurrence::of(full, read_coords, lambda);
+            let chosen: Vec<Vec<Option<usize>>> = rows
+                .par_iter()
+                .map_init(Scratch::default, |scratch, &y| {
+                    (ox..w)
+                        .step_by(s)
+                        .map(|x| {
+                            let forbid = breaks.is_some_and(|b| b[y * w + x]);
+                            (forbid || !only_cut).then(|| {
                                 self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch)
                             })
-                            .collect()
-                    })
-                    .collect();
-                for (&y, row) in rows.iter().zip(&chosen) {
-                    for (x, &best) in (ox..w).step_by(s).zip(row) {
+                        })
+                        .collect()
+                })
+                .collect();
+            for (&y, row) in rows.iter().zip(&chosen) {
+                for (x, best) in (ox..w).step_by(s).zip(row) {
+                    if let Some(best) = *best {
                         *out.get_mut(x, y) = full.texel(best);
                         *coords.get_mut(x, y) = full.position(best);
                     }
                 }
-                let causal = if self.config.start == Start::Scanline { h } else { 0 };
-                report(causal + h * pass + (sub + 1) * h / (s * s));
             }
+            report(sub);
         }
     }
 
@@ -109,7 +147,7 @@ impl CorrectionLevel<'_> {
         scratch: &mut Scratch,
     ) -> usize {
         let full = self.search.full.as_ref().expect("built for corrections");
-        let Scratch { query, sources, candidates, seen } = scratch;
+        let Scratch { query, sources, candidates, forbidden, seen } = scratch;
         query.resize(self.nb.dim(), 0.0);
         self.nb.gather(
             x,
@@ -120,7 +158,10 @@ impl CorrectionLevel<'_> {
         );
         let [cx, cy] = *coords.get_wrapped(x, y);
         let own = full.index_of(cx as isize, cy as isize);
-        let forbidden = own.filter(|_| forbid_own);
+        forbidden.clear();
+        if forbid_own {
+            cut_forbidden(full, coords, x, y, forbidden);
+        }
         let scorer = Scorer { ex: full, query, active: None, occurrence, own, forbidden };
         let score = |&i: &usize| (scorer.score(i), i);
         candidates.clear();
@@ -172,9 +213,22 @@ impl CorrectionLevel<'_> {
     }
 }
 
+/// The sources a texel the copy cap cuts may not take: its own, and each one that would continue
+/// a 4-neighbour's block (the neighbour's source less their offset). The cut texel then starts a
+/// block of its own, so no block crosses a cut line (otherwise a cut texel between two blocks of
+/// one offset could join them again).
+fn cut_forbidden(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, x: isize, y: isize, out: &mut Vec<usize>) {
+    let [cx, cy] = *coords.get_wrapped(x, y);
+    out.extend(full.index_of(cx as isize, cy as isize));
+    for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+        let [nx, ny] = *coords.get_wrapped(x + dx, y + dy);
+        out.extend(full.index_of(nx as isize - dx, ny as isize - dy));
+    }
+}
+
 /// The texels the copy cap re-chooses away from their current source: those of verbatim blocks
 /// larger than `cap` texels ([`metrics::copy_blocks`]) that lie on a grid of lines `p` apart
-/// (`(p - 1)^2 <= cap`, phase drawn from `seed`). Choosing another source there cuts every such
+/// (`(p - 1)^2 <= cap`, phase drawn from `seed`, plus row and column 0). Choosing another source there cuts every such
 /// block into pieces of at most `(p - 1)^2` texels; the new source is the best match of the cut
 /// texel's whole neighbourhood, so the cut follows the texture as a seam would.
 fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u64) -> Vec<bool> {
@@ -187,7 +241,10 @@ fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u
     (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let on_line = (x + px) % p == 0 || (y + py) % p == 0;
+            // Row and column 0 are lines too: the output wraps, and where its side is not a
+            // multiple of p the cell across the wrap would be up to 2 p - 2 texels wide (a 3 %
+            // cap let a 201-texel block through there).
+            let on_line = (x + px) % p == 0 || (y + py) % p == 0 || x == 0 || y == 0;
             on_line && blocks.size_at(i) as usize > cap
         })
         .collect()

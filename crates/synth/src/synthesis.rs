@@ -431,12 +431,12 @@ fn causal_pass(
                     active: Some(&active[..]),
                     occurrence: &occurrence,
                     own: None,
-                    forbidden: None,
+                    forbidden: &[],
                 };
                 (scorer, &full_nb, TreeQuery { query: &query, active: Some(&tree_active[..]) })
             } else {
                 let scorer =
-                    Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None, forbidden: None };
+                    Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None, forbidden: &[] };
                 (scorer, nb, TreeQuery { query: &query, active: None })
             };
             let score = |&i: &usize| (scorer.score(i), i);
@@ -549,14 +549,15 @@ pub(crate) struct Scorer<'a> {
     pub(crate) active: Option<&'a [bool]>,
     pub(crate) occurrence: &'a Occurrence,
     pub(crate) own: Option<usize>,
-    /// A candidate the texel may not take (its current source, when the copy cap breaks its block).
-    pub(crate) forbidden: Option<usize>,
+    /// Candidates the texel may not take (where the copy cap cuts: its current source and every
+    /// source that would continue a neighbour's block, see `correction::cut_forbidden`).
+    pub(crate) forbidden: &'a [usize],
 }
 
 impl Scorer<'_> {
     /// The score of candidate `i`.
     pub(crate) fn score(&self, i: usize) -> f32 {
-        if self.forbidden == Some(i) {
+        if self.forbidden.contains(&i) {
             return f32::INFINITY;
         }
         let d = match self.active {
@@ -569,7 +570,7 @@ impl Scorer<'_> {
     /// The score of candidate `i` when it is at most `best`, `f32::INFINITY` otherwise (the
     /// distance is abandoned early once it cannot win).
     pub(crate) fn score_below(&self, i: usize, best: f32) -> f32 {
-        if self.forbidden == Some(i) {
+        if self.forbidden.contains(&i) {
             return f32::INFINITY;
         }
         let f = self.occurrence.factor(i, self.own);
