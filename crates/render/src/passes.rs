@@ -210,12 +210,14 @@ pub fn poisson_second_moment() -> f32 {
 /// the disc is not isotropic (0.352 along u, 0.285 along v), so a blur that should add the same
 /// variance along both axes sizes its radius per axis.
 pub fn poisson_axis_variance() -> [f32; 2] {
-    let mean = poisson_mean();
-    std::array::from_fn(|axis| {
-        let centre = mean[axis] * mean[axis];
-        let taps = POISSON.iter().map(|p| (p[axis] - mean[axis]).powi(2)).sum::<f32>();
-        (taps + centre) / 13.0
-    })
+    std::array::from_fn(|axis| centred_taps(axis).map(|o| o * o).sum::<f32>() / 13.0)
+}
+
+/// The 13 taps' coordinates along `axis` (0: u, 1: v), centre first, moved by minus their mean
+/// ([`poisson_mean`]) as the blur places them, in radii.
+pub fn centred_taps(axis: usize) -> impl Iterator<Item = f32> {
+    let mean = poisson_mean()[axis];
+    std::iter::once(0.0).chain(POISSON.iter().map(move |p| p[axis])).map(move |p| p - mean)
 }
 
 /// The derived kernel radius (mm) for `passes` blur passes so that their combined variance per

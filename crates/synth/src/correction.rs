@@ -228,9 +228,10 @@ fn cut_forbidden(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, x: isize, y: isi
 
 /// The texels the copy cap re-chooses away from their current source: those of verbatim blocks
 /// larger than `cap` texels ([`metrics::copy_blocks`]) that lie on a grid of lines `p` apart
-/// (`(p - 1)^2 <= cap`, phase drawn from `seed`, plus row and column 0). Choosing another source there cuts every such
-/// block into pieces of at most `(p - 1)^2` texels; the new source is the best match of the cut
-/// texel's whole neighbourhood, so the cut follows the texture as a seam would.
+/// (`(p - 1)^2 <= cap`, phase drawn from `seed`, plus row and column 0). Choosing another source
+/// there cuts every such block into pieces of at most `(p - 1)^2` texels; the new source is the
+/// best match of the cut texel's whole neighbourhood, so the cut follows the texture as a seam
+/// would.
 fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u64) -> Vec<bool> {
     let (w, h) = coords.size();
     let blocks = metrics::copy_blocks(coords, full.texels().size(), full.wraps());

@@ -14,7 +14,7 @@
 
 use super::options::TsdKernel;
 use super::profile::{VARIANCES_MM2, WEIGHTS};
-use crate::passes::{POISSON, poisson_axis_variance, poisson_mean, poisson_second_moment};
+use crate::passes::{centred_taps, poisson_axis_variance, poisson_second_moment};
 
 /// The radius the light map's alpha stores for [`TsdKernel::Gaussians`], mm: each pass scales it
 /// by [`BlurStage::scale`] (with the single kernel, alpha stores that kernel's own radius).
@@ -129,9 +129,8 @@ pub const RADIUS_TABLE_MAX_VARIANCE: f32 = 4.0;
 /// mean of that. Below a texel the sampler's share `f (1 - f)`, linear in the radius, is most of
 /// it; far above, it averages 1/6.
 pub fn pass_variance(radius: f32, axis: usize) -> f32 {
-    let mean = poisson_mean()[axis];
-    let offsets = std::iter::once(0.0).chain(POISSON.iter().map(|p| p[axis])).map(|p| f64::from(radius * (p - mean)));
-    let sum: f64 = offsets
+    let sum: f64 = centred_taps(axis)
+        .map(|p| f64::from(radius * p))
         .map(|o| {
             let f = o - o.floor();
             o * o + f * (1.0 - f)
