@@ -204,7 +204,10 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(options["corrections"], 2);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");
-    assert!((options["copy_cap"].as_f64().unwrap() - 0.06).abs() < 1e-6, "{options}");
+    assert!((options["copy_cap"].as_f64().unwrap() - 0.09).abs() < 1e-6, "{options}");
+    assert_eq!(options["parent"], 1);
+    assert_eq!((options["fallback"].as_f64(), options["finest_fallback"].as_f64()), (Some(3.0), Some(6.0)));
+    assert_eq!((options["coherence_bias"].as_f64(), options["finest_coherence_bias"].as_f64()), (Some(0.5), Some(0.0)));
     assert!(r["quality"]["variation"].as_f64().unwrap() >= 0.5, "{}", r["quality"]);
     // The old flag still runs, and selects the default.
     let old: serde_json::Value =
@@ -222,4 +225,6 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["levels_requested"], 3);
     assert_eq!(r["options"]["occurrence_penalty"], 4.0);
     assert!(r["options"]["copy_cap"].is_null());
+    assert_eq!(r["options"]["parent"], 3);
+    assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }

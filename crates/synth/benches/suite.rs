@@ -24,7 +24,8 @@
 //! The three texture photos come from the folder `SYNTH_SUITE_TEXTURES` names (without it they
 //! are skipped, and the report has 9 exemplars). Knobs for experiments: `SYNTH_SUITE_CONFIG` (keys as `k=2,j=1,...`, see [`parse_config`]),
 //! `SYNTH_SUITE_ONLY` (a substring of exemplar names), `SYNTH_SUITE_SEEDS` (how many),
-//! `SYNTH_SUITE_SPEED=0` (skip the speed part). Peer scores are cached in
+//! `SYNTH_SUITE_SPEED=0` (skip the speed part), `SYNTH_SUITE_WINDOWS=1` (where each output's
+//! energy sits, see [`window_shares`]; the peer's only when it runs, not from the cache). Peer scores are cached in
 //! `target/synth-suite-peer.tsv` (keyed by exemplar, seed and size; delete it to rerun the peer).
 //! Run with `cargo bench -p skinkit-synth --bench suite` (a plain `main`, `harness = false`).
 
@@ -65,14 +66,20 @@ fn target_dir() -> PathBuf {
 /// The configuration under test: the defaults, changed by `key=value` pairs (k: k-coherence k;
 /// n: neighbourhood side; m: coarser window side; c / cc: finest and coarser correction passes; l / fl / cp: occurrence
 /// penalty, at the finest level, in the corrections; L: levels; up: upsampled start (1) or
-/// scanline (0); j: jitter; w: exemplar wrap; cap: copy cap, share of the exemplar's area).
+/// scanline (0); j: jitter; w: exemplar wrap; cap: copy cap, share of the exemplar's area; fb /
+/// ffb: k-coherence tree fallback ratio, at the finest level, 0 = none; kb / fkb: coherence bias,
+/// at the finest level).
 fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConfig {
     let mut config = SynthConfig { seed, ..SynthConfig::new(width, height) };
     for kv in spec.split(',').filter(|s| !s.is_empty()) {
         let (k, v) = kv.split_once('=').expect("key=value");
         let f: f64 = v.parse().expect("number");
         match k {
-            "k" => config.search = Search::KCoherence { k: f as usize, fallback: None, dims: 8, rerank: 8 },
+            "k" => {
+                if let Search::KCoherence { k, .. } = &mut config.search {
+                    *k = f as usize;
+                }
+            }
             "n" => config.neighbourhood = f as usize,
             "c" => config.corrections = f as usize,
             "cc" => config.coarse_corrections = Some(f as usize),
@@ -84,6 +91,14 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "j" => config.jitter = f as usize,
             "w" => config.exemplar_wrap = f > 0.0,
             "m" => config.parent = f as usize,
+            "fb" => {
+                if let Search::KCoherence { fallback, .. } = &mut config.search {
+                    *fallback = (f > 0.0).then_some(f as f32);
+                }
+            }
+            "ffb" => config.finest_fallback = (f > 0.0).then_some(f as f32),
+            "kb" => config.coherence_bias = f as f32,
+            "fkb" => config.finest_coherence_bias = Some(f as f32),
             "cap" => config.copy_cap = (f > 0.0).then_some(f as f32),
             other => panic!("unknown key {other}"),
         }
@@ -104,6 +119,9 @@ pub struct Scores {
 fn score(output: &Texels, coords: &Grid<[u32; 2]>, ex: &Exemplar, own: f64) -> Scores {
     let (ew, eh) = ex.texels.grid().size();
     let energy = window_energy(output.grid(), ex.texels.grid(), WINDOW, STRIDE) / own.max(1e-12);
+    if env("SYNTH_SUITE_WINDOWS").is_some() {
+        window_shares(output, ex, own);
+    }
     let copy = metrics::copy_statistics(coords, (ew, eh), false).largest_block as f64 / (ew * eh) as f64;
     let (distribution, spectrum, variation) = match (output, &ex.texels) {
         (Texels::Normal(o), Texels::Normal(e)) => (
@@ -119,6 +137,30 @@ fn score(output: &Texels, coords: &Grid<[u32; 2]>, ex: &Exemplar, own: f64) -> S
         _ => unreachable!("outputs are of their exemplar's kind"),
     };
     Scores { energy, copy, distribution, spectrum, variation }
+}
+
+/// Where the energy sits (`SYNTH_SUITE_WINDOWS=1`): the share of output windows found verbatim in
+/// the exemplar (under 1e-3 of its own figure: copy interiors; the peer's 8-bit output never
+/// scores exactly 0), the mean of the others, and quantiles, all over the exemplar's own figure.
+fn window_shares(output: &Texels, ex: &Exemplar, own: f64) {
+    let mut m: Vec<f64> = skinkit_synth::energy::window_minima(output.grid(), ex.texels.grid(), WINDOW, STRIDE)
+        .iter()
+        .map(|&v| v as f64 / own.max(1e-12))
+        .collect();
+    m.sort_by(f64::total_cmp);
+    let n = m.len().max(1) as f64;
+    let inside = m.iter().filter(|&&v| v < 1e-3).count();
+    let rest = &m[inside..];
+    let rest_mean = rest.iter().sum::<f64>() / rest.len().max(1) as f64;
+    let q = |f: f64| m.get(((n - 1.0) * f) as usize).copied().unwrap_or(0.0);
+    eprintln!(
+        "    windows: verbatim {:.3}, mean of the rest {rest_mean:.3}, quantiles 0.5 {:.3} 0.75 {:.3} 0.9 {:.3} 0.99 {:.3}",
+        inside as f64 / n,
+        q(0.5),
+        q(0.75),
+        q(0.9),
+        q(0.99)
+    );
 }
 
 /// One skinkit synthesis of `ex` under `config`.

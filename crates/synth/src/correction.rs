@@ -19,6 +19,8 @@ pub(crate) struct CorrectionLevel<'a> {
     pub(crate) coarser: Option<&'a Grid<Vec3>>,
     /// The copy cap of this level in texels (the finest level only; see [`cap_breaks`]).
     pub(crate) copy_cap: Option<usize>,
+    /// The coherence bias of this level ([`SynthConfig::coherence_bias`]).
+    pub(crate) coherence_bias: f32,
     /// The full `N x N` (+ coarser `M x M`) shape.
     pub(crate) nb: &'a Neighbourhood,
     pub(crate) search: &'a LevelSearch,
@@ -184,11 +186,19 @@ impl CorrectionLevel<'_> {
                     }
                     None => (f32::INFINITY, usize::MAX),
                 };
+                // Shifted sources first (they continue a neighbour's block), then the rest of
+                // their sets, biased: a candidate counts as coherent if any neighbour makes it so.
+                for &j in sources.iter() {
+                    if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
+                        best = better(best, (scorer.score_below(j, best.0), j));
+                    }
+                }
+                let bias = 1.0 + self.coherence_bias;
                 for &source in sources.iter() {
-                    for &j in sets.set(source) {
+                    for &j in &sets.set(source)[1..] {
                         let j = j as usize;
                         if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
-                            best = better(best, (scorer.score_below(j, best.0), j));
+                            best = better(best, (scorer.score_below(j, best.0 / bias) * bias, j));
                         }
                     }
                 }

@@ -16,10 +16,17 @@ use skinkit_maps::Grid;
 /// summed in texel order, so the value does not depend on the thread count. Returns 0 when the
 /// exemplar holds no whole window.
 pub fn window_energy(output: &Grid<Vec3>, exemplar: &Grid<Vec3>, n: usize, stride: usize) -> f64 {
+    let mins = window_minima(output, exemplar, n, stride);
+    if mins.is_empty() { 0.0 } else { mins.iter().map(|&m| m as f64).sum::<f64>() / mins.len() as f64 }
+}
+
+/// The smallest squared distance of [`window_energy`] for each sampled output texel, row-major
+/// (empty when the exemplar holds no whole window): where the energy sits (seams, interiors).
+pub fn window_minima(output: &Grid<Vec3>, exemplar: &Grid<Vec3>, n: usize, stride: usize) -> Vec<f32> {
     let r = n / 2;
     let (ew, eh) = exemplar.size();
     if ew < n || eh < n || output.is_empty() {
-        return 0.0;
+        return Vec::new();
     }
     let row = 3 * n;
     let windows: Vec<f32> = (r..eh - r)
@@ -31,7 +38,7 @@ pub fn window_energy(output: &Grid<Vec3>, exemplar: &Grid<Vec3>, n: usize, strid
         .step_by(stride)
         .flat_map(|y| (0..output.width()).step_by(stride).map(move |x| (x, y)))
         .collect();
-    let mins: Vec<f32> = samples
+    samples
         .par_iter()
         .map(|&(x, y)| {
             let q = window(|dx, dy| *output.get_wrapped(x as isize + dx, y as isize + dy), r);
@@ -48,8 +55,7 @@ pub fn window_energy(output: &Grid<Vec3>, exemplar: &Grid<Vec3>, n: usize, strid
             }
             best
         })
-        .collect();
-    mins.iter().map(|&m| m as f64).sum::<f64>() / mins.len() as f64
+        .collect()
 }
 
 /// The `(2r + 1)^2` texels around a centre, row-major, flattened to floats.

@@ -170,10 +170,15 @@ impl ApproximateIndex {
     /// The projection is orthonormal, so a projected distance never exceeds the full one: a
     /// candidate whose full squared distance is below `radius2` is never cut by the radius.
     pub fn candidates(&self, query: &[f32], radius2: f32, out: &mut Vec<usize>) {
+        self.nearest(query, radius2, self.rerank, out);
+    }
+
+    /// [`Self::candidates`] with `count` candidates instead of the index's `rerank`.
+    pub fn nearest(&self, query: &[f32], radius2: f32, count: NonZero<usize>, out: &mut Vec<usize>) {
         let mut q = [0.0f32; 32];
         let d = self.pca.dims().max(1);
         self.pca.project(query, &mut q[..self.pca.dims()]);
-        self.tree.nearest(&q[..d], radius2, self.rerank, out);
+        self.tree.nearest(&q[..d], radius2, count, out);
     }
 }
 
@@ -195,14 +200,19 @@ impl KCoherenceSets {
     /// that); ties go to the lower index. Every candidate is independent, so the result does not
     /// depend on the thread count.
     pub fn new(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, dims: usize) -> Self {
+        Self::from_index(full, causal, k, &ApproximateIndex::new(full, dims, 1))
+    }
+
+    /// [`Self::new`] with the PCA kd-tree over `full` built already (the correction passes'
+    /// fallback shares it); its `rerank` does not matter.
+    pub fn from_index(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, index: &ApproximateIndex) -> Self {
         debug_assert_eq!(full.len(), causal.len());
         let k = k.max(1);
-        let pool = (2 * k).max(16);
-        let index = ApproximateIndex::new(full, dims, pool);
+        let pool = NonZero::new((2 * k).max(16)).expect("at least 16");
         let mut sets = vec![0u32; full.len() * k];
         sets.par_chunks_mut(k).enumerate().for_each_init(Vec::new, |found, (i, set)| {
             found.clear();
-            index.candidates(full.feature(i), f32::INFINITY, found);
+            index.nearest(full.feature(i), f32::INFINITY, pool, found);
             let mut scored: Vec<(f32, usize)> =
                 found.iter().filter(|&&j| j != i).map(|&j| (full.distance2(j, full.feature(i)), j)).collect();
             scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));

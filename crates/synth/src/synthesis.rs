@@ -53,8 +53,16 @@
 //! current coordinates are found ([`metrics::copy_blocks`]); the texels of blocks over the cap that
 //! lie on a grid of lines (spacing from the cap, phase from the seed) may not keep their source in
 //! that pass, so each such block is cut into pieces along the best-matching seam the pass finds.
-//! Texels off the lines are chosen as usual and can join a neighbour's new block, so the largest
-//! block ends near the cap rather than strictly under it (a 6 % cap measured up to 7.1 %).
+//! A cut texel may not continue a neighbour's block either, and the cut repeats on the cut texels
+//! while any block still exceeds the cap (see `correction`).
+//!
+//! Patch size and seams (the default's choices, measured by `benches/suite.rs`): the suite's
+//! energy counts every output window that is not verbatim in the exemplar, so it is mostly seams,
+//! and the peer wins it with large copies. At the coarser levels a coherence bias
+//! ([`SynthConfig::coherence_bias`]) keeps the patches the finest level inherits large, and a
+//! texel whose best coherent candidate is far from its window searches the PCA kd-tree too (the
+//! k-coherence fallback), which is where a good seam texel is found; the finest level places the
+//! seams without a bias and with a looser fallback ratio (its tree queries cost the most).
 //!
 //! Collapse guard ([`synthesize`], [`synthesize_normals`]): an output whose variation (slope or
 //! channel deviation over the exemplar's, [`metrics::variation_ratio`]) falls under
@@ -301,6 +309,15 @@ fn synthesize_level(
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    let finest;
+    let config = match (level, config.finest_fallback, config.search) {
+        (0, Some(ratio), Search::KCoherence { k, dims, rerank, .. }) => {
+            finest =
+                SynthConfig { search: Search::KCoherence { k, fallback: Some(ratio), dims, rerank }, ..config.clone() };
+            &finest
+        }
+        _ => config,
+    };
     let coarser = coarser_level.map(|(t, _)| t);
     let nb = shape(config, false, coarser.is_some());
     let ex = ExemplarLevel::new(
@@ -328,7 +345,9 @@ fn synthesize_level(
             let (ew, eh) = pyramid[0].size();
             ((share as f64 * (ew * eh) as f64) as usize).max(4)
         });
-        let level = CorrectionLevel { coarser, copy_cap, nb: &full_nb, search: &search, config };
+        let coherence_bias =
+            if level == 0 { config.finest_coherence_bias } else { None }.unwrap_or(config.coherence_bias);
+        let level = CorrectionLevel { coarser, copy_cap, coherence_bias, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
@@ -655,9 +674,13 @@ fn build_search(
             (Some(ApproximateIndex::new(ex, dims, rerank)), None, full_tree(dims, rerank))
         }
         Search::KCoherence { k, fallback, dims, rerank } => {
-            let sets = KCoherenceSets::new(full.as_ref().expect("built for k-coherence"), ex, k, dims);
-            let index = fallback.map(|_| ApproximateIndex::new(ex, dims, rerank));
-            (index, Some(sets), fallback.and_then(|_| full_tree(dims, rerank)))
+            // One tree over the full features serves the sets and the correction passes' fallback.
+            let full = full.as_ref().expect("built for k-coherence");
+            let tree = ApproximateIndex::new(full, dims, rerank);
+            let sets = KCoherenceSets::from_index(full, ex, k, &tree);
+            let causal = fallback.filter(|_| config.start == Start::Scanline);
+            let index = causal.map(|_| ApproximateIndex::new(ex, dims, rerank));
+            (index, Some(sets), fallback.filter(|_| corrections).map(|_| tree))
         }
     };
     LevelSearch { index, sets, full, full_index }

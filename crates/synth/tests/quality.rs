@@ -472,7 +472,9 @@ fn assert_slope_within(c: &NormalCase, factor: f64) {
 }
 
 /// The same target on the captured maps, met since the upsampled default: measured OA / AB
-/// forehead 1.7, cheek 2.3, nose 1.8, forehead-edge 1.1 (the scanline start: 5.3, 4.0, 2.7, 0.90).
+/// forehead 1.8, cheek 1.7, nose 1.15, forehead-edge 0.99 (before the coarser levels' coherence
+/// bias and tree fallback: 1.7, 2.3, 1.8, 1.1; the scanline start: 5.3, 4.0, 2.7, 0.90). The
+/// issue's 1.5 is not met on the forehead and cheek.
 #[test]
 fn captured_slope_distance_within_three_times_own_variation() {
     for i in 0..4 {

@@ -51,11 +51,12 @@ pub struct Args {
     /// Side of the causal neighbourhood at each level (odd, 3 to 99).
     #[arg(long, default_value_t = 5, value_name = "N", alias = "neighbourhood", value_parser = flags::odd_in(3, 99))]
     pub neighborhood: usize,
-    /// Side of the full neighbourhood taken from the coarser level (odd, 1 to 99).
-    #[arg(long, default_value_t = 3, value_name = "M", value_parser = flags::odd_in(1, 99))]
-    pub parent: usize,
+    /// Side of the full neighbourhood taken from the coarser level (odd, 1 to 99; default 1, 3
+    /// with `--scanline`).
+    #[arg(long, value_name = "M", value_parser = flags::odd_in(1, 99))]
+    pub parent: Option<usize>,
     /// Correction passes at the finest level: every texel chosen again by its full window
-    /// (default 3, 1 with `--scanline`; the coarser levels get 1).
+    /// (default 2, 1 with `--scanline`; the coarser levels get 1).
     #[arg(long, value_name = "P", value_parser = flags::usize_in(0, skinkit_synth::config::MAX_CORRECTIONS))]
     pub corrections: Option<usize>,
     /// Start every level with Wei and Levoy's causal scanline pass (sequential, 3 levels, k = 4,
@@ -66,7 +67,7 @@ pub struct Args {
     /// The default since the upsampled start became it; accepted so older scripts still run.
     #[arg(long, hide = true, conflicts_with = "scanline")]
     pub upsampled: bool,
-    /// Largest verbatim copy, as a share of the exemplar's area (0 < SHARE <= 1; default 0.06,
+    /// Largest verbatim copy, as a share of the exemplar's area (0 < SHARE <= 1; default 0.09,
     /// none with `--scanline`): the last correction pass cuts bigger copied blocks apart.
     #[arg(long, value_name = "SHARE", value_parser = flags::non_negative)]
     pub copy_cap: Option<f32>,
@@ -271,6 +272,13 @@ pub struct OptionsReport {
     pub corrections: usize,
     /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
     pub search: String,
+    /// k-coherence: the tree fallback's ratio at the coarser levels and at the finest (`null`: no
+    /// fallback).
+    pub fallback: Option<f32>,
+    pub finest_fallback: Option<f32>,
+    /// k-coherence: the coherence bias at the coarser levels and at the finest.
+    pub coherence_bias: f32,
+    pub finest_coherence_bias: f32,
     pub dims: Option<usize>,
     pub rerank: Option<usize>,
     pub coherence: bool,
@@ -340,7 +348,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
     SynthConfig {
         levels: args.levels.unwrap_or(base.levels),
         neighbourhood: args.neighborhood,
-        parent: args.parent,
+        parent: args.parent.unwrap_or(base.parent),
         corrections: args.corrections.unwrap_or(base.corrections),
         occurrence_penalty: args.occurrence_penalty.unwrap_or(base.occurrence_penalty),
         search: if args.exact {
@@ -348,11 +356,11 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         } else if args.pca {
             Search::Approximate { dims: args.dims, rerank: args.rerank }
         } else {
-            let k = match base.search {
-                Search::KCoherence { k, .. } => args.k.unwrap_or(k),
-                _ => args.k.unwrap_or(Search::K_COHERENCE_K),
+            let (k, fallback) = match base.search {
+                Search::KCoherence { k, fallback, .. } => (args.k.unwrap_or(k), fallback),
+                _ => (args.k.unwrap_or(Search::K_COHERENCE_K), None),
             };
-            Search::KCoherence { k, fallback: None, dims: args.dims, rerank: args.rerank }
+            Search::KCoherence { k, fallback, dims: args.dims, rerank: args.rerank }
         },
         coherence: !args.no_coherence,
         exemplar_wrap: args.exemplar_wrap,
@@ -449,6 +457,10 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
 }
 
 fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
+    let fallback = match run.search {
+        Search::KCoherence { fallback, .. } => fallback,
+        _ => None,
+    };
     let (search, dims, rerank) = match run.search {
         Search::Exact => ("exact".to_owned(), None, None),
         Search::Approximate { dims, rerank } => ("approximate".to_owned(), Some(dims), Some(rerank)),
@@ -472,6 +484,10 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         parent: run.parent,
         corrections: run.corrections,
         search,
+        fallback,
+        finest_fallback: run.finest_fallback.or(fallback),
+        coherence_bias: run.coherence_bias,
+        finest_coherence_bias: run.finest_coherence_bias.unwrap_or(run.coherence_bias),
         dims,
         rerank,
         coherence: run.coherence,
