@@ -166,6 +166,85 @@ fn batch_goes_on_past_a_bad_session_and_says_which() {
     assert!(out.join("batch-report.json").is_file());
 }
 
+/// Every file under `dir` (relative path -> bytes), session reports without what a rerun changes
+/// (timings, the process's peak memory).
+fn tree_contents(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut files = std::collections::BTreeMap::new();
+    for session in std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()) {
+        for file in std::fs::read_dir(&session).unwrap().map(|e| e.unwrap().path()) {
+            let mut bytes = std::fs::read(&file).unwrap();
+            if file.extension().is_some_and(|e| e == "json") {
+                let mut v: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+                for varies in ["timings_s", "peak_memory_mib"] {
+                    v.as_object_mut().unwrap().remove(varies);
+                }
+                bytes = serde_json::to_vec(&v).unwrap();
+            }
+            files.insert(file.strip_prefix(dir).unwrap().display().to_string(), bytes);
+        }
+    }
+    files
+}
+
+/// A batch report's outcomes without their timings.
+fn outcomes_without_seconds(report: &serde_json::Value) -> Vec<serde_json::Value> {
+    let mut outcomes = report["outcomes"].as_array().unwrap().clone();
+    outcomes.iter_mut().for_each(|o| drop(o.as_object_mut().unwrap().remove("seconds")));
+    outcomes
+}
+
+#[test]
+fn three_shards_merge_to_the_single_batch_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sessions = tmp.path().join("sessions");
+    for name in ["s1", "s2", "s3", "s4", "s5-bad"] {
+        let dir = sessions.join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        for entry in std::fs::read_dir(mold("forehead-edge")).unwrap() {
+            let entry = entry.unwrap();
+            std::fs::copy(entry.path(), dir.join(entry.file_name())).unwrap();
+        }
+    }
+    std::fs::remove_file(sessions.join("s5-bad/08.png")).unwrap();
+    let (whole, sharded) = (tmp.path().join("whole"), tmp.path().join("sharded"));
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let o = skinkit(&["batch", "--quiet", &s(&sessions), "--out", &s(&whole)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let mut shares = Vec::new();
+    for k in 1..=3 {
+        let shard = format!("{k}/3");
+        // Merging before every shard has run names the missing ones.
+        let early = skinkit(&["batch", "--merge", "--out", &s(&sharded)]);
+        assert_eq!(early.status.code(), Some(1));
+        assert!(k == 1 || stderr(&early).contains(&format!("{k}/3")), "{}", stderr(&early));
+        let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&sharded), "--shard", &shard]);
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(report["shard"]["index"], k);
+        shares.push(report["sessions"].as_u64().unwrap());
+        assert!(sharded.join(format!("batch-report-{k}-of-3.json")).is_file());
+    }
+    assert_eq!(shares, [2, 2, 1]);
+    let (one, three) = (tree_contents(&whole), tree_contents(&sharded));
+    assert_eq!(one.keys().collect::<Vec<_>>(), three.keys().collect::<Vec<_>>());
+    for (name, bytes) in &one {
+        assert!(three[name] == *bytes, "{name} differs between the single batch and the shards");
+    }
+    let o = skinkit(&["batch", "--merge", "--json", "--out", &s(&sharded)]);
+    assert_eq!(o.status.code(), Some(1), "a session failed: {}", stderr(&o));
+    let merged: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let single: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(whole.join("batch-report.json")).unwrap()).unwrap();
+    assert_eq!(outcomes_without_seconds(&merged), outcomes_without_seconds(&single));
+    for field in ["sessions", "succeeded", "failed", "interrupted"] {
+        assert_eq!(merged[field], single[field], "{field}");
+    }
+    assert!(merged.get("shard").is_none());
+    assert!(sharded.join("batch-report.json").is_file());
+    let bad = skinkit(&["batch", &s(&sessions), "--out", &s(&sharded), "--shard", "4/3"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("4/3"), "{}", stderr(&bad));
+}
+
 #[test]
 fn rig_import_reads_diligent_and_uw_files() {
     let tmp = tempfile::tempdir().unwrap();

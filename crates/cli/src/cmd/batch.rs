@@ -8,12 +8,16 @@
 //! Each session's folder is one output set (all its files or none, `report.json` last), so after
 //! a failure or an interrupt every session folder is either complete or absent (issue 15, D3/D4);
 //! an interrupt still writes `batch-report.json` of the sessions that finished.
+//!
+//! `--shard K/N` and `--merge` spread a batch over machines ([`shard`]).
+
+mod shard;
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use skinkit_capture::Rig;
 use skinkit_capture::session::{self, CaptureOptions, CaptureReport, Session};
@@ -24,21 +28,29 @@ use super::capture::SolveArgs;
 use crate::interrupt::{self, HookGuard};
 use crate::output::Output;
 use crate::{guard, pipeline};
+use shard::Shard;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Folder whose sub-folders are sessions (photos + rig.toml).
-    #[arg(value_name = "SESSIONS_DIR")]
-    pub sessions: PathBuf,
+    #[arg(value_name = "SESSIONS_DIR", required_unless_present = "merge")]
+    pub sessions: Option<PathBuf>,
     /// Output folder: one sub-folder per session, plus batch-report.json.
     #[arg(long, value_name = "OUT_DIR")]
     pub out: PathBuf,
+    /// Process only shard K of N (1 <= K <= N): the sessions whose index in name order is K - 1
+    /// modulo N. The report goes to batch-report-K-of-N.json; `--merge` joins the N of them.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
+    /// Join the shard reports in OUT_DIR (all N of them) into OUT_DIR/batch-report.json.
+    #[arg(long, conflicts_with_all = ["sessions", "shard"])]
+    pub merge: bool,
     #[command(flatten)]
     pub solve: SolveArgs,
 }
 
 /// One line of the batch summary.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SessionOutcome {
     pub session: String,
     pub ok: bool,
@@ -50,7 +62,7 @@ pub struct SessionOutcome {
     pub seconds: Option<f64>,
 }
 
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct BatchReport {
     pub sessions: usize,
     pub succeeded: usize,
@@ -63,6 +75,9 @@ pub struct BatchReport {
     /// The most sessions that ran at once.
     pub most_at_once: usize,
     pub outcomes: Vec<SessionOutcome>,
+    /// The shard this report covers (`--shard`); absent for a whole or merged batch.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
 }
 
 /// The session sub-folders of `dir`, sorted by name.
@@ -133,7 +148,13 @@ fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 }
 
 impl BatchReport {
-    fn new(sessions: usize, mut outcomes: Vec<SessionOutcome>, interrupted: bool, gate: &MemoryGate) -> Self {
+    fn new(
+        sessions: usize,
+        mut outcomes: Vec<SessionOutcome>,
+        interrupted: bool,
+        gate: &MemoryGate,
+        shard: Option<Shard>,
+    ) -> Self {
         outcomes.sort_by(|a, b| a.session.cmp(&b.session));
         let failed = outcomes.iter().filter(|o| !o.ok).count();
         BatchReport {
@@ -144,6 +165,7 @@ impl BatchReport {
             memory_limit_mib: gate.budget() >> 20,
             most_at_once: gate.peaks().0,
             outcomes,
+            shard,
         }
     }
 }
@@ -154,9 +176,10 @@ fn report_on_interrupt(
     sessions: usize,
     finished: Arc<Mutex<Vec<SessionOutcome>>>,
     gate: Arc<MemoryGate>,
+    shard: Option<Shard>,
 ) -> HookGuard {
     interrupt::on_interrupt(move || {
-        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate);
+        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard);
         // Written by the signal thread itself, whole (atomically), before the exit.
         if let Err(e) = pipeline::write_json(&path, &report) {
             eprintln!("error: {e:#}");
@@ -165,21 +188,27 @@ fn report_on_interrupt(
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
+    let Some(sessions) = args.sessions.as_deref().filter(|_| !args.merge) else {
+        let report = shard::merge(&args.out)?;
+        return finish(&report, &args.out.join("batch-report.json"), out);
+    };
     let options = args.solve.options(out)?;
     guard::out_folder("--out", &args.out)?;
-    guard::not_in_input_folder("--out", &args.out, "the sessions folder", &args.sessions)?;
-    let dirs = session_dirs(&args.sessions)?;
-    if dirs.is_empty() {
-        anyhow::bail!("{}: no session sub-folders", args.sessions.display());
+    guard::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
+    let all = session_dirs(sessions)?;
+    if all.is_empty() {
+        anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
+    let dirs = args.shard.map_or_else(|| all.clone(), |s| s.select(&all));
     // Made here, not by the sessions' output sets: one session's failure must not remove it.
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let report_path = args.out.join("batch-report.json");
+    let report_path = args.out.join(args.shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
     let finished = Arc::new(Mutex::new(Vec::new()));
     // As many sessions at once as there are workers, fewer when their estimates do not fit the
     // memory limit together.
     let gate = Arc::new(MemoryGate::new(options.memory_limit));
-    let hook = report_on_interrupt(report_path.clone(), dirs.len(), Arc::clone(&finished), Arc::clone(&gate));
+    let hook =
+        report_on_interrupt(report_path.clone(), dirs.len(), Arc::clone(&finished), Arc::clone(&gate), args.shard);
     let swept = Mutex::new(Vec::new());
     let bar = out.progress(dirs.len() as u64, "batch");
     limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
@@ -196,18 +225,25 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     });
     bar.finish_and_clear();
     out.swept(&lock(&swept));
-    let report = BatchReport::new(dirs.len(), lock(&finished).clone(), false, &gate);
-    let mut set = OutputSet::files();
-    pipeline::write_json_file(&mut set, &report_path, &report)?;
-    set.commit().with_context(|| format!("cannot write {}", report_path.display()))?;
+    let report = BatchReport::new(dirs.len(), lock(&finished).clone(), false, &gate, args.shard);
+    let code = finish(&report, &report_path, out);
     drop(hook);
-    let failed = report.failed;
-    out.result(&report, || {
-        let mut s = format!("{} sessions: {} succeeded, {} failed", report.sessions, report.succeeded, report.failed);
+    code
+}
+
+/// Writes `report` to `path` and shows it; exit code 1 when a session failed.
+fn finish(report: &BatchReport, path: &Path, out: &Output) -> Result<i32> {
+    let mut set = OutputSet::files();
+    pipeline::write_json_file(&mut set, path, report)?;
+    set.commit().with_context(|| format!("cannot write {}", path.display()))?;
+    out.result(report, || {
+        let shard = report.shard.map(|s| format!(" (shard {s})")).unwrap_or_default();
+        let mut s =
+            format!("{} sessions{shard}: {} succeeded, {} failed", report.sessions, report.succeeded, report.failed);
         for o in report.outcomes.iter().filter(|o| !o.ok) {
             s += &format!("\nfailed: {}: {}", o.session, o.error.as_deref().unwrap_or(""));
         }
         s
     });
-    Ok(if failed > 0 { 1 } else { 0 })
+    Ok(if report.failed > 0 { 1 } else { 0 })
 }

@@ -1,0 +1,133 @@
+//! Sharded batches (`skinkit batch --shard K/N`, `skinkit batch --merge`): a cluster runs N
+//! copies of the batch, each on its own deterministic share of the sessions, with no scheduler of
+//! ours; the shards' reports are then joined into the report one batch would have written.
+//!
+//! Shard `K` of `N` takes the sessions whose index in name order is `K - 1` modulo `N`, so the
+//! shares differ by at most one session and a session's shard depends only on the sorted names.
+//! Each shard writes `batch-report-K-of-N.json` beside the session folders (shards sharing one
+//! output folder never write the same file); `--merge` checks that all N are there and writes
+//! `batch-report.json`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+
+use super::BatchReport;
+
+/// Shard `index` (1-based) of `count`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    /// `K/N` with `1 <= K <= N`.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let bad = || format!("'{s}' is not a shard: expected K/N with 1 <= K <= N (e.g. 2/8)");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) =
+            (k.trim().parse::<usize>().map_err(|_| bad())?, n.trim().parse::<usize>().map_err(|_| bad())?);
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl Shard {
+    /// This shard's share of `sessions` (sorted by name).
+    pub fn select<T: Clone>(&self, sessions: &[T]) -> Vec<T> {
+        sessions.iter().skip(self.index - 1).step_by(self.count).cloned().collect()
+    }
+
+    /// The file name of this shard's report.
+    pub fn report_name(&self) -> String {
+        format!("batch-report-{}-of-{}.json", self.index, self.count)
+    }
+}
+
+/// The shard reports in `dir`: `batch-report-K-of-N.json` for one N and every K, or an error that
+/// names what is missing or mixed.
+fn shard_reports(dir: &Path) -> Result<Vec<(Shard, PathBuf)>> {
+    let mut found: Vec<(Shard, PathBuf)> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot list {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter_map(|p| {
+            let name = p.file_name()?.to_str()?;
+            let middle = name.strip_prefix("batch-report-")?.strip_suffix(".json")?;
+            let (k, n) = middle.split_once("-of-")?;
+            Some((format!("{k}/{n}").parse().ok()?, p))
+        })
+        .collect();
+    found.sort_by_key(|(s, _)| s.index);
+    let Some(count) = found.first().map(|(s, _)| s.count) else {
+        bail!("{}: no shard reports (batch-report-K-of-N.json) to merge", dir.display());
+    };
+    if let Some((s, p)) = found.iter().find(|(s, _)| s.count != count) {
+        bail!("{}: shard {s} does not belong to a batch of {count} shards", p.display());
+    }
+    let missing: Vec<String> =
+        (1..=count).filter(|k| !found.iter().any(|(s, _)| s.index == *k)).map(|k| format!("{k}/{count}")).collect();
+    if !missing.is_empty() {
+        bail!("{}: shard reports missing for {} (run those shards first)", dir.display(), missing.join(", "));
+    }
+    Ok(found)
+}
+
+/// Joins the shard reports of `dir` into one report: counts added, outcomes in name order, the
+/// memory limit and sessions at once the largest of any shard, interrupted if any shard was.
+pub fn merge(dir: &Path) -> Result<BatchReport> {
+    let mut merged: Option<BatchReport> = None;
+    for (shard, path) in shard_reports(dir)? {
+        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let report: BatchReport =
+            serde_json::from_str(&text).with_context(|| format!("{}: not a batch report", path.display()))?;
+        if report.shard != Some(shard) {
+            bail!("{}: its `shard` field says {:?}, not {shard}", path.display(), report.shard.map(|s| s.to_string()));
+        }
+        merged = Some(match merged {
+            None => BatchReport { shard: None, ..report },
+            Some(m) => BatchReport {
+                sessions: m.sessions + report.sessions,
+                succeeded: m.succeeded + report.succeeded,
+                failed: m.failed + report.failed,
+                interrupted: m.interrupted || report.interrupted,
+                memory_limit_mib: m.memory_limit_mib.max(report.memory_limit_mib),
+                most_at_once: m.most_at_once.max(report.most_at_once),
+                outcomes: m.outcomes.into_iter().chain(report.outcomes).collect(),
+                shard: None,
+            },
+        });
+    }
+    let mut merged = merged.expect("shard_reports returns at least one");
+    merged.outcomes.sort_by(|a, b| a.session.cmp(&b.session));
+    Ok(merged)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_parse_and_partition_in_name_order() {
+        let s: Shard = "2/3".parse().unwrap();
+        assert_eq!(s, Shard { index: 2, count: 3 });
+        for bad in ["0/3", "4/3", "3", "a/b", "1/0", ""] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+        let names: Vec<usize> = (0..7).collect();
+        let shares: Vec<Vec<usize>> = (1..=3).map(|k| Shard { index: k, count: 3 }.select(&names)).collect();
+        assert_eq!(shares, vec![vec![0, 3, 6], vec![1, 4], vec![2, 5]]);
+        assert!(Shard { index: 5, count: 9 }.select(&names[..3]).is_empty());
+    }
+}
