@@ -50,9 +50,11 @@ const SLOW_SECONDS: f64 = 5.0;
 #[derive(Clone, Copy)]
 struct Mode {
     name: &'static str,
+    /// The search (the default's own for the upsampled row).
     search: Search,
     corrections: usize,
-    /// [`SynthConfig::new`] (the upsampled default) instead of [`SynthConfig::scanline`].
+    /// [`SynthConfig::new`] (the upsampled default, its search included) instead of
+    /// [`SynthConfig::scanline`].
     upsampled: bool,
 }
 
@@ -75,8 +77,8 @@ const MODES: [Mode; 9] = [
     mode("PCA-8, rerank 8", pca(8), 1),
     mode("k-coherence k=4", Search::K_COHERENCE, 1),
     Mode {
-        name: "default (upsampled, k-coherence k=2)",
-        search: Search::KCoherence { k: 2, fallback: None, dims: 8, rerank: 8 },
+        name: "default (upsampled, k-coherence k=2, tree fallback)",
+        search: Search::Exact, // replaced by the default's search
         corrections: skinkit_synth::config::DEFAULT_CORRECTIONS,
         upsampled: true,
     },
@@ -123,7 +125,7 @@ fn measure(ex: &Grid<Vec3>, ex_normals: &NormalMap, n: usize, levels: usize, mod
     };
     let config = SynthConfig {
         levels,
-        search: mode.search,
+        search: if mode.upsampled { base.search } else { mode.search },
         neighbourhood: n,
         corrections: mode.corrections,
         seed: SEED,
@@ -185,7 +187,7 @@ fn markdown(cells: &[Cell], load: &str) -> String {
     for c in cells {
         let exact = cells
             .iter()
-            .find(|e| e.n == c.n && e.levels == c.levels && e.mode.search == Search::Exact)
+            .find(|e| e.n == c.n && e.levels == c.levels && !e.mode.upsampled && e.mode.search == Search::Exact)
             .and_then(|e| e.scores.as_ref().ok());
         let head = format!("| {} | {} | {} | {} |", c.n, c.levels, c.mode.name, c.mode.corrections);
         s += &match &c.scores {
