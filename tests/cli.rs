@@ -246,6 +246,45 @@ fn three_shards_merge_to_the_single_batch_bit_for_bit() {
 }
 
 #[test]
+fn a_rerun_skips_up_to_date_sessions_and_force_redoes_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sessions = tmp.path().join("sessions");
+    for name in ["a", "b"] {
+        let dir = sessions.join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        for entry in std::fs::read_dir(mold("forehead-edge")).unwrap() {
+            let entry = entry.unwrap();
+            std::fs::copy(entry.path(), dir.join(entry.file_name())).unwrap();
+        }
+    }
+    let out = tmp.path().join("out");
+    let batch = |extra: &[&str]| {
+        let mut args = vec!["batch", "--json", sessions.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        args.extend(extra);
+        let o = skinkit(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let skipped: Vec<bool> = report["outcomes"].as_array().unwrap().iter().map(|o| o["skipped"] == true).collect();
+        (report["skipped"].as_u64().unwrap(), skipped)
+    };
+    let made = |name: &str| std::fs::metadata(out.join(name).join("normal.png")).unwrap().modified().unwrap();
+    assert_eq!(batch(&[]), (0, vec![false, false]));
+    let first = made("a");
+    assert_eq!(batch(&[]), (2, vec![true, true]));
+    assert_eq!(made("a"), first, "a skipped session's outputs are left as they were");
+    // A photo newer than the outputs: that session alone runs again.
+    let photo = std::fs::File::options().write(true).open(sessions.join("b/03.png")).unwrap();
+    let report = std::fs::metadata(out.join("b/report.json")).unwrap().modified().unwrap();
+    photo.set_modified(report + std::time::Duration::from_millis(1)).unwrap();
+    assert_eq!(batch(&[]), (1, vec![true, false]));
+    // Other options: run again.
+    assert_eq!(batch(&["--solver", "ls"]), (0, vec![false, false]));
+    assert_eq!(batch(&["--solver", "ls"]), (2, vec![true, true]));
+    assert_eq!(batch(&["--solver", "ls", "--force"]), (0, vec![false, false]));
+    assert!(made("a") > first);
+}
+
+#[test]
 fn rig_import_reads_diligent_and_uw_files() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path().join("ball");

@@ -118,10 +118,11 @@ impl Rng {
     }
 }
 
-/// Runs a batch and sends `signal` after `delay`; the status is the batch's own.
+/// Runs a batch and sends `signal` after `delay`; the status is the batch's own. With `--force`,
+/// so every run captures all sessions again rather than skipping those an earlier run finished.
 fn interrupted_batch(sessions: &Path, out: &Path, delay: Duration, signal: &str) -> Output {
     let child = bin()
-        .args(["batch", "--quiet", s(sessions), "--out", s(out)])
+        .args(["batch", "--quiet", "--force", s(sessions), "--out", s(out)])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()

@@ -130,6 +130,14 @@ pub struct CaptureOptions {
     pub memory_limit: u64,
 }
 
+/// The name of a transfer curve in reports: `linear` or `srgb`.
+pub fn transfer_name(transfer: Transfer) -> &'static str {
+    match transfer {
+        Transfer::Linear => "linear",
+        Transfer::Srgb => "srgb",
+    }
+}
+
 impl Default for CaptureOptions {
     /// The robust solve, the paper's 50-pixel detrend, linear photos, green-up truth.
     fn default() -> Self {
@@ -194,6 +202,8 @@ pub struct CaptureReport {
     pub condition_number: f64,
     pub noise_amplification: f64,
     pub detrend_block: usize,
+    /// How photo values were read: `linear` or `srgb` ([`transfer_name`]).
+    pub transfer: String,
     pub valid_pixels: usize,
     pub invalid_pixels: usize,
     /// Angle of the output normals from +Z, in degrees (how rough the captured surface is).
@@ -304,6 +314,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         condition_number: conditioning.condition_number,
         noise_amplification: conditioning.noise_amplification,
         detrend_block: options.detrend_block,
+        transfer: transfer_name(options.transfer).to_owned(),
         valid_pixels: width * height - invalid,
         invalid_pixels: invalid,
         tilt_degrees: tilt,

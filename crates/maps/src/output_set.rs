@@ -396,6 +396,20 @@ fn rename_all(moves: &[(PathBuf, PathBuf)]) -> Result<()> {
     Ok(())
 }
 
+/// Removes what killed runs left around the output folder `target` without writing it: the
+/// staging folders of [`OutputSet::folder`] beside it whose process is gone, and the old temporary
+/// files of the files in it (what a folder set's creation and commit sweep; for a caller that
+/// keeps the folder as it is, such as a batch skipping an up-to-date session). Returns what it
+/// removed.
+pub fn sweep_folder(target: &Path) -> Vec<PathBuf> {
+    let Ok((parent, name)) = split(target) else { return Vec::new() };
+    let mut swept = sweep_staging(&parent, &name);
+    for file in entries(target).into_iter().filter(|p| p.is_file()) {
+        swept.extend(sweep_old_temps(&file));
+    }
+    swept
+}
+
 /// Removes `.<label>.staging.<pid>.<n>` folders in `parent` whose process is gone.
 fn sweep_staging(parent: &Path, label: &str) -> Vec<PathBuf> {
     let prefix = format!(".{label}{STAGING}");

@@ -3,7 +3,7 @@
 //!
 //! 1. Partition the map by nearest seed point, boundaries warped into random curves
 //!    ([`Partition::build`]); texels outside the layout's coverage mask get no region.
-//! 2. Choose the spline's levels: `--levels`, or the REFERENCE rule on the narrowest region
+//! 2. Choose the spline's levels: `--levels`, or enblend's overlap rule on the narrowest region
 //!    ([`spline::levels_for_overlap`] of its bounding box's short side), capped at
 //!    [`MAX_AUTO_LEVELS`].
 //! 3. Resample each exemplar to the map's scale ([`skinkit_maps::resample`]), so pores keep their

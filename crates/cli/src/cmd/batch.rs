@@ -9,8 +9,10 @@
 //! a failure or an interrupt every session folder is either complete or absent (issue 15, D3/D4);
 //! an interrupt still writes `batch-report.json` of the sessions that finished.
 //!
-//! `--shard K/N` and `--merge` spread a batch over machines ([`shard`]).
+//! `--shard K/N` and `--merge` spread a batch over machines ([`shard`]); a re-run skips the
+//! sessions whose outputs are complete and up to date ([`resume`]; `--force` redoes them).
 
+mod resume;
 mod shard;
 
 use std::path::{Path, PathBuf};
@@ -20,7 +22,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use skinkit_capture::Rig;
-use skinkit_capture::session::{self, CaptureOptions, CaptureReport, Session};
+use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_maps::OutputSet;
 use skinkit_maps::limits::{self, MemoryGate};
 
@@ -43,8 +45,12 @@ pub struct Args {
     #[arg(long, value_name = "K/N")]
     pub shard: Option<Shard>,
     /// Join the shard reports in OUT_DIR (all N of them) into OUT_DIR/batch-report.json.
-    #[arg(long, conflicts_with_all = ["sessions", "shard"])]
+    #[arg(long, conflicts_with_all = ["sessions", "shard", "force"])]
     pub merge: bool,
+    /// Capture every session again, even those whose outputs are complete, newer than their
+    /// inputs and made with the same options (by default those are skipped).
+    #[arg(long)]
+    pub force: bool,
     #[command(flatten)]
     pub solve: SolveArgs,
 }
@@ -60,6 +66,9 @@ pub struct SessionOutcome {
     pub invalid_pixels: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seconds: Option<f64>,
+    /// Not captured again: its outputs were complete and up to date (`seconds` is the earlier run's).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub skipped: bool,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -67,6 +76,9 @@ pub struct BatchReport {
     pub sessions: usize,
     pub succeeded: usize,
     pub failed: usize,
+    /// Sessions among the succeeded that were up to date and not captured again.
+    #[serde(default)]
+    pub skipped: usize,
     /// True when a signal stopped the batch: `outcomes` lists the sessions that finished (their
     /// folders are complete); the others have no folder.
     pub interrupted: bool,
@@ -91,18 +103,32 @@ fn session_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
+/// What one session's run left: its figures, and what its commit cleaned up from killed runs.
+struct SessionRun {
+    invalid_pixels: usize,
+    seconds: f64,
+    skipped: bool,
+    swept: Vec<PathBuf>,
+}
+
 /// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
-/// session that could never fit fails at once with its estimate and the limit.
+/// session that could never fit fails at once with its estimate and the limit. Without `force`,
+/// a session whose outputs are up to date ([`resume::up_to_date`]) is skipped.
 fn run_session(
     dir: &Path,
     out_dir: &Path,
     options: &CaptureOptions,
     gate: &MemoryGate,
-) -> Result<(CaptureReport, Vec<PathBuf>)> {
+    force: bool,
+) -> Result<SessionRun> {
     let files = Session::from_dir(dir)?;
     // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
     let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
     let ambient = files.ambient.clone().or(rig_ambient);
+    if let Some(done) = resume::up_to_date(dir, &files, ambient.as_deref(), out_dir, options).filter(|_| !force) {
+        let swept = skinkit_maps::output_set::sweep_folder(out_dir);
+        return Ok(SessionRun { invalid_pixels: done.invalid_pixels, seconds: done.seconds, skipped: true, swept });
+    }
     let estimate = session::memory_estimate(&files, ambient.as_deref(), options)?;
     limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, gate.budget())?;
     let _admitted = gate.acquire(estimate);
@@ -110,7 +136,8 @@ fn run_session(
     let set = pipeline::capture_set(out_dir)?;
     let mut captured = session::capture(&files, options, &|_| {})?;
     let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
-    Ok((captured.report, swept))
+    let report = &captured.report;
+    Ok(SessionRun { invalid_pixels: report.invalid_pixels, seconds: report.timings_s.total, skipped: false, swept })
 }
 
 /// One session's outcome; `swept` collects what its commit cleaned up from killed runs.
@@ -119,18 +146,20 @@ fn outcome(
     out_dir: &Path,
     options: &CaptureOptions,
     gate: &MemoryGate,
+    force: bool,
     swept: &Mutex<Vec<PathBuf>>,
 ) -> SessionOutcome {
     let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    match run_session(dir, &out_dir.join(&name), options, gate) {
-        Ok((report, cleaned)) => {
-            lock(swept).extend(cleaned);
+    match run_session(dir, &out_dir.join(&name), options, gate, force) {
+        Ok(run) => {
+            lock(swept).extend(run.swept);
             SessionOutcome {
                 session: name,
                 ok: true,
                 error: None,
-                invalid_pixels: Some(report.invalid_pixels),
-                seconds: Some(report.timings_s.total),
+                invalid_pixels: Some(run.invalid_pixels),
+                seconds: Some(run.seconds),
+                skipped: run.skipped,
             }
         }
         Err(e) => SessionOutcome {
@@ -139,6 +168,7 @@ fn outcome(
             error: Some(crate::output::one_line(&e)),
             invalid_pixels: None,
             seconds: None,
+            skipped: false,
         },
     }
 }
@@ -161,6 +191,7 @@ impl BatchReport {
             sessions,
             succeeded: outcomes.len() - failed,
             failed,
+            skipped: outcomes.iter().filter(|o| o.skipped).count(),
             interrupted,
             memory_limit_mib: gate.budget() >> 20,
             most_at_once: gate.peaks().0,
@@ -212,7 +243,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let swept = Mutex::new(Vec::new());
     let bar = out.progress(dirs.len() as u64, "batch");
     limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
-        let outcome = outcome(dir, &args.out, &options, &gate, &swept);
+        let outcome = outcome(dir, &args.out, &options, &gate, args.force, &swept);
         if interrupt::requested() && !outcome.ok {
             // Failed because the interrupt removed its staging folder: unfinished, not failed.
             return;
@@ -238,8 +269,12 @@ fn finish(report: &BatchReport, path: &Path, out: &Output) -> Result<i32> {
     set.commit().with_context(|| format!("cannot write {}", path.display()))?;
     out.result(report, || {
         let shard = report.shard.map(|s| format!(" (shard {s})")).unwrap_or_default();
-        let mut s =
-            format!("{} sessions{shard}: {} succeeded, {} failed", report.sessions, report.succeeded, report.failed);
+        let skipped =
+            if report.skipped > 0 { format!(" ({} up to date, skipped)", report.skipped) } else { String::new() };
+        let mut s = format!(
+            "{} sessions{shard}: {} succeeded{skipped}, {} failed",
+            report.sessions, report.succeeded, report.failed
+        );
         for o in report.outcomes.iter().filter(|o| !o.ok) {
             s += &format!("\nfailed: {}: {}", o.session, o.error.as_deref().unwrap_or(""));
         }

@@ -101,6 +101,7 @@ pub fn merge(dir: &Path) -> Result<BatchReport> {
                 sessions: m.sessions + report.sessions,
                 succeeded: m.succeeded + report.succeeded,
                 failed: m.failed + report.failed,
+                skipped: m.skipped + report.skipped,
                 interrupted: m.interrupted || report.interrupted,
                 memory_limit_mib: m.memory_limit_mib.max(report.memory_limit_mib),
                 most_at_once: m.most_at_once.max(report.most_at_once),
