@@ -230,7 +230,10 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     if all.is_empty() {
         anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
-    let dirs = args.shard.map_or_else(|| all.clone(), |s| s.select(&all));
+    let dirs = match args.shard {
+        Some(shard) => shard.select(&all),
+        None => all,
+    };
     // Made here, not by the sessions' output sets: one session's failure must not remove it.
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let report_path = args.out.join(args.shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
