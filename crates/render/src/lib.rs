@@ -5,13 +5,16 @@
 //! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
 //! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
 //! (device, resources, pipelines, readback, timing) and [`pass`] (one module per pass of the
-//! graph, each with its WGSL); [`load`] turns a scene into what the passes draw and plans the
+//! graph, each with its WGSL); [`export`] writes a scene's skin as glTF 2.0 and [`gltf_maps`]
+//! reads a glTF material's textures back as maps; [`load`] turns a scene into what the passes draw and plans the
 //! passes and resources it needs; [`highlight`] measures how much of a render's highlights the
 //! specular lobes make.
 
 pub mod brdf;
 pub mod effect;
+pub mod export;
 pub mod frames;
+pub mod gltf_maps;
 pub mod gpu;
 pub mod graph;
 pub mod head;

@@ -9,6 +9,8 @@
 //! - The albedo is read as a photo: 8-bit files are taken as sRGB (what painted and photographed
 //!   textures are), 16-bit and float files as linear (what `skinkit capture` writes). Grey albedo
 //!   is spread to RGB.
+//! - A map path naming a `.glb` or `.gltf` file takes the map from that file's material
+//!   ([`crate::gltf_maps`]: its `baseColorTexture` as sRGB, its green-up `normalTexture`).
 //! - A map larger than the device's `max_texture_dimension_2d` is halved (2x2 box, the mip
 //!   filter) until it fits, with a warning naming the limit.
 //!
@@ -21,15 +23,16 @@ use std::path::Path;
 
 use glam::{Mat3, Vec3};
 use skinkit_maps::io::{self, Limits};
-use skinkit_maps::{Channels, NormalEncoding};
+use skinkit_maps::{Channels, NormalEncoding, NormalMap};
 
 use crate::brdf::Lafortune;
 use crate::frames::{self, FrameMethod};
+use crate::gltf_maps;
 use crate::gpu::OutputFormat as TargetFormat;
 use crate::graph::{PassGraph, PassKind};
 use crate::mesh::{Mesh, MeshError};
 use crate::passes::{DiffuseMode, Features};
-use crate::scene::{self, Albedo, Scene};
+use crate::scene::{self, Albedo, NormalMapSpec, Scene};
 use crate::shading::{self, GreenAxis, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex};
 use crate::skin::options::TsdKernel;
 use crate::skin::tsd;
@@ -154,13 +157,7 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
     let normal_map = match &scene.normal_map {
         None => Texture::flat_normals(),
         Some(spec) => {
-            exists(scene, "normal_map.path", &spec.path, spec.made_by.as_deref())?;
-            let encoding = NormalEncoding { green: spec.green };
-            let map = io::read_normal_map(&spec.path, encoding, &limits).map_err(|error| LoadError::Map {
-                file: scene.name(),
-                field: "normal_map.path",
-                error,
-            })?;
+            let map = read_normal_map(scene, spec, &limits)?;
             fit(Texture::from_normal_map(&map), "normal map", max_texture_side, &mut warnings)
         }
     };
@@ -168,13 +165,7 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         None => Texture::solid([1.0; 4]),
         Some(Albedo::Constant(c)) => Texture::solid([c.x, c.y, c.z, 1.0]),
         Some(Albedo::Map(path)) => {
-            exists(scene, "albedo", path, None)?;
-            let texture = read_albedo(path, &limits).map_err(|error| LoadError::Map {
-                file: scene.name(),
-                field: "albedo",
-                error,
-            })?;
-            fit(texture, "albedo", max_texture_side, &mut warnings)
+            fit(read_scene_albedo(scene, path, &limits)?, "albedo", max_texture_side, &mut warnings)
         }
     };
     // A constant albedo scales rho_d; with no albedo rho_d is the BRDF's own.
@@ -200,6 +191,40 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         background: [0.0, 0.0, 0.0, 1.0],
     };
     Ok(Loaded { inputs, vertex_count: mesh.positions.len(), triangle_count: mesh.triangle_count(), warnings })
+}
+
+/// The scene's normal map, green-up in memory: from its file, or from the normal texture of a
+/// glTF file's material ([`crate::gltf_maps`], green-up by glTF's definition).
+///
+/// # Errors
+/// A missing or unreadable map; `green = "down"` on a glTF file.
+pub(crate) fn read_normal_map(scene: &Scene, spec: &NormalMapSpec, limits: &Limits) -> Result<NormalMap> {
+    const FIELD: &str = "normal_map.path";
+    exists(scene, FIELD, &spec.path, spec.made_by.as_deref())?;
+    let map_error = |error| LoadError::Map { file: scene.name(), field: FIELD, error };
+    if !gltf_maps::is_gltf(&spec.path) {
+        return io::read_normal_map(&spec.path, NormalEncoding { green: spec.green }, limits).map_err(map_error);
+    }
+    if spec.green != skinkit_maps::GreenAxis::Up {
+        let reason =
+            format!("{}: glTF normal textures are green-up; remove `green` or say \"up\"", spec.path.display());
+        return Err(LoadError::Unsupported { file: scene.name(), field: "normal_map.green".into(), reason });
+    }
+    gltf_maps::normal_map(&spec.path, limits).map_err(map_error)
+}
+
+/// The scene's albedo map as linear RGBA: from an image file, or from the base colour texture of
+/// a glTF file's material ([`crate::gltf_maps`]).
+///
+/// # Errors
+/// A missing or unreadable map.
+pub(crate) fn read_scene_albedo(scene: &Scene, path: &Path, limits: &Limits) -> Result<Texture> {
+    exists(scene, "albedo", path, None)?;
+    let texture = match gltf_maps::is_gltf(path) {
+        true => gltf_maps::albedo(path, limits),
+        false => read_albedo(path, limits),
+    };
+    texture.map_err(|error| LoadError::Map { file: scene.name(), field: "albedo", error })
 }
 
 /// [`LoadError::Missing`] unless `path` exists.

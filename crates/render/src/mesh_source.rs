@@ -198,7 +198,7 @@ pub(crate) fn check_gltf_buffer_uris(document: &gltf::Document, base: &std::path
 }
 
 /// `%XX` escapes decoded, or `None` when an escape is malformed or the bytes are not UTF-8.
-fn percent_decode(text: &str) -> Option<String> {
+pub(crate) fn percent_decode(text: &str) -> Option<String> {
     let bytes = text.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
