@@ -49,6 +49,9 @@ enum Command {
     Face(cmd::stitch::FaceArgs),
     /// Render a scene (mesh, maps, Lafortune skin, lights, cameras) with the bundled wgpu renderer.
     Render(cmd::render::Args),
+    /// Export a scene's skin for other tools (glTF 2.0: mesh, tangents, albedo, normal map, roughness).
+    #[command(subcommand)]
+    Export(cmd::export::Command),
     /// Build a pre-integrated skin table (diffuse falloff or shadow scattering) as a float EXR.
     #[command(subcommand)]
     Lut(cmd::lut::Command),
@@ -74,6 +77,7 @@ fn main() {
         Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
         Command::Face(args) => cmd::stitch::run_face(args, &out),
         Command::Render(args) => cmd::render::run(args, &out),
+        Command::Export(command) => cmd::export::run(command, &out),
         Command::Lut(command) => cmd::lut::run(command, &out),
         #[cfg(feature = "viewer")]
         Command::View(args) => cmd::render::view(args, &out),

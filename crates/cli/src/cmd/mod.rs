@@ -3,6 +3,7 @@
 pub mod batch;
 pub mod capture;
 pub mod demo;
+pub mod export;
 pub mod figure7;
 pub mod figures;
 pub mod lut;
