@@ -18,7 +18,7 @@ use crate::shading::Texture;
 /// Bit depth of the exported normal texture.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub enum NormalBits {
-    /// 8-bit RGB PNG: what every viewer reads (about 0.45 degrees of quantisation at the pole).
+    /// 8-bit RGB PNG: what every viewer reads (at most about 0.3 degrees of quantisation).
     #[default]
     Eight,
     /// 16-bit RGB PNG: valid PNG and accepted by the validator, but some viewers quantise it to
