@@ -13,6 +13,7 @@
 //! mesh = "head.obj"
 //! mm_per_unit = 1.0             # how long one mesh unit is, in millimetres (curvature needs it)
 //! albedo = "albedo.png"         # or a constant linear RGB: [0.6, 0.45, 0.4]; absent: brdf.diffuse
+//!                               # (a .glb/.gltf here or in normal_map.path: crate::gltf_maps)
 //! specular = "pixel"            # or "vertex" (the paper's per-vertex specular look)
 //! effects = ["shadows"]         # crate::effect::Effect names; their settings: skin::options
 //!

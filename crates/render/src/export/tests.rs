@@ -123,3 +123,69 @@ fn uris_escape_all_but_unreserved_bytes() {
     assert_eq!(uri_encode("head 2%.bin"), "head%202%25.bin");
     assert_eq!(uri_encode("tête"), "t%C3%AAte");
 }
+
+/// Writes an export's files into `dir` (as the CLI does, without the atomic set).
+fn write_files(dir: &Path, exported: &Exported) -> std::path::PathBuf {
+    for file in &exported.files {
+        std::fs::write(dir.join(&file.name), &file.bytes).unwrap();
+    }
+    dir.join(&exported.files[0].name)
+}
+
+#[test]
+fn a_scene_reads_its_maps_back_from_the_exported_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(dir.path(), &quad_obj(false), true);
+    let limits = Limits::default();
+    let normals = skinkit_maps::io::read_normal_map(&dir.path().join("n.png"), Default::default(), &limits).unwrap();
+    let albedo = crate::load::read_albedo(&dir.path().join("a.png"), &limits).unwrap();
+    for container in [Container::Glb, Container::Gltf] {
+        let exported = export(&scene, &options(container, NormalBits::Eight), &|_| {}).unwrap();
+        let out = dir.path().join(format!("{container:?}"));
+        std::fs::create_dir(&out).unwrap();
+        let file = write_files(&out, &exported);
+        let back = crate::gltf_maps::normal_map(&file, &limits).unwrap();
+        assert_eq!(back.size(), normals.size());
+        for (a, b) in back.as_slice().iter().zip(normals.as_slice()) {
+            // Half an 8-bit step per component, then renormalised.
+            assert!(a.angle_between(*b) < 0.006, "{container:?}: {a} against {b}");
+        }
+        let back = crate::gltf_maps::albedo(&file, &limits).unwrap();
+        assert_eq!((back.width, back.height), (albedo.width, albedo.height));
+        for (a, b) in back.texels.iter().zip(&albedo.texels) {
+            (0..3).for_each(|c| assert!((a[c] - b[c]).abs() < 0.004, "{container:?}: {a:?} against {b:?}"));
+        }
+    }
+}
+
+#[test]
+fn a_material_without_the_texture_is_named_in_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(dir.path(), &quad_obj(false), false);
+    let exported = export(&scene, &options(Container::Glb, NormalBits::Eight), &|_| {}).unwrap();
+    let file = write_files(dir.path(), &exported);
+    let error = crate::gltf_maps::normal_map(&file, &Limits::default()).unwrap_err().to_string();
+    assert!(
+        error.contains("quad.glb: normalTexture") && error.contains("material 0 (`skin`) has no normalTexture"),
+        "{error}"
+    );
+    // A scene saying its glTF normal texture is green-down contradicts glTF: refused by name.
+    let text = "mesh = \"quad.glb\"\nmm_per_unit = 1000.0\n[normal_map]\npath = \"quad.glb\"\ngreen = \"down\"\n\
+         [[light]]\nkind = \"directional\"\ndirection = [0, 0, 1]\n[[camera]]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\n";
+    let scene = Scene::parse(text, &dir.path().join("s.toml")).unwrap();
+    let error = crate::load::load(&scene, 8, 8, 4096).unwrap_err().to_string();
+    assert!(error.contains("s.toml: normal_map.green:") && error.contains("green-up"), "{error}");
+}
+
+#[test]
+fn zero_area_uv_triangles_give_finite_unit_tangents() {
+    let dir = tempfile::tempdir().unwrap();
+    // Every vertex at one UV: no triangle has UV area.
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0.5 0.5\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\nf 1/1/1 3/1/1 4/1/1\n";
+    let scene = scene(dir.path(), obj, false);
+    let exported = export(&scene, &options(Container::Glb, NormalBits::Eight), &|_| {}).unwrap();
+    for t in glb_tangents(&exported.files[0].bytes) {
+        assert!(t.is_finite() && (t.truncate().length() - 1.0).abs() < 1e-5 && t.w.abs() == 1.0, "{t}");
+        assert!(t.truncate().dot(Vec3::Z).abs() < 1e-5, "the tangent is orthogonal to the normal: {t}");
+    }
+}
