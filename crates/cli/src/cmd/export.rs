@@ -99,8 +99,9 @@ fn gltf(args: GltfArgs, out: &Output) -> Result<i32> {
     exported.summary.warnings.iter().for_each(|w| out.warn(w));
     let mut set = OutputSet::files();
     let mut files = Vec::new();
-    for file in &exported.files {
-        let path = dir.join(&file.name);
+    for (i, file) in exported.files.iter().enumerate() {
+        // The main file is `--out` as spelt (`HEAD.GLB` stays so); side files are named by the library.
+        let path = if i == 0 { args.out.clone() } else { dir.join(&file.name) };
         set.write_file(&path, |p| write_bytes(p, &file.bytes))
             .with_context(|| format!("cannot write {}", path.display()))?;
         files.push(WrittenFile { path: path.display().to_string(), bytes: file.bytes.len() });
