@@ -132,17 +132,22 @@ fn material_label(material: &gltf::Material) -> String {
     }
 }
 
-/// The bytes of a buffer view: from the GLB's binary chunk or an external buffer file.
+/// The bytes of a buffer view: from the GLB's binary chunk or an external buffer file (a regular
+/// file: the mesh loader's check of buffer URIs runs first).
 fn view_bytes(gltf: &gltf::Gltf, view: &gltf::buffer::View, base: &Path) -> Result<Vec<u8>, String> {
+    crate::mesh_source::check_gltf_buffer_uris(&gltf.document, base)?;
     let buffer = view.buffer();
-    let data: Vec<u8> = match buffer.source() {
-        gltf::buffer::Source::Bin => gltf.blob.clone().ok_or("the GLB has no binary chunk")?,
+    let external;
+    let data: &[u8] = match buffer.source() {
+        gltf::buffer::Source::Bin => gltf.blob.as_deref().ok_or("the GLB has no binary chunk")?,
         gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
             return Err("buffers in data URIs are not read: use a GLB or a .bin file".into());
         }
         gltf::buffer::Source::Uri(uri) => {
             let file = base.join(uri_path(uri)?);
-            std::fs::read(&file).map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?
+            external =
+                std::fs::read(&file).map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?;
+            &external
         }
     };
     let (start, length) = (view.offset(), view.length());
@@ -165,4 +170,27 @@ fn uri_path(uri: &str) -> Result<PathBuf, String> {
         return Err(format!("uri `{uri}`: only relative file URIs are read"));
     }
     Ok(PathBuf::from(decoded))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_relative_file_uris_are_read() {
+        assert_eq!(uri_path("maps/head%20normal.png").unwrap(), PathBuf::from("maps/head normal.png"));
+        assert!(uri_path("/etc/passwd").unwrap_err().contains("only relative file URIs"));
+        assert!(uri_path("https://example.invalid/a.png").unwrap_err().contains("only relative file URIs"));
+        assert!(uri_path("%FF.png").unwrap_err().contains("not UTF-8"));
+        assert!(is_gltf(Path::new("a/HEAD.GLB")) && is_gltf(Path::new("h.gltf")) && !is_gltf(Path::new("h.png")));
+    }
+
+    #[test]
+    fn a_file_that_is_not_gltf_is_named_with_the_reason() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.glb");
+        std::fs::write(&path, b"not a glTF file").unwrap();
+        let error = albedo(&path, &Limits::default()).unwrap_err().to_string();
+        assert!(error.contains("x.glb: not a readable glTF file"), "{error}");
+    }
 }
