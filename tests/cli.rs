@@ -20,6 +20,21 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// The JSON lines of a `--json` stream (`skinkit batch`): one record per line.
+fn records(o: &Output) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON record a line"))
+        .collect()
+}
+
+/// The last record of a batch's `--json` stream: the batch report.
+fn batch_report(o: &Output) -> serde_json::Value {
+    let last = records(o).pop().expect("a batch report line");
+    assert_eq!(last["record"], "batch", "{last}");
+    last
+}
+
 fn photos(region: &str) -> Vec<String> {
     (1..=8).map(|i| mold(region).join(format!("{i:02}.png")).display().to_string()).collect()
 }
@@ -156,7 +171,10 @@ fn batch_goes_on_past_a_bad_session_and_says_which() {
     let out = tmp.path().join("out");
     let o = skinkit(&["batch", "--json", sessions.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // One line per session as it ends, then the report.
+    let lines = records(&o);
+    assert_eq!(lines.iter().filter(|r| r["record"] == "session").count(), 2);
+    let report = batch_report(&o);
     assert_eq!(report["succeeded"], 1);
     assert_eq!(report["failed"], 1);
     assert_eq!(report["outcomes"][1]["session"], "b-bad");
@@ -218,7 +236,7 @@ fn three_shards_merge_to_the_single_batch_bit_for_bit() {
         assert_eq!(early.status.code(), Some(1));
         assert!(k == 1 || stderr(&early).contains(&format!("{k}/3")), "{}", stderr(&early));
         let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&sharded), "--shard", &shard]);
-        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let report = batch_report(&o);
         assert_eq!(report["shard"]["index"], k);
         shares.push(report["sessions"].as_u64().unwrap());
         assert!(sharded.join(format!("batch-report-{k}-of-3.json")).is_file());
@@ -231,7 +249,8 @@ fn three_shards_merge_to_the_single_batch_bit_for_bit() {
     }
     let o = skinkit(&["batch", "--merge", "--json", "--out", &s(&sharded)]);
     assert_eq!(o.status.code(), Some(1), "a session failed: {}", stderr(&o));
-    let merged: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut merged = batch_report(&o);
+    merged.as_object_mut().unwrap().remove("record");
     let single: serde_json::Value =
         serde_json::from_slice(&std::fs::read(whole.join("batch-report.json")).unwrap()).unwrap();
     assert_eq!(outcomes_without_seconds(&merged), outcomes_without_seconds(&single));
@@ -263,7 +282,7 @@ fn a_rerun_skips_up_to_date_sessions_and_force_redoes_them() {
         args.extend(extra);
         let o = skinkit(&args);
         assert!(o.status.success(), "{}", stderr(&o));
-        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let report = batch_report(&o);
         let skipped: Vec<bool> = report["outcomes"].as_array().unwrap().iter().map(|o| o["skipped"] == true).collect();
         (report["skipped"].as_u64().unwrap(), skipped)
     };
@@ -331,87 +350,6 @@ fn samples_regenerate_bit_for_bit() {
                 name.to_string_lossy()
             );
         }
-    }
-}
-
-#[test]
-fn demo_reports_every_mold_with_both_solvers() {
-    let tmp = tempfile::tempdir().unwrap();
-    let o = skinkit(&["demo", "--json", "--out", tmp.path().to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let molds = report["molds"].as_array().unwrap();
-    assert_eq!(molds.len(), 8);
-    for m in molds {
-        assert!(m["mean_error_deg"].as_f64().unwrap().is_finite());
-    }
-    assert!(tmp.path().join("demo-report.json").is_file());
-    // Each mold's robust map grown to the default 1024x1024, albedo and coordinates beside it.
-    let growths = report["growths"].as_array().unwrap();
-    assert_eq!(growths.len(), 4);
-    for g in growths {
-        let region = g["region"].as_str().unwrap();
-        assert_eq!((g["width"].as_u64(), g["height"].as_u64()), (Some(1024), Some(1024)), "{region}");
-        let slope = g["quality"]["slope_distance"].as_f64().unwrap();
-        assert!(slope.is_finite() && slope < 0.1, "{region}: slope distance {slope}");
-        let dir = tmp.path().join("synth").join(region);
-        for name in ["normal.png", "albedo.png", "coords.png"] {
-            assert!(dir.join(name).is_file(), "{region}/{name} missing");
-        }
-        let normals =
-            skinkit_maps::io::read_normal_map(&dir.join("normal.png"), Default::default(), &Default::default())
-                .unwrap();
-        assert_eq!(normals.size(), (1024, 1024));
-    }
-    // The sample face, stitched at 2048x1024 from the seven regions of samples/face/layout.toml.
-    let face = &report["face"];
-    assert_eq!((face["width"].as_u64(), face["height"].as_u64()), (Some(2048), Some(1024)));
-    assert_eq!(face["regions"].as_array().unwrap().len(), 7);
-    assert!(face["seams"]["summary"]["mean_jump_degrees"].as_f64().unwrap().is_finite());
-    for name in ["normal.png", "normal.exr", "labels.png", "report.json"] {
-        assert!(tmp.path().join("face").join(name).is_file(), "face/{name} missing");
-    }
-    // Figures 7 (the face without and with the face map) and 8 (a patch under four lights),
-    // rendered on the test machine's adapter (lavapipe in CI: scripts/test installs it).
-    let renders = &report["renders"];
-    // Figure 7: two PNG panels and four EXRs (skin and smooth, lobes on and off); figure 8: four
-    // patches; the skin figure: six methods.
-    assert_eq!(renders["renders"].as_array().unwrap().len(), 16, "{renders}");
-    let read = |name: &str| {
-        let p = skinkit_maps::io::read_photo(&tmp.path().join("render").join(name), &Default::default()).unwrap();
-        let skinkit_maps::Samples::U8(v) = p.samples() else { panic!("{name} is not 8-bit") };
-        (p.width(), p.height(), v.clone())
-    };
-    let (w7, h7, fig7) = read("figure7.png");
-    assert_eq!((w7, h7), (2 * 1024, 1024));
-    let (w8, h8, _) = read("figure8.png");
-    assert_eq!((w8, h8), (2 * 768, 2 * 768));
-    // The right panel (with fine-scale structure) is not the left one.
-    let differ = (0..h7)
-        .flat_map(|y| (0..1024).map(move |x| (x, y)))
-        .filter(|&(x, y)| fig7[3 * (y * w7 + x)] != fig7[3 * (y * w7 + x + 1024)])
-        .count();
-    assert!(differ > 1024 * 1024 / 20, "figure 7's panels differ in only {differ} pixels");
-    // Issue 13: the lobes make most of figure 7's highlights (73 % measured; the old lighting gave
-    // at most about a quarter), and the grown map raises the sheen's local contrast (0.042
-    // against 0.028 measured).
-    let (skin, smooth) = (&renders["figure7"]["skin"], &renders["figure7"]["smooth"]);
-    let share = skin["mean"].as_f64().unwrap();
-    assert!(share > 0.5, "the lobes make only {share} of figure 7's highlights");
-    let (c_skin, c_smooth) = (skin["local_contrast"].as_f64().unwrap(), smooth["local_contrast"].as_f64().unwrap());
-    assert!(c_skin > 1.2 * c_smooth, "sheen contrast {c_skin} with the map, {c_smooth} without");
-    assert!(tmp.path().join("render").join("head-skin.toml").is_file());
-    // The skin figure: six methods in a 3 x 2 grid, each with its FLIP mean against the
-    // reference (the last panel, 0 against itself; the others differ from it but stay close).
-    let (ws, hs, _) = read("figure-skin.png");
-    assert_eq!((ws, hs), (3 * 768, 2 * 768));
-    let methods = renders["skin"]["methods"].as_array().unwrap();
-    let names: Vec<&str> = methods.iter().map(|m| m["method"].as_str().unwrap()).collect();
-    assert_eq!(names, ["lambert", "blog-fit", "own-fit", "lut-256", "tsd-1x1024", "reference-512"]);
-    for m in methods {
-        let flip = m["flip_mean"].as_f64().unwrap();
-        let last = m["method"] == "reference-512";
-        assert!(if last { flip == 0.0 } else { flip > 0.0 && flip < 0.2 }, "{m}");
     }
 }
 
@@ -541,4 +479,60 @@ fn outputs_do_not_depend_on_the_thread_count() {
             assert!(first == std::fs::read(other.join(name)).unwrap(), "{name} differs with {}", other.display());
         }
     }
+}
+
+/// Copies the sample mold `region` into `dir`.
+fn copy_mold(region: &str, dir: &Path) {
+    std::fs::create_dir_all(dir).unwrap();
+    for entry in std::fs::read_dir(mold(region)).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), dir.join(entry.file_name())).unwrap();
+    }
+}
+
+#[test]
+fn a_subject_folder_gets_its_face_map_from_the_batch_captures() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sessions = tmp.path().join("sessions");
+    // Subject `ann`: two sessions its layout names and one it does not; `zed` is a plain session.
+    copy_mold("forehead", &sessions.join("ann/brow"));
+    copy_mold("nose", &sessions.join("ann/nose"));
+    copy_mold("cheek", &sessions.join("ann/unused"));
+    copy_mold("cheek", &sessions.join("zed"));
+    let layout = "size = [256, 128]\nmm_per_texel = 0.05\n\
+        [[region]]\nname = \"forehead\"\nsession = \"brow\"\nexemplar_mm_per_texel = 0.02\npoints = [[0.5, 0.25]]\nseed = 1\n\
+        [[region]]\nname = \"nose\"\nsession = \"nose\"\nexemplar_mm_per_texel = 0.02\npoints = [[0.5, 0.75]]\nseed = 2\n";
+    std::fs::write(sessions.join("ann/layout.toml"), layout).unwrap();
+    let out = tmp.path().join("out");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lines = records(&o);
+    let mut names: Vec<&str> =
+        lines.iter().filter(|r| r["record"] == "session").map(|r| r["session"].as_str().unwrap()).collect();
+    names.sort();
+    assert_eq!(names, ["ann/brow", "ann/nose", "zed"]);
+    let report = batch_report(&o);
+    assert_eq!(report["faces"][0]["subject"], "ann");
+    assert_eq!(report["faces"][0]["ok"], true, "{report}");
+    assert!(out.join("ann/brow/normal.exr").is_file() && !out.join("ann/unused").exists());
+    // The same map `skinkit face` makes from the layout, bit for bit (same solver and seed).
+    let alone = tmp.path().join("alone");
+    let o = skinkit(&["face", "--quiet", "--layout", &s(&sessions.join("ann/layout.toml")), "--out", &s(&alone)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["normal.png", "labels.png"] {
+        let (a, b) =
+            (std::fs::read(out.join("ann/face").join(name)).unwrap(), std::fs::read(alone.join(name)).unwrap());
+        assert!(a == b, "face/{name} differs from `skinkit face`'s");
+    }
+    // A re-run skips the sessions and the face; a failed session leaves its subject without one.
+    let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&out)]);
+    let report = batch_report(&o);
+    assert_eq!((report["skipped"].as_u64(), report["faces"][0]["skipped"].as_bool()), (Some(3), Some(true)));
+    std::fs::remove_file(sessions.join("ann/nose/08.png")).unwrap();
+    let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&tmp.path().join("out2"))]);
+    assert_eq!(o.status.code(), Some(1));
+    let report = batch_report(&o);
+    let error = report["faces"][0]["error"].as_str().unwrap();
+    assert!(error.contains("ann/nose"), "{error}");
 }

@@ -261,7 +261,9 @@ fn sessions(dir: &Path, molds: &[&str]) -> Vec<PathBuf> {
 
 fn batch(sessions: &Path, out: &Path, limit: &str) -> (Output, serde_json::Value) {
     let o = skinkit(&["--threads", "4", "--memory-limit", limit, "batch", "--json", s(sessions), "--out", s(out)]);
-    let report = serde_json::from_slice(&o.stdout).unwrap_or(serde_json::Value::Null);
+    // The last line of the --json stream is the batch report (one line per session before it).
+    let last = String::from_utf8_lossy(&o.stdout).lines().last().map(str::to_owned);
+    let report = last.and_then(|l| serde_json::from_str(&l).ok()).unwrap_or(serde_json::Value::Null);
     (o, report)
 }
 

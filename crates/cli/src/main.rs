@@ -10,6 +10,7 @@ mod cmd;
 mod flags;
 mod guard;
 mod interrupt;
+mod machine;
 mod output;
 mod pipeline;
 

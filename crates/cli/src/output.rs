@@ -104,6 +104,25 @@ impl Output {
         }
     }
 
+    /// With `--json`, one compact line `{"record": KIND, ...}` on stdout, for a command that
+    /// streams one record per item as each ends (a script reads them line by line); otherwise
+    /// nothing.
+    pub fn record<T: Serialize>(&self, kind: &str, value: &T) {
+        if self.json {
+            println!("{}", tagged(kind, value));
+        }
+    }
+
+    /// The last line of such a stream: the command's result as a record of `kind` with `--json`,
+    /// else the text `human` gives.
+    pub fn result_record<T: Serialize>(&self, kind: &str, value: &T, human: impl FnOnce() -> String) {
+        if self.json {
+            println!("{}", tagged(kind, value));
+        } else if !self.quiet {
+            println!("{}", human());
+        }
+    }
+
     /// Prints a result: as JSON with `--json`, else as the text `human` gives, on stdout.
     pub fn result<T: Serialize>(&self, value: &T, human: impl FnOnce() -> String) {
         if self.json {
@@ -112,6 +131,15 @@ impl Output {
             println!("{}", human());
         }
     }
+}
+
+/// `value` as one line of JSON with a `record` field naming its kind.
+fn tagged<T: Serialize>(kind: &str, value: &T) -> String {
+    let mut json = serde_json::to_value(value).expect("serialisable record");
+    if let serde_json::Value::Object(map) = &mut json {
+        map.insert("record".into(), kind.into());
+    }
+    json.to_string()
 }
 
 /// The error and its causes on one line, each cause once (issue 15, D10). Two rules:

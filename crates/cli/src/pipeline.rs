@@ -93,10 +93,19 @@ pub fn write_json_file<T: Serialize>(set: &mut OutputSet, path: &Path, value: &T
 
 fn json_atomic<T: Serialize>(path: &Path, value: &T) -> skinkit_maps::Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(|e| skinkit_maps::Error::InvalidParameter(e.to_string()))?;
+    text_atomic(path, &text)
+}
+
+fn text_atomic(path: &Path, text: &str) -> skinkit_maps::Result<()> {
     io::write_atomic(path, |w| {
         use std::io::Write;
         w.write_all(text.as_bytes()).map_err(|e| skinkit_maps::Error::Io { path: path.to_owned(), error: e })
     })
+}
+
+/// Writes text (a page, a table), atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    text_atomic(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes a value as pretty JSON, atomically.

@@ -73,6 +73,12 @@ impl NormalEncoding {
     /// Maps a float triple read from a file (EXR) to memory, flipping y for green-down files.
     pub fn decode_float(self, v: [f32; 3]) -> Vec3 {
         let v = Vec3::new(v[0], v[1] * self.y_sign(), v[2]);
+        // A vector already of unit length to float precision (every map skinkit writes) is kept
+        // as it is: normalising it again can move its last bit, and a map read back must give the
+        // same results, bit for bit, as the map in memory did (a batch's face from its captures).
+        if v.is_finite() && (v.length_squared() - 1.0).abs() <= 4.0 * f32::EPSILON {
+            return v;
+        }
         normalize_or_invalid(v)
     }
 

@@ -11,6 +11,7 @@
 //!   [`OutputSet`] makes a command's several outputs appear all together or not at all.
 //! * [`limits`] states every resource limit (image sizes, lights, frames, threads, memory) and
 //!   checks them from headers and arithmetic before anything is allocated.
+//! * [`preview`] draws maps as 8-bit pictures people read (relief under a raking light).
 //!
 //! Image rows grow downward, against +y: row 0 is the top of the picture. UV origin: skinkit puts
 //! texture coordinate (0, 0) at the top-left texel (as glTF and wgpu do); loaders of bottom-left
@@ -25,6 +26,7 @@ pub mod limits;
 pub mod normal;
 pub mod output_set;
 pub mod photo;
+pub mod preview;
 pub mod pyramid;
 pub mod resample;
 mod signature;

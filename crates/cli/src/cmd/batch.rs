@@ -10,10 +10,14 @@
 //! an interrupt still writes `batch-report.json` of the sessions that finished.
 //!
 //! `--shard K/N` and `--merge` spread a batch over machines ([`shard`]); a re-run skips the
-//! sessions whose outputs are complete and up to date ([`resume`]; `--force` redoes them).
+//! sessions whose outputs are complete and up to date ([`resume`]; `--force` redoes them). A
+//! folder with a `layout.toml` is a subject: its face map is stitched after its sessions
+//! ([`subject`]). With `--json`, stdout has one JSON line per session and per face as each ends,
+//! then one line with the batch report.
 
 mod resume;
 mod shard;
+mod subject;
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -31,6 +35,7 @@ use crate::interrupt::{self, HookGuard};
 use crate::output::Output;
 use crate::{guard, pipeline};
 use shard::Shard;
+use subject::{FaceOutcome, Job, Unit};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -90,17 +95,9 @@ pub struct BatchReport {
     /// The shard this report covers (`--shard`); absent for a whole or merged batch.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<Shard>,
-}
-
-/// The session sub-folders of `dir`, sorted by name.
-fn session_dirs(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut dirs: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("cannot list sessions in {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
-        .collect();
-    dirs.sort();
-    Ok(dirs)
+    /// The subjects' face maps (folders with a `layout.toml`), in subject name order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faces: Vec<FaceOutcome>,
 }
 
 /// What one session's run left: its figures, and what its commit cleaned up from killed runs.
@@ -142,15 +139,14 @@ fn run_session(
 
 /// One session's outcome; `swept` collects what its commit cleaned up from killed runs.
 fn outcome(
-    dir: &Path,
-    out_dir: &Path,
+    job: &Job,
     options: &CaptureOptions,
     gate: &MemoryGate,
     force: bool,
     swept: &Mutex<Vec<PathBuf>>,
 ) -> SessionOutcome {
-    let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    match run_session(dir, &out_dir.join(&name), options, gate, force) {
+    let name = job.name.clone();
+    match run_session(&job.dir, &job.out, options, gate, force) {
         Ok(run) => {
             lock(swept).extend(run.swept);
             SessionOutcome {
@@ -184,6 +180,7 @@ impl BatchReport {
         interrupted: bool,
         gate: &MemoryGate,
         shard: Option<Shard>,
+        faces: Vec<FaceOutcome>,
     ) -> Self {
         outcomes.sort_by(|a, b| a.session.cmp(&b.session));
         let failed = outcomes.iter().filter(|o| !o.ok).count();
@@ -197,7 +194,13 @@ impl BatchReport {
             most_at_once: gate.peaks().0,
             outcomes,
             shard,
+            faces,
         }
+    }
+
+    /// Sessions and faces that failed.
+    fn any_failed(&self) -> bool {
+        self.failed > 0 || self.faces.iter().any(|f| !f.ok)
     }
 }
 
@@ -210,7 +213,7 @@ fn report_on_interrupt(
     shard: Option<Shard>,
 ) -> HookGuard {
     interrupt::on_interrupt(move || {
-        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard);
+        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard, Vec::new());
         // Written by the signal thread itself, whole (atomically), before the exit.
         if let Err(e) = pipeline::write_json(&path, &report) {
             eprintln!("error: {e:#}");
@@ -226,14 +229,15 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let options = args.solve.options(out)?;
     guard::out_folder("--out", &args.out)?;
     guard::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
-    let all = session_dirs(sessions)?;
-    if all.is_empty() {
+    let all = subject::units(sessions, &args.out)?;
+    if all.iter().all(|u| u.jobs().is_empty()) {
         anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
-    let dirs = match args.shard {
+    let units = match args.shard {
         Some(shard) => shard.select(&all),
         None => all,
     };
+    let jobs: Vec<Job> = units.iter().flat_map(|u| u.jobs().iter().cloned()).collect();
     // Made here, not by the sessions' output sets: one session's failure must not remove it.
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let report_path = args.out.join(args.shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
@@ -242,27 +246,66 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     // memory limit together.
     let gate = Arc::new(MemoryGate::new(options.memory_limit));
     let hook =
-        report_on_interrupt(report_path.clone(), dirs.len(), Arc::clone(&finished), Arc::clone(&gate), args.shard);
+        report_on_interrupt(report_path.clone(), jobs.len(), Arc::clone(&finished), Arc::clone(&gate), args.shard);
     let swept = Mutex::new(Vec::new());
-    let bar = out.progress(dirs.len() as u64, "batch");
-    limits::run_queued(&dirs, rayon::current_num_threads(), |dir| {
-        let outcome = outcome(dir, &args.out, &options, &gate, args.force, &swept);
+    let bar = out.progress(jobs.len() as u64, "batch");
+    limits::run_queued(&jobs, rayon::current_num_threads(), |job| {
+        let outcome = outcome(job, &options, &gate, args.force, &swept);
         if interrupt::requested() && !outcome.ok {
             // Failed because the interrupt removed its staging folder: unfinished, not failed.
             return;
         }
         if let Some(e) = &outcome.error {
-            bar.suspend(|| out.warn(format!("{}: {e}", dir.display())));
+            bar.suspend(|| out.warn(format!("{}: {e}", job.dir.display())));
         }
+        bar.suspend(|| out.record("session", &outcome));
         lock(&finished).push(outcome);
         bar.inc(1);
     });
     bar.finish_and_clear();
     out.swept(&lock(&swept));
-    let report = BatchReport::new(dirs.len(), lock(&finished).clone(), false, &gate, args.shard);
+    let outcomes = lock(&finished).clone();
+    let faces = faces(&units, &outcomes, args.force, out);
+    let report = BatchReport::new(jobs.len(), outcomes, false, &gate, args.shard, faces);
     let code = finish(&report, &report_path, out);
     drop(hook);
     code
+}
+
+/// Each subject's face, one after the other (a face map takes the whole machine), once its
+/// sessions are all captured; a subject with a failed session gets no face, and says which.
+fn faces(units: &[Unit], outcomes: &[SessionOutcome], force: bool, out: &Output) -> Vec<FaceOutcome> {
+    let mut faces = Vec::new();
+    for unit in units {
+        let Unit::Subject(subject) = unit else { continue };
+        if interrupt::requested() {
+            break;
+        }
+        let failed: Vec<&str> = subject
+            .jobs
+            .iter()
+            .filter(|j| !outcomes.iter().any(|o| o.session == j.name && o.ok))
+            .map(|j| j.name.as_str())
+            .collect();
+        let face = if failed.is_empty() {
+            out.note(format!("stitching the face of {}", subject.layout.display()));
+            subject::face(subject, force, out)
+        } else {
+            FaceOutcome {
+                subject: subject.name.clone(),
+                ok: false,
+                error: Some(format!("not stitched: sessions {} failed", failed.join(", "))),
+                seconds: None,
+                skipped: false,
+            }
+        };
+        if let Some(e) = &face.error {
+            out.warn(format!("{}: {e}", subject.layout.display()));
+        }
+        out.record("face", &face);
+        faces.push(face);
+    }
+    faces
 }
 
 /// Writes `report` to `path` and shows it; exit code 1 when a session failed.
@@ -270,7 +313,7 @@ fn finish(report: &BatchReport, path: &Path, out: &Output) -> Result<i32> {
     let mut set = OutputSet::files();
     pipeline::write_json_file(&mut set, path, report)?;
     set.commit().with_context(|| format!("cannot write {}", path.display()))?;
-    out.result(report, || {
+    out.result_record("batch", report, || {
         let shard = report.shard.map(|s| format!(" (shard {s})")).unwrap_or_default();
         let skipped =
             if report.skipped > 0 { format!(" ({} up to date, skipped)", report.skipped) } else { String::new() };
@@ -281,7 +324,15 @@ fn finish(report: &BatchReport, path: &Path, out: &Output) -> Result<i32> {
         for o in report.outcomes.iter().filter(|o| !o.ok) {
             s += &format!("\nfailed: {}: {}", o.session, o.error.as_deref().unwrap_or(""));
         }
+        if !report.faces.is_empty() {
+            let ok = report.faces.iter().filter(|f| f.ok).count();
+            let skipped = report.faces.iter().filter(|f| f.skipped).count();
+            s += &format!("\n{} faces: {ok} written or up to date ({skipped} skipped)", report.faces.len());
+            for f in report.faces.iter().filter(|f| !f.ok) {
+                s += &format!("\nface failed: {}: {}", f.subject, f.error.as_deref().unwrap_or(""));
+            }
+        }
         s
     });
-    Ok(if report.failed > 0 { 1 } else { 0 })
+    Ok(if report.any_failed() { 1 } else { 0 })
 }

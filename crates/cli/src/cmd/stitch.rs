@@ -275,10 +275,19 @@ pub fn build(
     let composed = compose(&layout, &exemplars, &compose_options, &|_| bar.inc(1))
         .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
     bar.finish_and_clear();
+    // The synthesis adjusts itself to small exemplars (fewer pyramid levels); the layout did not
+    // ask for anything else, so this is a note, said once for all the regions it applies to.
+    let mut adjusted: Vec<(&str, Vec<&str>)> = Vec::new();
     for r in &composed.regions {
         for w in &r.warnings {
-            out.warn(format!("region `{}`: {w}", r.name));
+            match adjusted.iter_mut().find(|(m, _)| m == w) {
+                Some((_, names)) => names.push(&r.name),
+                None => adjusted.push((w, vec![&r.name])),
+            }
         }
+    }
+    for (message, names) in adjusted {
+        out.note(format!("regions {}: {message}", names.join(", ")));
     }
     Ok(Face { layout, exemplars, composed, amplitude, seconds_exemplars })
 }

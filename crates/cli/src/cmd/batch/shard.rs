@@ -107,11 +107,13 @@ pub fn merge(dir: &Path) -> Result<BatchReport> {
                 most_at_once: m.most_at_once.max(report.most_at_once),
                 outcomes: m.outcomes.into_iter().chain(report.outcomes).collect(),
                 shard: None,
+                faces: m.faces.into_iter().chain(report.faces).collect(),
             },
         });
     }
     let mut merged = merged.expect("shard_reports returns at least one");
     merged.outcomes.sort_by(|a, b| a.session.cmp(&b.session));
+    merged.faces.sort_by(|a, b| a.subject.cmp(&b.subject));
     Ok(merged)
 }
 

@@ -3,7 +3,10 @@
 //! the robust solver's accuracy costs in time; then each mold's robust normal map grown to
 //! 1024x1024 by synthesis, its albedo replayed through the same coordinate map, with the quality
 //! metrics of every growth; then the sample face (`samples/face/layout.toml`, seven regions)
-//! stitched at 2048x1024 (`--full`: 4096x2048) from the molds just captured.
+//! stitched at 2048x1024 (`--full`: 4096x2048) from the molds just captured; the renders of the
+//! face map (figures 7 and 8, the skin figure); last the report page, `index.html` ([`page`]).
+
+mod page;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -21,6 +24,7 @@ use super::capture::SolveArgs;
 use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
 use super::synth::{Map, QualityReport, quality, write_coords};
+use crate::machine::Machine;
 use crate::output::Output;
 use crate::pipeline;
 
@@ -44,6 +48,17 @@ pub struct Args {
     /// Skip the renders of the face map (figures 7 and 8).
     #[arg(long)]
     pub no_render: bool,
+}
+
+/// Wall-clock seconds of each stage.
+#[derive(Serialize, Default)]
+struct DemoSeconds {
+    capture: f64,
+    synthesis: f64,
+    face: Option<f64>,
+    renders: Option<f64>,
+    page: f64,
+    total: f64,
 }
 
 #[derive(Serialize)]
@@ -70,6 +85,10 @@ struct GrowthResult {
 
 #[derive(Serialize)]
 struct DemoReport {
+    machine: Machine,
+    seconds: DemoSeconds,
+    /// The report page.
+    page: Option<String>,
     molds: Vec<MoldResult>,
     growths: Vec<GrowthResult>,
     face: Option<FaceReport>,
@@ -88,89 +107,24 @@ fn options(solver: &str, out: &Output) -> Result<CaptureOptions> {
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
+    let start = Instant::now();
     let samples = args.samples.clone().unwrap_or_else(default_samples);
-    let mut regions: Vec<PathBuf> = std::fs::read_dir(&samples)
-        .with_context(|| {
-            format!("cannot list sample molds in {} (run `skinkit samples` to make them)", samples.display())
-        })?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
-        .collect();
-    regions.sort();
-    let bar = out.progress(regions.len() as u64 * 3, "demo");
-    let mut molds = Vec::new();
-    let mut growths = Vec::new();
-    let mut cache = CaptureCache::new();
-    for dir in &regions {
-        let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let files = Session::from_dir(dir)?;
-        for solver in ["robust", "ls"] {
-            let options = options(solver, out)?;
-            let mut captured = session::capture(&files, &options, &|_| {})?;
-            let target = args.out.join("capture").join(&region).join(solver);
-            pipeline::write_outputs(pipeline::capture_set(&target)?, &target, &mut captured, &options)?;
-            let r = &captured.report;
-            let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
-            molds.push(MoldResult {
-                region: region.clone(),
-                solver: solver.into(),
-                mean_error_deg: e.mean,
-                rms_error_deg: e.rms,
-                p95_error_deg: e.p95,
-                invalid_pixels: r.invalid_pixels,
-                solve_seconds: r.timings_s.solve,
-                output: target.display().to_string(),
-            });
-            bar.inc(1);
-            if solver == "robust" {
-                let target = args.out.join("synth").join(&region);
-                growths.push(grow(&region, &captured, args.synth_size, args.seed, &target)?);
-                cache.insert(dir.canonicalize().unwrap_or_else(|_| dir.clone()), captured.solution.normals.clone());
-                bar.inc(1);
-            }
-        }
-    }
-    bar.finish_and_clear();
-    let layout = samples.join("../face/layout.toml");
-    let face = if layout.is_file() {
-        let size = if args.full { (4096, 2048) } else { (2048, 1024) };
-        out.note(format!("stitching the sample face at {}x{}", size.0, size.1));
-        let options = StitchOptions {
-            layout,
-            size: Some(size),
-            seed: args.seed,
-            levels: None,
-            curve_amplitude: None,
-            straight: false,
-            no_blend: false,
-            seam_band: 4,
-            scanline: false,
-            upsampled: false,
-        };
-        Some(face_to_dir(&options, &args.out.join("face"), &mut cache, out, Instant::now())?)
-    } else {
-        out.note(format!("no face layout at {}: the face map is skipped", layout.display()));
-        None
-    };
-    let renders = match &face {
-        Some(_) if !args.no_render => {
-            out.note("rendering the sample head and a patch of the face map (figures 7 and 8)");
-            match figures(&args.out.join("face").join("normal.png"), &args.out.join("render"), out) {
-                Ok(r) => Some(r),
-                // No adapter: the maps above are still worth having; say how to get the figures.
-                Err(e)
-                    if e.downcast_ref::<skinkit_render::gpu::GpuError>()
-                        .is_some_and(|g| matches!(g, skinkit_render::gpu::GpuError::NoAdapter { .. })) =>
-                {
-                    out.warn(format!("figures skipped: {e}"));
-                    None
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        _ => None,
-    };
-    let report = DemoReport { molds, growths, face, renders };
+    let mut seconds = DemoSeconds::default();
+    let (molds, growths, mut cache) = capture_and_grow(&args, &samples, out, &mut seconds)?;
+    let t = Instant::now();
+    let face = stitch_face(&args, &samples, &mut cache, out)?;
+    seconds.face = face.as_ref().map(|_| t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    let renders = if face.is_some() && !args.no_render { render_figures(&args, out)? } else { None };
+    seconds.renders = renders.as_ref().map(|_| t.elapsed().as_secs_f64());
+    let mut report = DemoReport { machine: Machine::this(), seconds, page: None, molds, growths, face, renders };
+    let t = Instant::now();
+    out.note("writing the report page");
+    report.seconds.total = start.elapsed().as_secs_f64();
+    let page = page::write(&args.out, &samples, &report)?;
+    report.page = Some(page.display().to_string());
+    report.seconds.page = t.elapsed().as_secs_f64();
+    report.seconds.total = start.elapsed().as_secs_f64();
     pipeline::write_json(&args.out.join("demo-report.json"), &report)?;
     out.result(&report, || {
         let mut s = format!(
@@ -235,9 +189,135 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                 smooth.local_contrast
             );
         }
-        s + &format!("outputs and demo-report.json in {}", args.out.display())
+        s += &format!("outputs and demo-report.json in {}\n", args.out.display());
+        s += &format!("report page: {}\n", report.page.as_deref().unwrap_or("-"));
+        let t = &report.seconds;
+        s + &format!(
+            "total {:.1} s (capture {:.1}, synthesis {:.1}, face {:.1}, renders {:.1}, page {:.1}) on {}",
+            t.total,
+            t.capture,
+            t.synthesis,
+            t.face.unwrap_or(0.0),
+            t.renders.unwrap_or(0.0),
+            t.page,
+            report.machine.summary()
+        )
     });
     Ok(0)
+}
+
+/// Molds, growths and the capture cache the face reuses.
+type Captures = (Vec<MoldResult>, Vec<GrowthResult>, CaptureCache);
+
+/// Captures every sample mold with both solvers and grows each robust map, with a progress bar
+/// per stage; adds each stage's time to `seconds`.
+fn capture_and_grow(args: &Args, samples: &Path, out: &Output, seconds: &mut DemoSeconds) -> Result<Captures> {
+    let mut regions: Vec<PathBuf> = std::fs::read_dir(samples)
+        .with_context(|| {
+            format!("cannot list sample molds in {} (run `skinkit samples` to make them)", samples.display())
+        })?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    regions.sort();
+    let (mut molds, mut captured_maps) = (Vec::new(), Vec::new());
+    let t = Instant::now();
+    let bar = out.progress(regions.len() as u64 * 2, "capture");
+    for dir in &regions {
+        let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let files = Session::from_dir(dir)?;
+        for solver in ["robust", "ls"] {
+            let (mold, captured) = capture_mold(args, &region, &files, solver, out)?;
+            molds.push(mold);
+            if solver == "robust" {
+                captured_maps.push((dir, region.clone(), captured));
+            }
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    seconds.capture = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let bar = out.progress(captured_maps.len() as u64, "synthesis");
+    let (mut growths, mut cache) = (Vec::new(), CaptureCache::new());
+    for (dir, region, captured) in captured_maps {
+        let target = args.out.join("synth").join(&region);
+        growths.push(grow(&region, &captured, args.synth_size, args.seed, &target)?);
+        cache.insert(dir.canonicalize().unwrap_or_else(|_| dir.clone()), captured.solution.normals);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    seconds.synthesis = t.elapsed().as_secs_f64();
+    Ok((molds, growths, cache))
+}
+
+/// Captures one mold with `solver` into `capture/REGION/SOLVER` and measures it against its truth.
+fn capture_mold(
+    args: &Args,
+    region: &str,
+    files: &Session,
+    solver: &str,
+    out: &Output,
+) -> Result<(MoldResult, Captured)> {
+    let options = options(solver, out)?;
+    let mut captured = session::capture(files, &options, &|_| {})?;
+    let target = args.out.join("capture").join(region).join(solver);
+    pipeline::write_outputs(pipeline::capture_set(&target)?, &target, &mut captured, &options)?;
+    let r = &captured.report;
+    let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
+    let mold = MoldResult {
+        region: region.to_owned(),
+        solver: solver.into(),
+        mean_error_deg: e.mean,
+        rms_error_deg: e.rms,
+        p95_error_deg: e.p95,
+        invalid_pixels: r.invalid_pixels,
+        solve_seconds: r.timings_s.solve,
+        output: target.display().to_string(),
+    };
+    Ok((mold, captured))
+}
+
+/// The sample face (`samples/../face/layout.toml`) stitched from the captured molds, when the
+/// layout exists.
+fn stitch_face(args: &Args, samples: &Path, cache: &mut CaptureCache, out: &Output) -> Result<Option<FaceReport>> {
+    let layout = samples.join("../face/layout.toml");
+    if !layout.is_file() {
+        out.note(format!("no face layout at {}: the face map is skipped", layout.display()));
+        return Ok(None);
+    }
+    let size = if args.full { (4096, 2048) } else { (2048, 1024) };
+    out.note(format!("stitching the sample face at {}x{}", size.0, size.1));
+    let options = StitchOptions {
+        layout,
+        size: Some(size),
+        seed: args.seed,
+        levels: None,
+        curve_amplitude: None,
+        straight: false,
+        no_blend: false,
+        seam_band: 4,
+        scanline: false,
+        upsampled: false,
+    };
+    Ok(Some(face_to_dir(&options, &args.out.join("face"), cache, out, Instant::now())?))
+}
+
+/// Figures 7, 8 and the skin figure of the face map; `None` (with a warning saying why) on a
+/// machine without a GPU adapter, since the maps are still worth having.
+fn render_figures(args: &Args, out: &Output) -> Result<Option<FiguresReport>> {
+    out.note("rendering the sample head and a patch of the face map (figures 7 and 8)");
+    match figures(&args.out.join("face").join("normal.png"), &args.out.join("render"), out) {
+        Ok(r) => Ok(Some(r)),
+        Err(e)
+            if e.downcast_ref::<skinkit_render::gpu::GpuError>()
+                .is_some_and(|g| matches!(g, skinkit_render::gpu::GpuError::NoAdapter { .. })) =>
+        {
+            out.warn(format!("figures skipped: {e}"));
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Grows a captured mold's normal map to `size` with the default synthesis options, replays its

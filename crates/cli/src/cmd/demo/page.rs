@@ -1,0 +1,333 @@
+//! The demo's report page, `DIR/index.html`: per stage, the inputs and outputs as pictures beside
+//! the stage's time and accuracy table, and the machine it ran on. One file of HTML and CSS (no
+//! script, no network); its pictures sit beside it, in the demo's own folders or in `page/`
+//! (8-bit previews drawn here: normal maps as relief under a raking light, photos stretched to
+//! be seen), all linked by relative paths, so the folder can be moved or zipped as a whole.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use skinkit_capture::session::Session;
+use skinkit_maps::{Grid, NormalEncoding, io, preview};
+
+use super::DemoReport;
+
+/// Longest side of a preview on the page, pixels.
+const PREVIEW_SIDE: usize = 1024;
+/// Size of the face map's detail at one texel a pixel.
+const DETAIL: (usize, usize) = (1024, 512);
+/// Longest side of a photo thumbnail.
+const THUMB_SIDE: usize = 160;
+
+/// Writes `out/index.html` (and its previews in `out/page/`) for `report`, whose outputs are in
+/// `out`; the photos are read from the molds in `samples`. Returns the page's path.
+///
+/// # Errors
+/// When an output of the demo cannot be read or a preview or the page cannot be written.
+pub fn write(out: &Path, samples: &Path, report: &DemoReport) -> Result<PathBuf> {
+    let previews = out.join("page");
+    std::fs::create_dir_all(&previews).with_context(|| format!("cannot create {}", previews.display()))?;
+    let mut html = String::new();
+    head(&mut html, report);
+    capture(&mut html, out, samples, report)?;
+    synthesis(&mut html, out, report)?;
+    face(&mut html, out, report)?;
+    renders(&mut html, out, report);
+    html += "</main></body></html>\n";
+    let page = out.join("index.html");
+    crate::pipeline::write_text(&page, &html)?;
+    Ok(page)
+}
+
+/// `text` with the five characters HTML gives meaning to escaped.
+fn esc(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;").replace('\'', "&#39;")
+}
+
+/// `path` relative to `out`, with forward slashes (for `src` and `href`).
+fn rel(out: &Path, path: &Path) -> String {
+    let path = path.strip_prefix(out).unwrap_or(path);
+    path.components().map(|c| c.as_os_str().to_string_lossy()).collect::<Vec<_>>().join("/")
+}
+
+/// A picture with its caption.
+fn figure(html: &mut String, src: &str, caption: &str, class: &str) {
+    let _ = write!(
+        html,
+        "<figure class=\"{class}\"><a href=\"{s}\"><img src=\"{s}\" alt=\"{c}\"></a><figcaption>{c}</figcaption></figure>",
+        s = esc(src),
+        c = esc(caption)
+    );
+}
+
+/// A table: header cells, then rows of cells (already formatted).
+fn table(html: &mut String, header: &[&str], rows: &[Vec<String>]) {
+    html.push_str("<table><thead><tr>");
+    for h in header {
+        let _ = write!(html, "<th>{}</th>", esc(h));
+    }
+    html.push_str("</tr></thead><tbody>");
+    for row in rows {
+        html.push_str("<tr>");
+        for cell in row {
+            let _ = write!(html, "<td>{}</td>", esc(cell));
+        }
+        html.push_str("</tr>");
+    }
+    html.push_str("</tbody></table>\n");
+}
+
+/// A stage's heading and its time.
+fn stage(html: &mut String, id: &str, title: &str, seconds: Option<f64>, what: &str) {
+    let time = seconds.map_or(String::new(), |s| format!(" <span class=\"time\">{s:.1} s</span>"));
+    let _ = writeln!(html, "<section id=\"{id}\"><h2>{}{time}</h2><p>{}</p>", esc(title), esc(what));
+}
+
+const STYLE: &str = "body{font:15px/1.45 system-ui,sans-serif;margin:0;background:#f6f5f3;color:#222}\
+main{max-width:1400px;margin:auto;padding:1em 2em}h1{margin-bottom:.2em}\
+h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}.time{color:#777;font-weight:normal;font-size:.8em}\
+table{border-collapse:collapse;margin:.8em 0}th,td{padding:.2em .7em;border-bottom:1px solid #ddd;text-align:right}\
+th:first-child,td:first-child{text-align:left}.row{display:flex;flex-wrap:wrap;gap:.6em;align-items:flex-start}\
+figure{margin:0}figure img{display:block;max-width:100%;image-rendering:auto;border:1px solid #bbb}\
+figcaption{font-size:.85em;color:#555;max-width:32em}.thumb img{width:96px}.map img{width:256px}\
+.wide img{width:100%}.native img{width:auto;max-width:100%}.machine{color:#555}";
+
+fn head(html: &mut String, report: &DemoReport) {
+    let s = &report.seconds;
+    let _ = writeln!(
+        html,
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>skinkit demo</title>\
+         <style>{STYLE}</style></head><body><main><h1>skinkit demo</h1>\
+         <p class=\"machine\">skinkit {} on {}; {:.1} s in all.</p>\
+         <p>Photos of four sample molds, each under eight lights, are solved for their normals and \
+         albedo; each normal map is grown to a larger one; one grown map per face region is \
+         stitched into a face map; the face map is rendered on a head.</p>",
+        esc(report.machine.skinkit),
+        esc(&report.machine.summary()),
+        s.total
+    );
+}
+
+/// Photos, maps and errors of every mold.
+fn capture(html: &mut String, out: &Path, samples: &Path, report: &DemoReport) -> Result<()> {
+    stage(
+        html,
+        "capture",
+        "Capture",
+        Some(report.seconds.capture),
+        "Per mold: its eight photos, then the robust solver's normal map drawn as relief under a raking \
+         light and as stored (16-bit PNG), its albedo and its confidence. The table gives each solver's \
+         angular error against the mold's ground truth.",
+    );
+    let rows: Vec<Vec<String>> = report
+        .molds
+        .iter()
+        .map(|m| {
+            vec![
+                m.region.clone(),
+                m.solver.clone(),
+                format!("{:.3}", m.mean_error_deg),
+                format!("{:.3}", m.rms_error_deg),
+                format!("{:.3}", m.p95_error_deg),
+                m.invalid_pixels.to_string(),
+                format!("{:.2}", m.solve_seconds * 1e3),
+            ]
+        })
+        .collect();
+    table(html, &["mold", "solver", "mean deg", "rms deg", "p95 deg", "invalid", "solve ms"], &rows);
+    let mut regions: Vec<&str> = report.molds.iter().map(|m| m.region.as_str()).collect();
+    regions.dedup();
+    for region in regions {
+        let _ = write!(html, "<h3>{}</h3><div class=\"row\">", esc(region));
+        let session = Session::from_dir(&samples.join(region))?;
+        for (i, photo) in session.photos.iter().enumerate() {
+            let src = photo_thumbnail(out, photo, &format!("{region}-photo-{}.png", i + 1))?;
+            figure(html, &src, &format!("light {}", i + 1), "thumb");
+        }
+        html.push_str("</div><div class=\"row\">");
+        let dir = out.join("capture").join(region).join("robust");
+        let shaded = shaded_normals(out, &dir.join("normal.png"), &format!("capture-{region}.png"))?;
+        figure(html, &shaded, "normals, as relief", "map");
+        for (name, caption) in
+            [("normal.png", "normals, as stored"), ("albedo.png", "albedo"), ("confidence.png", "confidence")]
+        {
+            figure(html, &rel(out, &dir.join(name)), caption, "map");
+        }
+        html.push_str("</div>\n");
+    }
+    html.push_str("</section>\n");
+    Ok(())
+}
+
+/// Every grown map beside its exemplar, with the growth's quality measures.
+fn synthesis(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
+    stage(
+        html,
+        "synthesis",
+        "Synthesis",
+        Some(report.seconds.synthesis),
+        "Each mold's captured normal map (left) grown to a larger map (right), both drawn as relief at \
+         one texel a pixel (shrunk only where the page is narrower). Slope W1: distance between the slope distributions of the grown map and its \
+         exemplar; spectrum: distance between their power spectra; largest: texels of the largest \
+         piece copied verbatim.",
+    );
+    let rows: Vec<Vec<String>> = report
+        .growths
+        .iter()
+        .map(|g| {
+            vec![
+                g.region.clone(),
+                format!("{}x{}", g.width, g.height),
+                format!("{:.2}", g.seconds),
+                g.quality.slope_distance.map_or("-".into(), |d| format!("{d:.4}")),
+                format!("{:.3}", g.quality.spectrum_distance),
+                g.quality.largest_block.to_string(),
+            ]
+        })
+        .collect();
+    table(html, &["grown", "size", "seconds", "slope W1", "spectrum", "largest"], &rows);
+    for g in &report.growths {
+        let exemplar = out.join("capture").join(&g.region).join("robust").join("normal.png");
+        let _ = write!(html, "<h3>{}</h3><div class=\"row\">", esc(&g.region));
+        let src = shaded_normals(out, &exemplar, &format!("exemplar-{}.png", g.region))?;
+        figure(html, &src, "exemplar (captured)", "native");
+        let grown = out.join("synth").join(&g.region).join("normal.png");
+        let src = shaded_normals(out, &grown, &format!("grown-{}.png", g.region))?;
+        figure(html, &src, &format!("grown to {}x{} in {:.1} s", g.width, g.height, g.seconds), "native");
+        html.push_str("</div>\n");
+    }
+    html.push_str("</section>\n");
+    Ok(())
+}
+
+/// The stitched face map with its region boundaries, the regions and the seam measures.
+fn face(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
+    let Some(f) = &report.face else { return Ok(()) };
+    stage(
+        html,
+        "face",
+        "Face map",
+        Some(f.seconds.total),
+        "One synthesis per face region, joined by multiresolution splines along random curves. The map \
+         is drawn as relief, region boundaries in red. Seams: gradient ratio across a boundary against \
+         inside the regions (1 is invisible) and the mean angle between the normals either side.",
+    );
+    let dir = out.join("face");
+    let (whole, detail) = face_preview(out, &dir.join("normal.png"), &dir.join("labels.png"))?;
+    figure(html, &whole, &format!("{}x{} face map, {} regions", f.width, f.height, f.regions.len()), "wide");
+    figure(html, &detail, "its centre at one texel a pixel", "native");
+    let rows: Vec<Vec<String>> = f
+        .regions
+        .iter()
+        .map(|r| {
+            vec![
+                r.name.clone(),
+                r.texels.to_string(),
+                format!("{}x{}", r.exemplar_size.0, r.exemplar_size.1),
+                format!("{:.2}", r.synthesis_seconds),
+            ]
+        })
+        .collect();
+    table(html, &["region", "texels", "exemplar", "synthesis s"], &rows);
+    let s = &f.seams.summary;
+    let ratio = |r: Option<f64>| r.map_or("-".into(), |r| format!("{r:.2}"));
+    table(
+        html,
+        &["seams", "mean gradient ratio", "max gradient ratio", "mean jump deg", "max jump deg"],
+        &[vec![
+            format!("{} boundaries, {} spline levels", s.boundaries, f.levels),
+            ratio(s.mean_gradient_ratio),
+            ratio(s.max_gradient_ratio),
+            format!("{:.2}", s.mean_jump_degrees),
+            format!("{:.2}", s.max_jump_degrees),
+        ]],
+    );
+    html.push_str("</section>\n");
+    Ok(())
+}
+
+/// The figures and every render, each with its caption, and the skin methods' errors.
+fn renders(html: &mut String, out: &Path, report: &DemoReport) {
+    let Some(r) = &report.renders else { return };
+    let adapter = r.renders.first().map_or("", |j| j.adapter.as_str());
+    stage(
+        html,
+        "renders",
+        "Renders",
+        report.seconds.renders,
+        &format!("The face map on the sample head, drawn by the bundled renderer on {adapter}."),
+    );
+    let p = |s: &str| rel(out, Path::new(s));
+    figure(html, &p(&r.figure7.image), "Figure 7: the head without (left) and with (right) the face map", "wide");
+    figure(html, &p(&r.figure8), "Figure 8: a patch of the face map under four light directions", "wide");
+    figure(html, &p(&r.skin.image), "Skin scattering methods against the texture-space reference", "wide");
+    let rows: Vec<Vec<String>> = r
+        .skin
+        .methods
+        .iter()
+        .map(|m| vec![m.method.clone(), format!("{:.4}", m.flip_mean), format!("{:.3}", m.render_seconds)])
+        .collect();
+    table(html, &["skin method", "FLIP against the reference", "render s"], &rows);
+    html.push_str("<h3>Every render</h3><div class=\"row\">");
+    for job in &r.renders {
+        for image in job.images.iter().filter(|i| i.path.ends_with(".png")) {
+            let scene = Path::new(&job.scene).file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+            let caption = format!("{scene}: {}x{}, {:.2} s", job.width, job.height, image.render_seconds);
+            figure(html, &p(&image.path), &caption, "map");
+        }
+    }
+    html.push_str("</div></section>\n");
+}
+
+/// A photo as a small grey picture in `page/name`; returns its link.
+fn photo_thumbnail(out: &Path, photo: &Path, name: &str) -> Result<String> {
+    let read =
+        io::read_photo(photo, &Default::default()).with_context(|| format!("cannot read {}", photo.display()))?;
+    let luminance = Grid::from_vec(read.width(), read.height(), read.luminance())?;
+    save(out, &preview::shrink(&preview::gray(&luminance), THUMB_SIDE), name)
+}
+
+/// A normal map drawn as relief in `page/name`; returns its link.
+fn shaded_normals(out: &Path, map: &Path, name: &str) -> Result<String> {
+    let normals = io::read_normal_map(map, NormalEncoding::default(), &Default::default())
+        .with_context(|| format!("cannot read {}", map.display()))?;
+    save(out, &preview::shrink(&preview::shade_normals(&normals, preview::raking_light()), PREVIEW_SIDE), name)
+}
+
+/// The face map as relief with its regions' boundaries (where the label picture's colour
+/// changes) in red: whole, shrunk to fit the page, and its centre at one texel a pixel (shrinking
+/// averages the fine relief away). Boundaries are drawn after shrinking, so the lines stay one
+/// pixel wide and pure. Returns both links.
+fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, String)> {
+    let normals = io::read_normal_map(normal, NormalEncoding::default(), &Default::default())
+        .with_context(|| format!("cannot read {}", normal.display()))?;
+    let (w, h) = normals.size();
+    let shaded = preview::shade_normals(&normals, preview::raking_light());
+    let (cw, ch) = (w.min(DETAIL.0), h.min(DETAIL.1));
+    let (x0, y0) = ((w - cw) / 2, (h - ch) / 2);
+    let mut detail = shaded.crop(x0, y0, cw, ch)?;
+    let factor = w.max(h).div_ceil(PREVIEW_SIDE).max(1);
+    let mut picture = preview::shrink(&shaded, PREVIEW_SIDE);
+    let read =
+        io::read_photo(labels, &Default::default()).with_context(|| format!("cannot read {}", labels.display()))?;
+    if (read.width(), read.height()) == (w, h) {
+        let channels = read.channels().count();
+        let label = |x: usize, y: usize| -> [u32; 3] {
+            let i = channels * (y * w + x);
+            std::array::from_fn(|c| read.samples().get(i + c.min(channels - 1)) as u32)
+        };
+        let (sw, sh) = picture.size();
+        let labels = Grid::from_fn(sw, sh, |x, y| label((x * factor).min(w - 1), (y * factor).min(h - 1)));
+        preview::outline(&mut picture, &labels, [230, 30, 30]);
+        let labels = Grid::from_fn(cw, ch, |x, y| label(x0 + x, y0 + y));
+        preview::outline(&mut detail, &labels, [230, 30, 30]);
+    }
+    Ok((save(out, &picture, "face.png")?, save(out, &detail, "face-detail.png")?))
+}
+
+fn save(out: &Path, picture: &preview::Picture, name: &str) -> Result<String> {
+    let path = out.join("page").join(name);
+    preview::write_png(&path, picture).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(rel(out, &path))
+}
