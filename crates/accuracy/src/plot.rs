@@ -4,6 +4,7 @@
 
 use std::sync::Once;
 
+use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
@@ -110,7 +111,7 @@ fn chart(root: &Area<'_>, stage: &StageReport) -> std::result::Result<(), String
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(72)
-        .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+        .build_cartesian_2d((x0..x1).log_scale().with_key_points(ticks(x0, x1)), y0..y1)
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
@@ -147,6 +148,23 @@ fn chart(root: &Area<'_>, stage: &StageReport) -> std::result::Result<(), String
         .draw()
         .map_err(|e| e.to_string())?;
     Ok(())
+}
+
+/// Log-axis ticks at 1, 2 and 5 times the powers of ten within `[lo, hi]`.
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && lo.is_finite() && hi.is_finite()) {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for exponent in lo.log10().floor() as i32..=hi.log10().ceil() as i32 {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * 10f64.powi(exponent);
+            if v >= lo && v <= hi {
+                out.push(v);
+            }
+        }
+    }
+    out
 }
 
 /// A tick label: few digits, no trailing zeros.
@@ -196,6 +214,15 @@ mod tests {
         assert_eq!(image.dimensions(), SIZE);
         let dark = image.pixels().filter(|p| p.0.iter().all(|&v| v < 100)).count();
         assert!(dark > 2000, "{dark} dark pixels: no axes or text drawn");
+    }
+
+    #[test]
+    fn log_ticks_are_one_two_five() {
+        assert_eq!(ticks(0.15, 3.0), vec![0.2, 0.5, 1.0, 2.0]);
+        assert!(ticks(0.0, 1.0).is_empty());
+        assert_eq!(short(0.05), "0.05");
+        assert_eq!(short(0.0012), "0.0012");
+        assert_eq!(short(2.0), "2");
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //!
 //! Cost: the stitching's own seconds (partition with its curves, the spline, the seam measure),
 //! not the regions' synthesis, which every choice pays alike. The exemplars are resampled so each
-//! is about [`EXEMPLAR_SIDE`] texels on the map whatever its size (at a reduced map size the
+//! is about 128 texels on the map (64 in quick mode) whatever its size (at a reduced map size the
 //! molds' physical scale would leave a handful of texels).
 
 use std::path::Path;
@@ -23,7 +23,9 @@ use crate::timing::median;
 use crate::{Config, Result};
 
 /// Texels an exemplar spans on the face map after resampling.
-pub const EXEMPLAR_SIDE: f64 = 128.0;
+fn exemplar_side(config: &Config) -> f64 {
+    if config.quick { 64.0 } else { 128.0 }
+}
 
 /// One stitching choice: series, label, spline levels (`None`: automatic), curves, blend.
 struct Try {
@@ -42,7 +44,7 @@ fn plan(config: &Config) -> ((usize, usize), Vec<Try>) {
         t("boundaries", "curves, no blend", None, true, false),
         t("boundaries", "straight, no blend", None, false, false),
     ];
-    let (size, levels) = if config.quick { ((512, 256), vec![2, 4]) } else { ((2048, 1024), vec![1, 2, 3, 4, 5, 6]) };
+    let (size, levels) = if config.quick { ((512, 256), vec![2, 3]) } else { ((2048, 1024), vec![1, 2, 3, 4, 5, 6]) };
     tries.extend(levels.into_iter().map(|l| t("spline levels", &format!("{l} levels"), Some(l), true, true)));
     (size, tries)
 }
@@ -55,10 +57,11 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     let ((w, h), tries) = plan(config);
     let original = Layout::load(&config.samples.join("face/layout.toml"))?;
     let mut layout = original.with_size(w, h)?;
-    let exemplars = load_exemplars(&mut layout)?;
+    let side = exemplar_side(config);
+    let exemplars = load_exemplars(&mut layout, side)?;
     let setup = format!(
         "The sample face layout at {w}x{h} ({} regions; exemplars: the sample molds' truth.png, about \
-         {EXEMPLAR_SIDE} texels on the map), default synthesis with 3 levels, seed {}; mean jump: the \
+         {side} texels on the map), default synthesis with 3 levels, seed {}; mean jump: the \
          mean angle between neighbours across each boundary, averaged over the boundaries; gradient \
          ratio: slope gradient in a 4-texel band along a boundary over the interiors beside it (1: \
          the boundary does not show); time: partition + spline + seam measure",
@@ -74,8 +77,8 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     Ok(report)
 }
 
-/// Reads every region's true normals and sets its scale so it spans [`EXEMPLAR_SIDE`] texels.
-fn load_exemplars(layout: &mut Layout) -> Result<Vec<NormalMap>> {
+/// Reads every region's true normals and sets its scale so it spans `side` texels.
+fn load_exemplars(layout: &mut Layout, side: f64) -> Result<Vec<NormalMap>> {
     let mm = layout.mm_per_texel;
     layout
         .regions
@@ -86,7 +89,7 @@ fn load_exemplars(layout: &mut Layout) -> Result<Vec<NormalMap>> {
                 ExemplarSource::NormalMap(p) => p.clone(),
             };
             let map = read(&path)?;
-            region.exemplar_mm_per_texel = mm * EXEMPLAR_SIDE / map.width().max(1) as f64;
+            region.exemplar_mm_per_texel = mm * side / map.width().max(1) as f64;
             Ok(map)
         })
         .collect()
