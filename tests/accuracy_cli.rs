@@ -11,13 +11,16 @@ use serde_json::Value;
 const STAGES: [&str; 5] = ["capture", "detrend", "synthesis", "stitching", "rendering"];
 
 /// Every number in `value` (recursively), with its JSON path; `null`s are reported as NaN (a
-/// non-finite float serialises as `null`).
+/// non-finite float serialises as `null`), but for `skipped`, which is `null` when measured.
 fn numbers(value: &Value, path: &str, out: &mut Vec<(String, f64)>) {
     match value {
         Value::Number(n) => out.push((path.to_owned(), n.as_f64().unwrap_or(f64::NAN))),
         Value::Null => out.push((path.to_owned(), f64::NAN)),
         Value::Array(items) => items.iter().enumerate().for_each(|(i, v)| numbers(v, &format!("{path}[{i}]"), out)),
-        Value::Object(map) => map.iter().for_each(|(k, v)| numbers(v, &format!("{path}.{k}"), out)),
+        Value::Object(map) => map
+            .iter()
+            .filter(|(k, v)| !(k.as_str() == "skipped" && v.is_null()))
+            .for_each(|(k, v)| numbers(v, &format!("{path}.{k}"), out)),
         _ => {}
     }
 }
