@@ -67,3 +67,22 @@ pub fn measure(stage: Stage, config: &Config, progress: Progress<'_>) -> Result<
     report.wall_seconds = start.elapsed().as_secs_f64();
     Ok(report)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Same seed, same numbers (times apart); another seed, other numbers.
+    #[test]
+    fn a_stage_is_deterministic_under_its_seed() {
+        let config = |seed| Config { quick: true, seed, samples: PathBuf::new() };
+        let numbers = |seed| -> Vec<Vec<Metric>> {
+            let report = measure(Stage::Capture, &config(seed), &|_, _, _| {}).unwrap();
+            report.choices.into_iter().map(|c| c.metrics).collect()
+        };
+        let first = numbers(5);
+        assert_eq!(first, numbers(5));
+        assert_ne!(first, numbers(6));
+        assert!(first.iter().flatten().all(|m| m.value.is_finite()));
+    }
+}
