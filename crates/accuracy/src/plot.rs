@@ -123,7 +123,7 @@ fn chart(root: &Area<'_>, stage: &StageReport) -> std::result::Result<(), String
         .draw()
         .map_err(|e| e.to_string())?;
     for (i, (name, members)) in series(&stage.choices).into_iter().enumerate() {
-        let colour = Palette99::pick(i).to_rgba();
+        let colour = colour(i);
         let points: Vec<(f64, f64)> = members.iter().map(|c| (c.cost, c.error())).collect();
         chart
             .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
@@ -148,6 +148,27 @@ fn chart(root: &Area<'_>, stage: &StageReport) -> std::result::Result<(), String
         .draw()
         .map_err(|e| e.to_string())?;
     Ok(())
+}
+
+/// The `i`-th series colour: ten well-separated colours on white (no pale yellow), then
+/// plotters' palette.
+fn colour(i: usize) -> RGBAColor {
+    const TEN: [(u8, u8, u8); 10] = [
+        (31, 119, 180),
+        (214, 39, 40),
+        (44, 160, 44),
+        (255, 127, 14),
+        (148, 103, 189),
+        (140, 86, 75),
+        (227, 119, 194),
+        (90, 90, 90),
+        (23, 190, 207),
+        (188, 189, 34),
+    ];
+    match TEN.get(i) {
+        Some(&(r, g, b)) => RGBColor(r, g, b).to_rgba(),
+        None => Palette99::pick(i).to_rgba(),
+    }
 }
 
 /// Log-axis ticks at 1, 2 and 5 times the powers of ten within `[lo, hi]`.

@@ -70,7 +70,8 @@ fn family(method: &Method) -> &'static str {
     match method {
         Method::Lambert => "lambert",
         Method::Blog | Method::OwnFit => "closed forms",
-        Method::Lut { .. } | Method::RingLut { .. } => "pre-integrated LUT",
+        Method::Lut { .. } => "pre-integrated LUT",
+        Method::RingLut { .. } => "LUT, the paper's ring",
         Method::Tsd { kernel: TsdKernel::Gaussians, .. } => "TSD, Gaussians",
         Method::Tsd { kernel: TsdKernel::Single, .. } => "TSD, single kernel",
         Method::Reference { .. } => "reference",

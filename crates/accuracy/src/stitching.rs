@@ -40,9 +40,10 @@ fn plan(config: &Config) -> ((usize, usize), Vec<Try>) {
     let t = |series, label: &str, levels, curved, blend| Try { series, label: label.into(), levels, curved, blend };
     let mut tries = vec![
         t("default", "curves + spline", None, true, true),
-        t("boundaries", "straight + spline", None, false, true),
-        t("boundaries", "curves, no blend", None, true, false),
-        t("boundaries", "straight, no blend", None, false, false),
+        // Categorical choices: a series each, so no line joins them.
+        t("straight + spline", "straight + spline", None, false, true),
+        t("curves, no blend", "curves, no blend", None, true, false),
+        t("straight, no blend", "straight, no blend", None, false, false),
     ];
     let (size, levels) = if config.quick { ((512, 256), vec![2, 3]) } else { ((2048, 1024), vec![1, 2, 3, 4, 5, 6]) };
     tries.extend(levels.into_iter().map(|l| t("spline levels", &format!("{l} levels"), Some(l), true, true)));
