@@ -56,6 +56,8 @@ enum Command {
     /// Build a pre-integrated skin table (diffuse falloff or shadow scattering) as a float EXR.
     #[command(subcommand)]
     Lut(cmd::lut::Command),
+    /// Measure every stage's choices against ground truth and what each costs in time.
+    Accuracy(cmd::accuracy::Args),
     /// Open a scene in the interactive viewer (orbit, move the light, toggle the normal map and
     /// specular); built with `--features viewer`.
     #[cfg(feature = "viewer")]
@@ -80,6 +82,7 @@ fn main() {
         Command::Render(args) => cmd::render::run(args, &out),
         Command::Export(command) => cmd::export::run(command, &out),
         Command::Lut(command) => cmd::lut::run(command, &out),
+        Command::Accuracy(args) => cmd::accuracy::run(args, &out),
         #[cfg(feature = "viewer")]
         Command::View(args) => cmd::render::view(args, &out),
     };

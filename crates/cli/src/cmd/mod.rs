@@ -1,5 +1,6 @@
 //! One module per subcommand: its `Args` and its `run`.
 
+pub mod accuracy;
 pub mod batch;
 pub mod capture;
 pub mod demo;

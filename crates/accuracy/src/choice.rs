@@ -1,0 +1,157 @@
+//! The one row type of every stage ([`Choice`]: what was chosen, what it scored, what it cost)
+//! and the reports that gather them ([`StageReport`], [`Report`]), serialisable as
+//! `accuracy.json`.
+
+use serde::{Deserialize, Serialize};
+
+/// A stage of the pipeline whose choices are measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stage {
+    /// Photometric stereo: lights, noise and solver.
+    Capture,
+    /// Removal of a mold's low-frequency tilt: block size.
+    Detrend,
+    /// Texture synthesis: the default and each knob.
+    Synthesis,
+    /// The face map's boundaries: spline levels, curves, blending.
+    Stitching,
+    /// Skin scattering methods and their quality knobs.
+    Rendering,
+}
+
+impl Stage {
+    /// Every stage, in pipeline order.
+    pub const ALL: [Stage; 5] = [Stage::Capture, Stage::Detrend, Stage::Synthesis, Stage::Stitching, Stage::Rendering];
+
+    /// The stage's name in files and tables (`capture`, `detrend`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Capture => "capture",
+            Stage::Detrend => "detrend",
+            Stage::Synthesis => "synthesis",
+            Stage::Stitching => "stitching",
+            Stage::Rendering => "rendering",
+        }
+    }
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One measured number of a choice (an error, a size, a ratio).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Metric {
+    /// Name with its unit, e.g. `mean angular error (deg)`.
+    pub name: String,
+    /// The value; always finite (measures give 0 rather than NaN on degenerate inputs).
+    pub value: f64,
+}
+
+/// One choice of a stage and what it scored and cost.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Choice {
+    /// The curve of the plot this choice belongs to (e.g. `robust, noise 0.01`).
+    pub series: String,
+    /// The point's label (e.g. `8 lights`).
+    pub label: String,
+    /// The knobs set, `name = value`, for the table.
+    pub knobs: Vec<(String, String)>,
+    /// What was measured, the stage's error metric first.
+    pub metrics: Vec<Metric>,
+    /// Wall-clock seconds (the median of `runs` runs); for rendering, the frame's GPU time.
+    pub seconds: f64,
+    /// The plotted cost: `seconds`, or for rendering the frame time over the base pass's.
+    pub cost: f64,
+    /// Timed runs behind `seconds`.
+    pub runs: usize,
+}
+
+impl Choice {
+    /// A choice whose plotted cost is its seconds.
+    pub fn timed(
+        series: &str,
+        label: &str,
+        knobs: Vec<(String, String)>,
+        metrics: Vec<Metric>,
+        seconds: f64,
+        runs: usize,
+    ) -> Self {
+        let seconds = crate::timing::positive(seconds);
+        Choice { series: series.into(), label: label.into(), knobs, metrics, seconds, cost: seconds, runs }
+    }
+
+    /// The value of the metric called `name`, if measured.
+    pub fn metric(&self, name: &str) -> Option<f64> {
+        self.metrics.iter().find(|m| m.name == name).map(|m| m.value)
+    }
+
+    /// The stage's error metric: the first one.
+    pub fn error(&self) -> f64 {
+        self.metrics.first().map_or(0.0, |m| m.value)
+    }
+}
+
+/// `name = value` knob pairs from string slices.
+pub fn knobs(pairs: &[(&str, String)]) -> Vec<(String, String)> {
+    pairs.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect()
+}
+
+/// Metrics from `(name, value)` pairs; a non-finite value becomes 0 (a measure's degenerate case).
+pub fn metrics(pairs: &[(&str, f64)]) -> Vec<Metric> {
+    pairs.iter().map(|(n, v)| Metric { name: (*n).to_owned(), value: if v.is_finite() { *v } else { 0.0 } }).collect()
+}
+
+/// Every choice of one stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageReport {
+    /// Which stage.
+    pub stage: Stage,
+    /// What was measured on what, one sentence (the markdown's caption).
+    pub setup: String,
+    /// The plotted error metric's name (the first metric of every choice).
+    pub error_metric: String,
+    /// The plotted cost's name, e.g. `seconds` or `frame time / base pass`.
+    pub cost_axis: String,
+    /// The measured choices.
+    pub choices: Vec<Choice>,
+    /// Why the stage was not measured, when it was not (no GPU adapter).
+    pub skipped: Option<String>,
+    /// Seconds the whole stage took, set by [`crate::measure`].
+    pub wall_seconds: f64,
+}
+
+impl StageReport {
+    /// An empty stage report, choices to be pushed.
+    pub fn new(stage: Stage, setup: String, error_metric: &str, cost_axis: &str) -> Self {
+        StageReport {
+            stage,
+            setup,
+            error_metric: error_metric.into(),
+            cost_axis: cost_axis.into(),
+            choices: Vec::new(),
+            skipped: None,
+            wall_seconds: 0.0,
+        }
+    }
+}
+
+/// A whole run: what `accuracy.json` holds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Quick mode (small sizes, one run per choice) or the full one.
+    pub quick: bool,
+    /// The run's seed.
+    pub seed: u64,
+    /// Worker threads the measurements ran on.
+    pub threads: usize,
+    /// Timed runs per choice (median).
+    pub runs: usize,
+    /// One report per stage, in pipeline order.
+    pub stages: Vec<StageReport>,
+    /// Seconds of the whole run.
+    pub wall_seconds: f64,
+}
