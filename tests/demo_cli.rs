@@ -131,6 +131,14 @@ fn demo_page_loads_every_image_without_console_errors_in_headless_chromium() {
     for stage in ["id=\"capture\"", "id=\"synthesis\"", "id=\"face\"", "id=\"renders\""] {
         assert!(html.contains(stage), "the page has no {stage} section");
     }
+    // Each stage's plot from the quick accuracy run, and its numbers in the report.
+    for stage in ["capture", "detrend", "synthesis", "stitching", "rendering"] {
+        let plot = format!("accuracy/accuracy-{stage}.png");
+        assert!(html.contains(&plot) && dir.join(&plot).is_file(), "no {plot}");
+    }
+    let stages = report["accuracy"]["stages"].as_array().unwrap();
+    assert_eq!(stages.len(), 5);
+    assert!(stages.iter().all(|s| s["skipped"].is_null() && !s["choices"].as_array().unwrap().is_empty()));
     let checker = match page_checker() {
         Ok(c) => c,
         Err(why) => {

@@ -54,19 +54,30 @@ fn default_samples() -> PathBuf {
 /// # Errors
 /// When a stage cannot read its samples or a file cannot be written.
 pub fn run(args: Args, out: &Output) -> Result<i32> {
-    let start = Instant::now();
     let config =
         Config { quick: args.quick, seed: args.seed, samples: args.samples.clone().unwrap_or_else(default_samples) };
-    let set = OutputSet::folder(&args.out, MARKER)
-        .with_context(|| format!("cannot write output folder {}", args.out.display()))?;
     let stages: Vec<Stage> = if args.only.is_empty() {
         Stage::ALL.to_vec()
     } else {
         Stage::ALL.into_iter().filter(|s| args.only.contains(s)).collect()
     };
+    let report = to_dir(&config, &stages, &args.out, out)?;
+    out.result(&report, || summary(&report, &args.out));
+    Ok(0)
+}
+
+/// Measures `stages` (a progress bar each) and writes `accuracy.md`, the plots and
+/// `accuracy.json` into `dir` (`skinkit accuracy`, and the demo's quick run).
+///
+/// # Errors
+/// When a stage cannot read its samples or a file cannot be written.
+pub fn to_dir(config: &Config, stages: &[Stage], dir: &Path, out: &Output) -> Result<Report> {
+    let start = Instant::now();
+    let set =
+        OutputSet::folder(dir, MARKER).with_context(|| format!("cannot write output folder {}", dir.display()))?;
     let mut reports = Vec::new();
-    for stage in stages {
-        reports.push(measure_stage(stage, &config, out)?);
+    for &stage in stages {
+        reports.push(measure_stage(stage, config, out)?);
     }
     let report = Report {
         quick: config.quick,
@@ -76,9 +87,8 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         stages: reports,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
-    write_all(set, &args.out, &report)?;
-    out.result(&report, || summary(&report, &args.out));
-    Ok(0)
+    write_all(set, dir, &report)?;
+    Ok(report)
 }
 
 /// One stage under its progress bar; a skipped stage is noted.

@@ -4,7 +4,9 @@
 //! 1024x1024 by synthesis, its albedo replayed through the same coordinate map, with the quality
 //! metrics of every growth; then the sample face (`samples/face/layout.toml`, seven regions)
 //! stitched at 2048x1024 (`--full`: 4096x2048) from the molds just captured; the renders of the
-//! face map (figures 7 and 8, the skin figure); last the report page, `index.html` ([`page`]).
+//! face map (figures 7 and 8, the skin figure); the quick run of `skinkit accuracy` (what each
+//! choice of every stage costs in time, into `accuracy/`); last the report page, `index.html`
+//! ([`page`]), which shows each stage's accuracy plot beside its pictures.
 
 mod page;
 
@@ -48,6 +50,9 @@ pub struct Args {
     /// Skip the renders of the face map (figures 7 and 8).
     #[arg(long)]
     pub no_render: bool,
+    /// Skip the quick accuracy run (`skinkit accuracy --quick`, about half a minute).
+    #[arg(long)]
+    pub no_accuracy: bool,
 }
 
 /// Wall-clock seconds of each stage.
@@ -57,6 +62,7 @@ struct DemoSeconds {
     synthesis: f64,
     face: Option<f64>,
     renders: Option<f64>,
+    accuracy: Option<f64>,
     page: f64,
     total: f64,
 }
@@ -93,6 +99,8 @@ struct DemoReport {
     growths: Vec<GrowthResult>,
     face: Option<FaceReport>,
     renders: Option<FiguresReport>,
+    /// The quick accuracy run (`accuracy/accuracy.json`).
+    accuracy: Option<skinkit_accuracy::Report>,
 }
 
 /// The repository's sample molds, found from the source tree this binary was built from, or in the
@@ -117,7 +125,11 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let t = Instant::now();
     let renders = if face.is_some() && !args.no_render { render_figures(&args, out)? } else { None };
     seconds.renders = renders.as_ref().map(|_| t.elapsed().as_secs_f64());
-    let mut report = DemoReport { machine: Machine::this(), seconds, page: None, molds, growths, face, renders };
+    let t = Instant::now();
+    let accuracy = if args.no_accuracy { None } else { Some(quick_accuracy(&args, &samples, out)?) };
+    seconds.accuracy = accuracy.as_ref().map(|_| t.elapsed().as_secs_f64());
+    let machine = Machine::this();
+    let mut report = DemoReport { machine, seconds, page: None, molds, growths, face, renders, accuracy };
     let t = Instant::now();
     out.note("writing the report page");
     report.seconds.total = start.elapsed().as_secs_f64();
@@ -193,12 +205,13 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         s += &format!("report page: {}\n", report.page.as_deref().unwrap_or("-"));
         let t = &report.seconds;
         s + &format!(
-            "total {:.1} s (capture {:.1}, synthesis {:.1}, face {:.1}, renders {:.1}, page {:.1}) on {}",
+            "total {:.1} s (capture {:.1}, synthesis {:.1}, face {:.1}, renders {:.1}, accuracy {:.1}, page {:.1}) on {}",
             t.total,
             t.capture,
             t.synthesis,
             t.face.unwrap_or(0.0),
             t.renders.unwrap_or(0.0),
+            t.accuracy.unwrap_or(0.0),
             t.page,
             report.machine.summary()
         )
@@ -301,6 +314,14 @@ fn stitch_face(args: &Args, samples: &Path, cache: &mut CaptureCache, out: &Outp
         upsampled: false,
     };
     Ok(Some(face_to_dir(&options, &args.out.join("face"), cache, out, Instant::now())?))
+}
+
+/// `skinkit accuracy --quick` on the samples the demo ran on, into `accuracy/`.
+fn quick_accuracy(args: &Args, molds: &Path, out: &Output) -> Result<skinkit_accuracy::Report> {
+    out.note("measuring what each choice of every stage costs (skinkit accuracy --quick)");
+    let samples = molds.parent().map_or_else(|| PathBuf::from("samples"), Path::to_path_buf);
+    let config = skinkit_accuracy::Config { quick: true, seed: args.seed, samples };
+    super::accuracy::to_dir(&config, &skinkit_accuracy::Stage::ALL, &args.out.join("accuracy"), out)
 }
 
 /// Figures 7, 8 and the skin figure of the face map; `None` (with a warning saying why) on a

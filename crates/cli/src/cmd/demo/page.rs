@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use skinkit_accuracy::{Stage, markdown};
 use skinkit_capture::session::Session;
 use skinkit_maps::{Grid, NormalEncoding, io, preview};
 
@@ -156,6 +157,7 @@ fn capture(html: &mut String, out: &Path, samples: &Path, report: &DemoReport) -
         }
         html.push_str("</div>\n");
     }
+    accuracy(html, report, &[Stage::Capture, Stage::Detrend]);
     html.push_str("</section>\n");
     Ok(())
 }
@@ -197,6 +199,7 @@ fn synthesis(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
         figure(html, &src, &format!("grown to {}x{} in {:.1} s", g.width, g.height, g.seconds), "native");
         html.push_str("</div>\n");
     }
+    accuracy(html, report, &[Stage::Synthesis]);
     html.push_str("</section>\n");
     Ok(())
 }
@@ -243,6 +246,7 @@ fn face(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
             format!("{:.2}", s.max_jump_degrees),
         ]],
     );
+    accuracy(html, report, &[Stage::Stitching]);
     html.push_str("</section>\n");
     Ok(())
 }
@@ -277,7 +281,30 @@ fn renders(html: &mut String, out: &Path, report: &DemoReport) {
             figure(html, &p(&image.path), &caption, "map");
         }
     }
-    html.push_str("</div></section>\n");
+    html.push_str("</div>");
+    accuracy(html, report, &[Stage::Rendering]);
+    html.push_str("</section>\n");
+}
+
+/// The quick accuracy run's plot and table of each of `stages` (nothing without the run).
+fn accuracy(html: &mut String, report: &DemoReport, stages: &[Stage]) {
+    let Some(run) = &report.accuracy else { return };
+    for stage in run.stages.iter().filter(|s| stages.contains(&s.stage)) {
+        let _ = write!(html, "<h3>Accuracy against time: {}</h3><p>{}</p>", esc(stage.stage.name()), esc(&stage.setup));
+        if let Some(reason) = &stage.skipped {
+            let _ = write!(html, "<p>Not measured: {}.</p>", esc(reason));
+            continue;
+        }
+        let caption =
+            format!("{} against {} (quick run, {:.1} s)", stage.error_metric, stage.cost_axis, stage.wall_seconds);
+        figure(html, &format!("accuracy/{}", markdown::plot_name(stage)), &caption, "native");
+        let rows: Vec<Vec<String>> = stage
+            .choices
+            .iter()
+            .map(|c| vec![c.series.clone(), c.label.clone(), format!("{:.4}", c.error()), format!("{:.4}", c.cost)])
+            .collect();
+        table(html, &["series", "choice", &stage.error_metric, &stage.cost_axis], &rows);
+    }
 }
 
 /// A photo as a small grey picture in `page/name`; returns its link.
