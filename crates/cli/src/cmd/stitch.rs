@@ -66,6 +66,25 @@ pub struct StitchOptions {
     pub upsampled: bool,
 }
 
+impl StitchOptions {
+    /// The command's defaults for `layout` (its own size, seed 0, the default spline and curves),
+    /// what `demo` and face batches stitch with.
+    pub fn for_layout(layout: PathBuf) -> Self {
+        StitchOptions {
+            layout,
+            size: None,
+            seed: 0,
+            levels: None,
+            curve_amplitude: None,
+            straight: false,
+            no_blend: false,
+            seam_band: 4,
+            scanline: false,
+            upsampled: false,
+        }
+    }
+}
+
 #[derive(clap::Args, Debug)]
 pub struct StitchArgs {
     #[command(flatten)]

@@ -172,18 +172,7 @@ fn stitch(subject: &Subject, dir: &Path, out: &Output) -> Result<f64> {
             .with_context(|| format!("cannot read the captured map {}", path.display()))?;
         cache.insert(job.dir.canonicalize().unwrap_or_else(|_| job.dir.clone()), map);
     }
-    let options = StitchOptions {
-        layout: subject.layout.clone(),
-        size: None,
-        seed: 0,
-        levels: None,
-        curve_amplitude: None,
-        straight: false,
-        no_blend: false,
-        seam_band: 4,
-        scanline: false,
-        upsampled: false,
-    };
+    let options = StitchOptions::for_layout(subject.layout.clone());
     let report = face_to_dir(&options, dir, &mut cache, out, Instant::now())?;
     Ok(report.seconds.total)
 }

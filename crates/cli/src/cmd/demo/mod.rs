@@ -301,18 +301,7 @@ fn stitch_face(args: &Args, samples: &Path, cache: &mut CaptureCache, out: &Outp
     }
     let size = if args.full { (4096, 2048) } else { (2048, 1024) };
     out.note(format!("stitching the sample face at {}x{}", size.0, size.1));
-    let options = StitchOptions {
-        layout,
-        size: Some(size),
-        seed: args.seed,
-        levels: None,
-        curve_amplitude: None,
-        straight: false,
-        no_blend: false,
-        seam_band: 4,
-        scanline: false,
-        upsampled: false,
-    };
+    let options = StitchOptions { size: Some(size), seed: args.seed, ..StitchOptions::for_layout(layout) };
     Ok(Some(face_to_dir(&options, &args.out.join("face"), cache, out, Instant::now())?))
 }
 
