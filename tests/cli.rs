@@ -1,24 +1,12 @@
 //! End-to-end tests of the `skinkit` binary: what a user at a shell sees (exit codes, messages that
 //! name the file and field, outputs written whole or not at all).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn mold(region: &str) -> PathBuf {
-    repo().join("samples/molds").join(region)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{mold, skinkit, stderr};
 
 /// The JSON lines of a `--json` stream (`skinkit batch`): one record per line.
 fn records(o: &Output) -> Vec<serde_json::Value> {

@@ -3,27 +3,11 @@
 //! never a temporary file's name.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn skinkit(args: &[&str]) -> Output {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_skinkit"));
-    // Renders run headless: a private runtime folder keeps the Vulkan loader quiet.
-    let runtime = std::env::temp_dir().join("skinkit-errors-cli-xdg");
-    std::fs::create_dir_all(&runtime).unwrap();
-    command.args(args).env("XDG_RUNTIME_DIR", &runtime).output().expect("skinkit runs")
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn mold(region: &str) -> PathBuf {
-    repo().join("samples/molds").join(region)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{mold, repo, s, skinkit, stderr};
 
 /// A writer's temporary file (`.NAME.XXXXXX.tmp`) or an output set's staging folder
 /// (`.NAME.staging.PID.N`) in `line`. The tests' own scratch folders (`/tmp/.tmpXXXXXX/`) are not.
@@ -32,10 +16,6 @@ fn names_a_temporary(line: &str) -> bool {
         .match_indices(".tmp")
         .any(|(i, _)| line[i + 4..].chars().next().is_none_or(|c| !c.is_ascii_alphanumeric()));
     temp_file || line.contains(".staging.")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Asserts the run failed with exit 1 and one error line that names `file` once, repeats no OS

@@ -7,27 +7,16 @@
 //! with a line on stderr, only when node or the package cannot be had.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use std::sync::OnceLock;
 
 use skinkit_maps::io::{Limits, read_photo};
 use skinkit_maps::{NormalEncoding, NormalMap, Samples};
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+#[path = "support/mod.rs"]
+mod support;
+use skinkit_testkit::image_diff;
+use support::{repo, s, skinkit, stderr};
 
 /// Render size: small, so the two renders stay quick on lavapipe.
 const SIZE: u32 = 256;
@@ -211,33 +200,10 @@ fn a_gltf_export_writes_its_side_files_and_passes_the_validator() {
     assert_eq!((images[1].width, images[1].height), (256, 128));
 }
 
-/// Per-pixel error statistics relative to the reference's brightest channel (as the renderer's
-/// GPU tests compute them).
-#[derive(Debug)]
-#[allow(dead_code)] // `max` is printed, not asserted: silhouette pixels may differ fully.
-struct Comparison {
-    mean: f32,
-    p99: f32,
-    max: f32,
-}
-
 fn linear_pixels(path: &Path) -> Vec<f32> {
     let photo = read_photo(path, &Limits::default()).unwrap();
     let Samples::F32(v) = photo.samples() else { panic!("{}: not float", path.display()) };
     v.clone()
-}
-
-fn compare(test: &[f32], reference: &[f32]) -> Comparison {
-    let range = reference.iter().copied().fold(0.0f32, f32::max);
-    assert!(range > 0.0, "the reference image is black");
-    let mut errors: Vec<f32> = test
-        .chunks_exact(3)
-        .zip(reference.chunks_exact(3))
-        .map(|(t, r)| (0..3).map(|c| (t[c] - r[c]).abs()).fold(0.0, f32::max) / range)
-        .collect();
-    errors.sort_by(f32::total_cmp);
-    let mean = errors.iter().sum::<f32>() / errors.len() as f32;
-    Comparison { mean, p99: errors[errors.len() * 99 / 100], max: *errors.last().unwrap() }
 }
 
 // The tolerances of the renderer's GPU tests (crates/render/tests/gpu.rs: mean 0.005 and 99th
@@ -263,7 +229,7 @@ fn skinkit_render_draws_the_exported_glb_like_its_scene() {
         let image = tmp.path().join(format!("from-glb{bits}.exr"));
         let o = skinkit(&["render", s(&from_glb), "--out", s(&image), "--quiet"]);
         assert!(o.status.success(), "{}", stderr(&o));
-        let c = compare(&linear_pixels(&image), &expected);
+        let c = image_diff(&linear_pixels(&image), &expected, 3);
         eprintln!("{bits}-bit normal texture: re-render against the scene's: {c:?}");
         assert!(
             c.mean < MEAN_TOL && c.p99 < P99_TOL,

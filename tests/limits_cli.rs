@@ -4,25 +4,17 @@
 //! to stay within `--memory-limit`. Each test is named after the probe's defect it covers.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_testkit::header_only_png;
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{s, skinkit, stderr};
 
 fn mold(region: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region).canonicalize().unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// Usage error: exit 2, and clap's message names the flag and the value.

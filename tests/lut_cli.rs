@@ -2,24 +2,17 @@
 //! attributes match `skin::lut` / `skin::shadow` built in process, prints its definitions, and
 //! refuses bad flags naming them.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
 use skinkit_render::skin::lut::{DiffuseLut, DiffuseLutSpec};
 use skinkit_render::skin::lut_file;
 use skinkit_render::skin::profile::{Domain, Normalisation};
 use skinkit_render::skin::shadow::{ShadowLut, ShadowLutSpec};
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{s, skinkit};
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]

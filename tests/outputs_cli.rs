@@ -8,24 +8,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+#[path = "support/mod.rs"]
+mod support;
+use support::{bin, s, skinkit, stderr};
+
 /// What every complete capture folder holds; `report.json` marks it complete.
 const SET: [&str; 5] = ["normal.exr", "normal.png", "albedo.png", "confidence.png", "report.json"];
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_skinkit"))
-}
-
-fn skinkit(args: &[&str]) -> Output {
-    bin().args(args).output().expect("skinkit runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// The four sample molds at `side` pixels in `dir/molds-<side>`.
 fn molds(dir: &Path, side: usize) -> PathBuf {

@@ -4,26 +4,14 @@
 //! via scripts/test); these tests never pass by skipping it.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use skinkit_maps::io::{Limits, read_photo};
 use skinkit_maps::{NormalEncoding, NormalMap, Samples};
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{repo, s, skinkit, stderr};
 
 /// 8-bit RGB samples of a PNG render.
 fn pixels(path: &Path) -> (usize, usize, Vec<u8>) {

@@ -3,22 +3,13 @@
 //! layouts that are wrong in the ways users get them wrong.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{s, skinkit, stderr};
 
 fn molds() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").canonicalize().unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// A 320x160 layout of three regions whose exemplars are the sample molds' truth maps (0.02 mm

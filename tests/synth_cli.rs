@@ -3,18 +3,14 @@
 //! Runs stay tiny (48x48 from a 32x32 crop of a sample mold's truth map).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Vec3};
 
-fn skinkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_skinkit")).args(args).output().expect("skinkit runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{s, skinkit, stderr};
 
 fn truth(region: &str) -> NormalMap {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region).join("truth.png");
@@ -27,10 +23,6 @@ fn normal_exemplar(dir: &Path, region: &str, side: usize) -> PathBuf {
     let path = dir.join(format!("{region}-{side}.png"));
     io::write_normal_map(&path, &NormalMap::from_unit_grid(crop).unwrap(), NormalEncoding::default(), 16).unwrap();
     path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// `synth` of `exemplar` to `out` (48x48), with extra flags; asserts success.

@@ -11,6 +11,7 @@ use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex, render_cpu,
     srgb_encode,
 };
+use skinkit_testkit::{ImageDiff, image_diff};
 use std::f32::consts::PI;
 
 const SIZE: u32 = 128;
@@ -98,29 +99,6 @@ fn lit_sphere() -> RenderInputs {
     inputs(sphere(64, 32), Texture::flat_normals(), vec![directional(Vec3::new(-0.4, 0.5, 0.77), 3.0)])
 }
 
-/// Per-pixel error statistics relative to the reference's range.
-#[derive(Debug)]
-#[allow(dead_code)] // `max` is printed, not asserted: silhouette pixels may differ fully.
-struct Comparison {
-    mean: f32,
-    p99: f32,
-    max: f32,
-    range: f32,
-}
-
-fn compare(gpu: &[[f32; 4]], cpu: &[[f32; 4]]) -> Comparison {
-    assert_eq!(gpu.len(), cpu.len());
-    let range = cpu.iter().flat_map(|p| p[..3].iter().copied()).fold(0.0f32, f32::max);
-    assert!(range > 0.0, "the reference image is black");
-    let mut errors: Vec<f32> =
-        gpu.iter().zip(cpu).map(|(g, c)| (0..4).map(|i| (g[i] - c[i]).abs()).fold(0.0, f32::max) / range).collect();
-    assert!(errors.iter().all(|e| e.is_finite()), "non-finite pixels");
-    errors.sort_by(f32::total_cmp);
-    let mean = errors.iter().sum::<f32>() / errors.len() as f32;
-    let p99 = errors[(errors.len() * 99) / 100];
-    Comparison { mean, p99, max: *errors.last().unwrap(), range }
-}
-
 fn dump(name: &str, gpu: &[[f32; 4]], cpu: &[[f32; 4]]) {
     let dir = std::env::temp_dir();
     let size = SIZE as usize;
@@ -145,10 +123,10 @@ fn dump(name: &str, gpu: &[[f32; 4]], cpu: &[[f32; 4]]) {
 
 /// Render on both sides and check the tolerances: mean and 99th percentile of the per-pixel
 /// maximum channel error, relative to the brightest reference channel.
-fn check_against_cpu(name: &str, scene: &RenderInputs, mean_tol: f32, p99_tol: f32) -> Comparison {
+fn check_against_cpu(name: &str, scene: &RenderInputs, mean_tol: f32, p99_tol: f32) -> ImageDiff {
     let rendered = gpu().render(scene, SIZE, SIZE, OutputFormat::Hdr32).unwrap();
     let cpu = render_cpu(scene, SIZE, SIZE);
-    let c = compare(&rendered.pixels, &cpu);
+    let c = image_diff(rendered.pixels.as_flattened(), cpu.as_flattened(), 4);
     eprintln!("{name}: {c:?}");
     if std::env::var_os("SKINKIT_RENDER_DUMP").is_some() {
         dump(name, &rendered.pixels, &cpu);
@@ -197,7 +175,7 @@ fn green_down_map_matches_cpu_reference_and_differs_from_green_up() {
     let down = gpu.render(&scene, SIZE, SIZE, OutputFormat::Hdr32).unwrap();
     scene.green = GreenAxis::Up;
     let up = gpu.render(&scene, SIZE, SIZE, OutputFormat::Hdr32).unwrap();
-    let c = compare(&down.pixels, &up.pixels);
+    let c = image_diff(down.pixels.as_flattened(), up.pixels.as_flattened(), 4);
     assert!(c.mean > 0.01, "flipping green changed nothing: {c:?}");
 }
 

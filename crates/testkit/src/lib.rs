@@ -60,6 +60,39 @@ pub fn proptest_config(cases: u32, seed: u64) -> Config {
     }
 }
 
+/// How far a rendered image is from a reference, per pixel: the largest channel difference over
+/// the reference's brightest colour channel. The renderer's GPU tests bound `mean` and `p99`;
+/// `max` is printed, not asserted, because silhouette pixels may differ fully.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageDiff {
+    pub mean: f32,
+    pub p99: f32,
+    pub max: f32,
+    /// The reference's brightest colour channel (every error is relative to it).
+    pub range: f32,
+}
+
+/// Compares two images of `channels` interleaved samples a pixel (3 or 4; the first three are
+/// colour and set the range, every channel counts in the error).
+///
+/// # Panics
+/// When the images differ in size, the reference is black or a difference is not finite.
+pub fn image_diff(test: &[f32], reference: &[f32], channels: usize) -> ImageDiff {
+    assert_eq!(test.len(), reference.len(), "images of different sizes");
+    assert!(channels >= 3 && test.len().is_multiple_of(channels) && !test.is_empty(), "not {channels}-channel pixels");
+    let range = reference.chunks_exact(channels).flat_map(|p| p[..3].iter().copied()).fold(0.0f32, f32::max);
+    assert!(range > 0.0, "the reference image is black");
+    let mut errors: Vec<f32> = test
+        .chunks_exact(channels)
+        .zip(reference.chunks_exact(channels))
+        .map(|(t, r)| t.iter().zip(r).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max) / range)
+        .collect();
+    assert!(errors.iter().all(|e| e.is_finite()), "non-finite pixels");
+    errors.sort_by(f32::total_cmp);
+    let mean = errors.iter().sum::<f32>() / errors.len() as f32;
+    ImageDiff { mean, p99: errors[errors.len() * 99 / 100], max: errors[errors.len() - 1], range }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -80,5 +113,16 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(&bytes[16..24], &[0, 1, 0x11, 0x70, 0, 0, 0, 3]);
         assert_eq!(bytes.len(), 8 + 25 + 24 + 12);
+    }
+
+    #[test]
+    fn image_diff_is_relative_to_the_brightest_colour_channel() {
+        // Two RGBA pixels; the reference's brightest colour channel is 2, alpha 5 does not count.
+        let reference = [2.0, 0.0, 0.0, 5.0, 1.0, 1.0, 1.0, 5.0];
+        let test = [2.0, 0.0, 0.0, 5.0, 1.0, 1.5, 1.0, 4.0];
+        let d = image_diff(&test, &reference, 4);
+        assert_eq!(d.range, 2.0);
+        assert_eq!((d.mean, d.max), (0.25, 0.5));
+        assert_eq!(image_diff(&reference, &reference, 4).max, 0.0);
     }
 }
