@@ -10,14 +10,16 @@
 //! Vulkan on the CPU): the ratios say what each effect costs relative to the base pass there, not
 //! real-time rates on hardware.
 //!
-//! Writes `target/<scene>[-unshadowed].{md,svg,json}` (table, error against log time, rows) and
-//! one PNG per method, and `target/skin-methods.md` with every table. Settings:
+//! Writes `target/<scene>[-unshadowed].{md,json}` (table, rows) and one PNG per method, and `target/skin-methods.md` with every table. Settings:
 //! - `SKIN_METHODS_SCENES=skin-sphere,skin-nose`: these scenes only;
 //! - `SKIN_METHODS_UNSHADOWED=1` (or `0`): only without (with) the scene's shadows;
 //! - `SKIN_METHODS_REFERENCE=N`: the reference's light map (2048; its half is a row too);
 //! - `SKIN_METHODS_ONLY=lambert,lut-256`: these methods only (the reference always);
 //! - `SKIN_METHODS_SIZE=WxH`: one image size for every scene (else each scene's own);
-//! - `SKIN_METHODS_DOCS=1`: the tables into the README, the plots into `docs/`.
+//! - `SKIN_METHODS_DOCS=1`: the tables into the README.
+//!
+//! The plot of error against time is `skinkit accuracy`'s rendering stage (plotters), which
+//! measures the same methods on the sphere and the head.
 //!
 //! Run: `WGPU_BACKEND=vulkan cargo bench -p skinkit-render --bench skin_methods`.
 
@@ -84,11 +86,6 @@ fn main() {
                 reference_size,
                 &out.join(&stem),
             );
-            if docs() {
-                let plot = out.join(format!("{stem}.svg"));
-                std::fs::copy(&plot, root.join(format!("docs/skin-methods-{stem}.svg")))
-                    .unwrap_or_else(|e| panic!("{}: {e}", plot.display()));
-            }
             tables.push(table);
         }
     }
@@ -105,7 +102,7 @@ fn docs() -> bool {
 }
 
 /// Every method of [`Method::table`] on one scene: renders, errors against the reference and
-/// frame times, written to `stem.{md,svg,json}` and one PNG per method; returns the table.
+/// frame times, written to `stem.{md,json}` and one PNG per method; returns the table.
 fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, reference_size: u32, stem: &Path) -> String {
     let mut scene = Scene::load(scene_file).unwrap_or_else(|e| panic!("{e}"));
     if unshadowed {
@@ -152,7 +149,6 @@ fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, referenc
     println!("{table}");
     let with = |ext: &str| PathBuf::from(format!("{}.{ext}", stem.display()));
     write(&with("md"), &table);
-    write(&with("svg"), &svg(&rows));
     write(&with("json"), &serde_json::to_string_pretty(&rows).unwrap());
     for (method, (ldr, _), ..) in &renders {
         let path = PathBuf::from(format!("{}-{}.png", stem.display(), method.name()));
@@ -167,7 +163,7 @@ fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, referenc
         )
         .unwrap();
     }
-    eprintln!("wrote {}", with("{md,svg,json}").display());
+    eprintln!("wrote {}", with("{md,json}").display());
     table
 }
 
@@ -258,65 +254,5 @@ fn markdown(
             r.method, r.flip_mean, r.rmse, r.frame_ms, r.relative_time, r.cpu_setup_s
         ));
     }
-    s
-}
-
-/// Error (FLIP mean) against frame time relative to the base pass, log time axis.
-fn svg(rows: &[Row]) -> String {
-    let (w, h, pad) = (720.0, 440.0, 70.0);
-    let plotted: Vec<&Row> =
-        rows.iter().filter(|r| r.relative_time > 0.0 && !r.method.starts_with("reference")).collect();
-    let t_max = plotted.iter().map(|r| r.relative_time).fold(1.0, f64::max) * 1.3;
-    let t_min = plotted.iter().map(|r| r.relative_time).fold(f64::INFINITY, f64::min).min(1.0) * 0.8;
-    let e_max = plotted.iter().map(|r| r.flip_mean as f64).fold(1e-3, f64::max) * 1.15;
-    let x = |t: f64| pad + (t.ln() - t_min.ln()) / (t_max.ln() - t_min.ln()) * (w - 2.0 * pad);
-    let y = |e: f64| h - pad - e / e_max * (h - 2.0 * pad);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n\
-         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
-         <text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">Skin diffuse methods: error against the reference vs frame time</text>\n\
-         <line x1=\"{pad}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n\
-         <line x1=\"{pad}\" y1=\"{pad}\" x2=\"{pad}\" y2=\"{}\" stroke=\"black\"/>\n\
-         <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frame time / base pass (log)</text>\n\
-         <text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">FLIP mean</text>\n",
-        w / 2.0,
-        h - pad,
-        w - pad,
-        h - pad,
-        h - pad,
-        w / 2.0,
-        h - 25.0,
-        h / 2.0,
-        h / 2.0
-    );
-    for tick in [1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0] {
-        if tick >= t_min && tick <= t_max {
-            s.push_str(&format!(
-                "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{tick}</text>\n",
-                x(tick),
-                h - pad + 16.0
-            ));
-        }
-    }
-    for i in 0..=4 {
-        let e = e_max * i as f64 / 4.0;
-        s.push_str(&format!("<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{e:.3}</text>\n", pad - 6.0, y(e) + 4.0));
-    }
-    for r in plotted {
-        let colour = match r.method.split('-').next().unwrap_or("") {
-            "lambert" => "#444",
-            "lut" => "#c0392b",
-            "tsd" => "#2471a3",
-            _ => "#229954",
-        };
-        let (px, py) = (x(r.relative_time), y(r.flip_mean as f64));
-        s.push_str(&format!(
-            "<circle cx=\"{px:.1}\" cy=\"{py:.1}\" r=\"5\" fill=\"{colour}\"/>\n<text x=\"{:.1}\" y=\"{:.1}\">{}</text>\n",
-            px + 7.0,
-            py - 6.0,
-            r.method
-        ));
-    }
-    s.push_str("</svg>\n");
     s
 }
