@@ -124,7 +124,10 @@ fn chart(root: &Area<'_>, stage: &StageReport) -> std::result::Result<(), String
         .map_err(|e| e.to_string())?;
     for (i, (name, members)) in series(&stage.choices).into_iter().enumerate() {
         let colour = colour(i);
-        let points: Vec<(f64, f64)> = members.iter().map(|c| (c.cost, c.error())).collect();
+        // A series' curve runs left to right (its choices may vary more than one knob, so their
+        // own order can double back, and plotters clips a backward segment on a log axis badly).
+        let mut points: Vec<(f64, f64)> = members.iter().map(|c| (c.cost, c.error())).collect();
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
         chart
             .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
             .map_err(|e| e.to_string())?
