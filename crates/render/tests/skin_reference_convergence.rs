@@ -1,7 +1,8 @@
 //! The texture-space reference converges: on the committed skin scenes (the sample head of
 //! `skin-compare.toml` and the 6 mm sphere of `skin-sphere.toml`, each with its key light's
-//! ray-cast shadow), the scattered light map at 1024 texels agrees with the one at 2048, each
-//! 1024 texel against the mean of the four 2048 texels it covers.
+//! ray-cast shadow), the scattered light map at one size agrees with the one at twice the size,
+//! each texel against the mean of the four finer texels it covers: 512 against 1024 in CI, 1024
+//! against 2048 (the size the docs' tables compare against) by hand.
 
 use std::path::Path;
 
@@ -43,13 +44,31 @@ fn self_difference(scene: &str, size: u32) -> (f64, f64) {
     ((sum2 / n).sqrt() / (level / n), worst / peak)
 }
 
+/// Runs in CI: 512 texels against 1024 (about 2.5 minutes on the 2-core machine).
 #[test]
+fn reference_at_512_agrees_with_1024() {
+    // Measured: sphere rms 6.2e-5 (worst 1.0e-3 of the peak), head 2.5e-3 (worst 0.10, at the
+    // nose's shadow edge): about twice the 1024-against-2048 differences below, as a first-order
+    // convergence gives.
+    check(512, [("skin-sphere.toml", 5e-4), ("skin-compare.toml", 5e-3)]);
+}
+
+/// The claim behind the docs' 2048-texel reference, 1024 against 2048: about 10 minutes, so run
+/// by hand (`cargo test --release -p skinkit-render --test skin_reference_convergence --
+/// --ignored`).
+#[test]
+#[ignore = "about 10 minutes on 2 cores: run by hand with --ignored"]
 fn reference_at_1024_agrees_with_2048() {
     // Measured: sphere rms 4.6e-5 (worst 7.9e-4 of the peak), head 1.2e-3 (worst 7.3e-2, at the
     // nose's shadow edge, which a 1024 map places to a texel).
-    for (scene, bound) in [("skin-sphere.toml", 5e-4), ("skin-compare.toml", 5e-3)] {
-        let (rms, worst) = self_difference(scene, 1024);
-        println!("{scene}: 1024 against 2048: rms {rms:.2e} of the mean, worst {worst:.2e} of the peak");
+    check(1024, [("skin-sphere.toml", 5e-4), ("skin-compare.toml", 5e-3)]);
+}
+
+/// Each scene's reference at `size` against `2 size`, within its bound (rms of the mean).
+fn check(size: u32, bounds: [(&str, f64); 2]) {
+    for (scene, bound) in bounds {
+        let (rms, worst) = self_difference(scene, size);
+        println!("{scene}: {size} against {}: rms {rms:.2e} of the mean, worst {worst:.2e} of the peak", 2 * size);
         assert!(rms < bound && worst.is_finite(), "{scene}: {rms}");
     }
 }
