@@ -11,11 +11,7 @@ use skinkit_testkit::header_only_png;
 
 #[path = "support/mod.rs"]
 mod support;
-use support::{s, skinkit, stderr};
-
-fn mold(region: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region).canonicalize().unwrap()
-}
+use support::{mold, s, skinkit, stderr};
 
 /// Usage error: exit 2, and clap's message names the flag and the value.
 fn assert_usage_error(args: &[&str], flag: &str, value: &str) {

@@ -10,7 +10,8 @@
 //! Vulkan on the CPU): the ratios say what each effect costs relative to the base pass there, not
 //! real-time rates on hardware.
 //!
-//! Writes `target/<scene>[-unshadowed].{md,json}` (table, rows) and one PNG per method, and `target/skin-methods.md` with every table. Settings:
+//! Writes `target/<scene>[-unshadowed].{md,json}` (table, rows) and one PNG per method, and
+//! `target/skin-methods.md` with every table. Settings:
 //! - `SKIN_METHODS_SCENES=skin-sphere,skin-nose`: these scenes only;
 //! - `SKIN_METHODS_UNSHADOWED=1` (or `0`): only without (with) the scene's shadows;
 //! - `SKIN_METHODS_REFERENCE=N`: the reference's light map (2048; its half is a row too);
