@@ -91,6 +91,8 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "j" => config.jitter = f as usize,
             "w" => config.exemplar_wrap = f > 0.0,
             "m" => config.parent = f as usize,
+            "cl" => config.coarsest_clamped = f > 0.0,
+            "po" => config.polish = f as usize,
             "fb" => {
                 if let Search::KCoherence { fallback, .. } = &mut config.search {
                     *fallback = (f > 0.0).then_some(f as f32);

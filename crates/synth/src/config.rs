@@ -107,6 +107,11 @@ pub struct SynthConfig {
     /// search's (`Some(r)`, `r > 0`; see [`Search::KCoherence`]): fewer tree queries on the level
     /// that has the most texels.
     pub finest_fallback: Option<f32>,
+    /// Every texel of the coarsest exemplar level is a candidate, its window read with clamped
+    /// borders (otherwise only texels whose whole window lies inside).
+    pub coarsest_clamped: bool,
+    /// Seam-polishing passes at the finest level, after the correction passes (see `polish`).
+    pub polish: usize,
     /// Seed of the initial state (random exemplar positions, see [`crate::synthesis::random_copies`]).
     pub seed: u64,
     /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
@@ -135,6 +140,8 @@ impl Default for SynthConfig {
             coherence_bias: DEFAULT_COHERENCE_BIAS,
             finest_coherence_bias: Some(0.0),
             finest_fallback: Some(DEFAULT_FINEST_FALLBACK),
+            coarsest_clamped: false,
+            polish: 0,
             seed: 0,
             memory_limit: 8 << 30,
         }

@@ -19,6 +19,8 @@ pub(crate) struct CorrectionLevel<'a> {
     pub(crate) coarser: Option<&'a Grid<Vec3>>,
     /// The copy cap of this level in texels (the finest level only; see [`cap_breaks`]).
     pub(crate) copy_cap: Option<usize>,
+    /// Seam-polishing passes after the correction passes ([`crate::polish`]).
+    pub(crate) polish: usize,
     /// The coherence bias of this level ([`SynthConfig::coherence_bias`]).
     pub(crate) coherence_bias: f32,
     /// The full `N x N` (+ coarser `M x M`) shape.
@@ -80,6 +82,9 @@ impl CorrectionLevel<'_> {
             self.pass(out, coords, breaks.as_deref(), false, &|sub| {
                 report(causal + h * pass + (sub + 1) * h / (s * s))
             });
+        }
+        if self.polish > 0 {
+            crate::polish::polish(full, self.config.neighbourhood, self.copy_cap, out, coords, self.polish);
         }
         let Some(cap) = self.copy_cap.filter(|_| self.config.corrections > 0) else { return };
         for _ in 0..CAP_ROUNDS {

@@ -31,6 +31,7 @@ pub mod error;
 pub mod exemplar;
 pub mod metrics;
 pub mod neighbourhood;
+mod polish;
 pub mod search;
 pub mod synthesis;
 

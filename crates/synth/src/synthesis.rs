@@ -320,11 +320,12 @@ fn synthesize_level(
     };
     let coarser = coarser_level.map(|(t, _)| t);
     let nb = shape(config, false, coarser.is_some());
+    let side = candidate_side(config, coarser.is_some());
     let ex = ExemplarLevel::new(
         pyramid[level].clone(),
         pyramid.get(level + 1).filter(|_| coarser.is_some()),
         &nb,
-        config.neighbourhood,
+        side,
         config.exemplar_wrap,
     );
     let search = build_search(pyramid, level, coarser.is_some(), &ex, config);
@@ -347,13 +348,20 @@ fn synthesize_level(
         });
         let coherence_bias =
             if level == 0 { config.finest_coherence_bias } else { None }.unwrap_or(config.coherence_bias);
-        let level = CorrectionLevel { coarser, copy_cap, coherence_bias, nb: &full_nb, search: &search, config };
+        let polish = if level == 0 { config.polish } else { 0 };
+        let level = CorrectionLevel { coarser, copy_cap, polish, coherence_bias, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
 }
 
 const JITTER_MIN_LEVEL: usize = 2;
+
+/// The window side that decides a level's candidates: 1 (every texel, windows read with clamped
+/// borders) at the coarsest level when [`SynthConfig::coarsest_clamped`], else the neighbourhood.
+fn candidate_side(config: &SynthConfig, has_parent: bool) -> usize {
+    if config.coarsest_clamped && !has_parent { 1 } else { config.neighbourhood }
+}
 
 /// A level's start from its coarser level's coordinates (Lefebvre and Hoppe 2005): texel `(x, y)`
 /// copies exemplar position `2 p + (x mod 2, y mod 2)`, `p` the coarser texel's source, kept
@@ -663,7 +671,7 @@ fn build_search(
         pyramid[level].clone(),
         pyramid.get(level + 1).filter(|_| has_parent),
         &shape(config, true, has_parent),
-        config.neighbourhood,
+        candidate_side(config, has_parent),
         config.exemplar_wrap,
     ));
     let full_tree =
