@@ -193,7 +193,8 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     let options = &r["options"];
     assert_eq!(options["start"], "upsampled");
     assert_eq!(options["levels_requested"], 5);
-    assert_eq!(options["corrections"], 2);
+    assert_eq!((options["corrections"].as_u64(), options["coarse_corrections"].as_u64()), (Some(1), Some(2)));
+    assert_eq!(options["polish"], 1);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");
     assert!((options["copy_cap"].as_f64().unwrap() - 0.09).abs() < 1e-6, "{options}");
@@ -205,10 +206,12 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     let old: serde_json::Value =
         serde_json::from_slice(&synth(&exemplar, &out, &["--upsampled", "--json"]).stdout).unwrap();
     assert_eq!(old["options"], r["options"]);
-    let o = synth(&exemplar, &out, &["--levels", "3", "--corrections", "2", "--occurrence-penalty", "2", "--json"]);
+    let flags = ["--levels", "3", "--corrections", "2", "--polish", "0", "--occurrence-penalty", "2", "--json"];
+    let o = synth(&exemplar, &out, &flags);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["options"]["levels"], 3);
     assert_eq!(r["options"]["corrections"], 2);
+    assert_eq!(r["options"]["polish"], 0);
     assert_eq!(r["options"]["occurrence_penalty"], 2.0);
     // The Wei-Levoy scanline start, as before.
     let o = synth(&exemplar, &out, &["--scanline", "--json"]);
@@ -218,5 +221,6 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["occurrence_penalty"], 4.0);
     assert!(r["options"]["copy_cap"].is_null());
     assert_eq!(r["options"]["parent"], 3);
+    assert_eq!(r["options"]["polish"], 0);
     assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }

@@ -67,7 +67,7 @@ fn target_dir() -> PathBuf {
 /// n: neighbourhood side; m: coarser window side; c / cc: finest and coarser correction passes; l / fl / cp: occurrence
 /// penalty, at the finest level, in the corrections; L: levels; up: upsampled start (1) or
 /// scanline (0); j: jitter; w: exemplar wrap; cap: copy cap, share of the exemplar's area; fb /
-/// ffb: k-coherence tree fallback ratio, at the finest level, 0 = none; kb / fkb: coherence bias,
+/// ffb: k-coherence tree fallback ratio, at the finest level, 0 = none; rr: its rerank count; po: seam-polishing passes; kb / fkb: coherence bias,
 /// at the finest level).
 fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConfig {
     let mut config = SynthConfig { seed, ..SynthConfig::new(width, height) };
@@ -91,11 +91,15 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "j" => config.jitter = f as usize,
             "w" => config.exemplar_wrap = f > 0.0,
             "m" => config.parent = f as usize,
-            "cl" => config.coarsest_clamped = f > 0.0,
             "po" => config.polish = f as usize,
             "fb" => {
                 if let Search::KCoherence { fallback, .. } = &mut config.search {
                     *fallback = (f > 0.0).then_some(f as f32);
+                }
+            }
+            "rr" => {
+                if let Search::KCoherence { rerank, .. } = &mut config.search {
+                    *rerank = f as usize;
                 }
             }
             "ffb" => config.finest_fallback = (f > 0.0).then_some(f as f32),
@@ -123,6 +127,11 @@ fn score(output: &Texels, coords: &Grid<[u32; 2]>, ex: &Exemplar, own: f64) -> S
     let energy = window_energy(output.grid(), ex.texels.grid(), WINDOW, STRIDE) / own.max(1e-12);
     if env("SYNTH_SUITE_WINDOWS").is_some() {
         window_shares(output, ex, own);
+    }
+    if let (Some(_), Texels::Normal(o), Texels::Normal(e)) = (env("SYNTH_SUITE_SPECTRA"), output, &ex.texels) {
+        let (so, se) = (metrics::normal_spectrum(o, BINS), metrics::normal_spectrum(e, BINS));
+        let ratio: Vec<String> = so.iter().zip(&se).map(|(a, b)| format!("{:+.2}", (a / b).log10())).collect();
+        eprintln!("    spectrum log10(out / exemplar) per ring: {}", ratio.join(" "));
     }
     let copy = metrics::copy_statistics(coords, (ew, eh), false).largest_block as f64 / (ew * eh) as f64;
     let (distribution, spectrum, variation) = match (output, &ex.texels) {

@@ -8,6 +8,8 @@
 //! * [`search`]: PCA (nalgebra, f64) + kiddo kd-tree approximate search; k-coherence sets.
 //! * [`energy`]: the neighbourhood-matching energy the bench compares search modes with.
 //! * [`synthesis`]: [`synthesize`], [`synthesize_normals`], [`replay`].
+//! * `correction` and `polish` (private): the correction passes with the copy cap, and seam
+//!   polishing of the finest level by every window a texel lies in.
 //! * [`metrics`]: quality measures.
 //!
 //! Texels are `Vec3` throughout: colour as linear RGB, normals as unnormalised vectors (pyramid
@@ -18,7 +20,7 @@
 //! # Defaults and where they were measured
 //!
 //! [`SynthConfig::default`] is the upsampled start (Lefebvre and Hoppe 2005) with k-coherence
-//! correction passes, a copy cap and a collapse guard; [`SynthConfig::scanline`] the Wei-Levoy
+//! correction passes, seam polishing, a copy cap and a collapse guard; [`SynthConfig::scanline`] the Wei-Levoy
 //! causal start. Both are scored against the `texture-synthesis` peer on a fixed set of
 //! exemplars by `benches/suite.rs` (its table is in the README); `benches/table.rs` gives
 //! accuracy against time per search mode, and `docs/synthesis-notes.md` keeps what was measured

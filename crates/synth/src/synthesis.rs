@@ -56,6 +56,11 @@
 //! A cut texel may not continue a neighbour's block either, and the cut repeats on the cut texels
 //! while any block still exceeds the cap (see `correction`).
 //!
+//! Seam polishing ([`SynthConfig::polish`], the finest level, after its correction passes and
+//! before the cap's repeated cuts): each texel near a seam takes, among the sources that continue
+//! its neighbours' blocks, the one that minimises the distances of all the windows it lies in,
+//! without joining blocks beyond the cap (see `polish`).
+//!
 //! Patch size and seams (the default's choices, measured by `benches/suite.rs`): the suite's
 //! energy counts every output window that is not verbatim in the exemplar, so it is mostly seams,
 //! and the peer wins it with large copies. At the coarser levels a coherence bias
@@ -320,12 +325,11 @@ fn synthesize_level(
     };
     let coarser = coarser_level.map(|(t, _)| t);
     let nb = shape(config, false, coarser.is_some());
-    let side = candidate_side(config, coarser.is_some());
     let ex = ExemplarLevel::new(
         pyramid[level].clone(),
         pyramid.get(level + 1).filter(|_| coarser.is_some()),
         &nb,
-        side,
+        config.neighbourhood,
         config.exemplar_wrap,
     );
     let search = build_search(pyramid, level, coarser.is_some(), &ex, config);
@@ -349,19 +353,14 @@ fn synthesize_level(
         let coherence_bias =
             if level == 0 { config.finest_coherence_bias } else { None }.unwrap_or(config.coherence_bias);
         let polish = if level == 0 { config.polish } else { 0 };
-        let level = CorrectionLevel { coarser, copy_cap, polish, coherence_bias, nb: &full_nb, search: &search, config };
+        let level =
+            CorrectionLevel { coarser, copy_cap, polish, coherence_bias, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
 }
 
 const JITTER_MIN_LEVEL: usize = 2;
-
-/// The window side that decides a level's candidates: 1 (every texel, windows read with clamped
-/// borders) at the coarsest level when [`SynthConfig::coarsest_clamped`], else the neighbourhood.
-fn candidate_side(config: &SynthConfig, has_parent: bool) -> usize {
-    if config.coarsest_clamped && !has_parent { 1 } else { config.neighbourhood }
-}
 
 /// A level's start from its coarser level's coordinates (Lefebvre and Hoppe 2005): texel `(x, y)`
 /// copies exemplar position `2 p + (x mod 2, y mod 2)`, `p` the coarser texel's source, kept
@@ -671,7 +670,7 @@ fn build_search(
         pyramid[level].clone(),
         pyramid.get(level + 1).filter(|_| has_parent),
         &shape(config, true, has_parent),
-        candidate_side(config, has_parent),
+        config.neighbourhood,
         config.exemplar_wrap,
     ));
     let full_tree =

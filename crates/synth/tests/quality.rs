@@ -179,17 +179,18 @@ fn assert_not_tiled(name: &str, coords: &Grid<[u32; 2]>) {
 }
 
 /// Largest block at most an eighth of the exemplar (2048 texels; the default's copy cap keeps it
-/// near 6 %, 983), mean block at most 16 texels (the default copies coherent patches, which is
-/// what keeps its energy low: measured 8.5 to 14.4; the scanline start 2.2 to 4.9), at least a quarter of the exemplar's texels used
-/// as sources (4096; measured 6287 to 10543 of the 124 x 124 = 15376 candidates) and an eighth as
-/// many distinct offsets (2048; the default's patches give 3467 to 3910, the scanline start's 9963
-/// to 21829; a tiled copy has one).
+/// under 9 %, 1474), mean block at most 32 texels (the default copies coherent patches, which is
+/// what keeps its energy low, and seam polishing merges their small fragments: measured 9.7 to
+/// 20.7; the scanline start 2.2 to 4.9), at least a quarter of the exemplar's texels used as
+/// sources (4096; measured 7745 to 12614 of the 124 x 124 = 15376 candidates) and a sixteenth as
+/// many distinct offsets (1024; the default gives 2079 to 4965, the scanline start 9963 to 21829;
+/// a tiled copy has one).
 fn assert_copy_bounds(name: &str, stats: &CopyStats, sources: usize) {
     let area = HALF * HALF;
     assert!(stats.largest_block <= area / 8, "{name}: largest copied block {} > {}", stats.largest_block, area / 8);
-    assert!(stats.mean_block <= 16.0, "{name}: mean copied block {:.2} > 16", stats.mean_block);
+    assert!(stats.mean_block <= 32.0, "{name}: mean copied block {:.2} > 32", stats.mean_block);
     assert!(sources >= area / 4, "{name}: only {sources} distinct exemplar texels used");
-    assert!(stats.distinct_offsets >= area / 8, "{name}: only {} distinct offsets", stats.distinct_offsets);
+    assert!(stats.distinct_offsets >= area / 16, "{name}: only {} distinct offsets", stats.distinct_offsets);
 }
 
 /// Mean squared difference across each row boundary `y | y + 1` (`rows[y]`, the last one wrapping

@@ -56,9 +56,14 @@ pub struct Args {
     #[arg(long, value_name = "M", value_parser = flags::odd_in(1, 99))]
     pub parent: Option<usize>,
     /// Correction passes at the finest level: every texel chosen again by its full window
-    /// (default 2, 1 with `--scanline`; the coarser levels get 1).
+    /// (default 1, as with `--scanline`; the coarser levels get 2, 1 with `--scanline`).
     #[arg(long, value_name = "P", value_parser = flags::usize_in(0, skinkit_synth::config::MAX_CORRECTIONS))]
     pub corrections: Option<usize>,
+    /// Seam-polishing passes at the finest level, after its correction passes: every texel near a
+    /// seam chosen again among its neighbours' blocks by all the windows it lies in (default 1, 0
+    /// with `--scanline`).
+    #[arg(long, value_name = "P", value_parser = flags::usize_in(0, skinkit_synth::config::MAX_CORRECTIONS))]
+    pub polish: Option<usize>,
     /// Start every level with Wei and Levoy's causal scanline pass (sequential, 3 levels, k = 4,
     /// occurrence penalty 4, no copy cap) instead of the default's upsampled coordinates (Lefebvre
     /// and Hoppe 2005). Slower, and higher in energy on every exemplar of the README's suite.
@@ -270,6 +275,10 @@ pub struct OptionsReport {
     pub neighborhood: usize,
     pub parent: usize,
     pub corrections: usize,
+    /// Correction passes at the coarser levels.
+    pub coarse_corrections: usize,
+    /// Seam-polishing passes at the finest level.
+    pub polish: usize,
     /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
     pub search: String,
     /// k-coherence: the tree fallback's ratio at the coarser levels and at the finest (`null`: no
@@ -350,6 +359,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         neighbourhood: args.neighborhood,
         parent: args.parent.unwrap_or(base.parent),
         corrections: args.corrections.unwrap_or(base.corrections),
+        polish: args.polish.unwrap_or(base.polish),
         occurrence_penalty: args.occurrence_penalty.unwrap_or(base.occurrence_penalty),
         search: if args.exact {
             Search::Exact
@@ -483,6 +493,8 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         neighborhood: run.neighbourhood,
         parent: run.parent,
         corrections: run.corrections,
+        coarse_corrections: run.coarse_corrections.unwrap_or(run.corrections),
+        polish: run.polish,
         search,
         fallback,
         finest_fallback: run.finest_fallback.or(fallback),
