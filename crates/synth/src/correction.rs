@@ -107,36 +107,16 @@ impl CorrectionLevel<'_> {
         report: &dyn Fn(usize),
     ) {
         let full = self.search.full.as_ref().expect("built for corrections");
-        let (w, h) = out.size();
+        let w = out.width();
         let s = CORRECTION_STRIDE;
         let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
         for sub in 0..s * s {
-            let (ox, oy) = (sub % s, sub / s);
-            let rows: Vec<usize> = (oy..h).step_by(s).collect();
-            let (read_out, read_coords) = (&*out, &*coords);
-            let occurrence = Occurrence::of(full, read_coords, lambda);
-            let chosen: Vec<Vec<Option<usize>>> = rows
-                .par_iter()
-                .map_init(Scratch::default, |scratch, &y| {
-                    (ox..w)
-                        .step_by(s)
-                        .map(|x| {
-                            let forbid = breaks.is_some_and(|b| b[y * w + x]);
-                            (forbid || !only_cut).then(|| {
-                                self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch)
-                            })
-                        })
-                        .collect()
-                })
-                .collect();
-            for (&y, row) in rows.iter().zip(&chosen) {
-                for (x, best) in (ox..w).step_by(s).zip(row) {
-                    if let Some(best) = *best {
-                        *out.get_mut(x, y) = full.texel(best);
-                        *coords.get_mut(x, y) = full.position(best);
-                    }
-                }
-            }
+            let occurrence = Occurrence::of(full, coords, lambda);
+            sub_pass(full, out, coords, sub, |x, y, read_out, read_coords, scratch: &mut Scratch| {
+                let forbid = breaks.is_some_and(|b| b[y * w + x]);
+                (forbid || !only_cut)
+                    .then(|| self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch))
+            });
             report(sub);
         }
     }
@@ -224,6 +204,38 @@ impl CorrectionLevel<'_> {
                 tree_refine(index, &TreeQuery { query, active: None }, coherent, &score, candidates)
             }
             _ => scorer.nearest_exact(),
+        }
+    }
+}
+
+/// One interleaved sub-pass (`sub` in row-major order of the residues `(x mod s, y mod s)`,
+/// `s` = [`CORRECTION_STRIDE`]): `choose` picks a new candidate (or none) for each of its texels
+/// in parallel from the state the previous sub-passes left, then all are written, so the result
+/// does not depend on the thread count. Shared by the correction passes and seam polishing.
+pub(crate) fn sub_pass<S: Default + Send>(
+    full: &ExemplarLevel,
+    out: &mut Grid<Vec3>,
+    coords: &mut Grid<[u32; 2]>,
+    sub: usize,
+    choose: impl Fn(usize, usize, &Grid<Vec3>, &Grid<[u32; 2]>, &mut S) -> Option<usize> + Sync,
+) {
+    let (w, h) = out.size();
+    let s = CORRECTION_STRIDE;
+    let (ox, oy) = (sub % s, sub / s);
+    let rows: Vec<usize> = (oy..h).step_by(s).collect();
+    let (read_out, read_coords) = (&*out, &*coords);
+    let chosen: Vec<Vec<Option<usize>>> = rows
+        .par_iter()
+        .map_init(S::default, |scratch, &y| {
+            (ox..w).step_by(s).map(|x| choose(x, y, read_out, read_coords, scratch)).collect()
+        })
+        .collect();
+    for (&y, row) in rows.iter().zip(&chosen) {
+        for (x, best) in (ox..w).step_by(s).zip(row) {
+            if let Some(best) = *best {
+                *out.get_mut(x, y) = full.texel(best);
+                *coords.get_mut(x, y) = full.position(best);
+            }
         }
     }
 }

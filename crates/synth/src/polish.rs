@@ -11,10 +11,10 @@
 //! `sum_{o != 0} |X(s) - X(coords(t + o) - o)|^2 + |out(t + o) - X(s + o)|^2`.
 
 use glam::Vec3;
-use rayon::prelude::*;
 use skinkit_maps::Grid;
 
 use crate::config::CORRECTION_STRIDE;
+use crate::correction::sub_pass;
 use crate::exemplar::{ExemplarLevel, better};
 use crate::metrics::{self, CopyBlocks};
 
@@ -30,35 +30,16 @@ pub(crate) fn polish(
     coords: &mut Grid<[u32; 2]>,
     passes: usize,
 ) {
-    let (w, h) = out.size();
-    let s = CORRECTION_STRIDE;
     let r = (n / 2) as isize;
     let offsets: Vec<[isize; 2]> =
         (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| [dx, dy])).filter(|&o| o != [0, 0]).collect();
     for _ in 0..passes {
         let blocks = cap.map(|cap| (cap, metrics::copy_blocks(coords, full.texels().size(), full.wraps())));
         let blocks = blocks.as_ref();
-        for sub in 0..s * s {
-            let (ox, oy) = (sub % s, sub / s);
-            let rows: Vec<usize> = (oy..h).step_by(s).collect();
-            let (read_out, read_coords) = (&*out, &*coords);
-            let chosen: Vec<Vec<Option<usize>>> = rows
-                .par_iter()
-                .map_init(Scratch::default, |scratch, &y| {
-                    (ox..w)
-                        .step_by(s)
-                        .map(|x| choose(full, &offsets, blocks, x as isize, y as isize, read_out, read_coords, scratch))
-                        .collect()
-                })
-                .collect();
-            for (&y, row) in rows.iter().zip(&chosen) {
-                for (x, best) in (ox..w).step_by(s).zip(row) {
-                    if let Some(best) = *best {
-                        *out.get_mut(x, y) = full.texel(best);
-                        *coords.get_mut(x, y) = full.position(best);
-                    }
-                }
-            }
+        for sub in 0..CORRECTION_STRIDE * CORRECTION_STRIDE {
+            sub_pass(full, out, coords, sub, |x, y, read_out, read_coords, scratch| {
+                choose(full, &offsets, blocks, x as isize, y as isize, read_out, read_coords, scratch)
+            });
         }
     }
 }
