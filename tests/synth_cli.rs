@@ -193,7 +193,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     let options = &r["options"];
     assert_eq!(options["start"], "upsampled");
     assert_eq!(options["levels_requested"], 5);
-    assert_eq!((options["corrections"].as_u64(), options["coarse_corrections"].as_u64()), (Some(1), Some(2)));
+    assert_eq!((options["corrections"].as_u64(), options["coarse_corrections"].as_u64()), (Some(1), Some(3)));
     assert_eq!(options["polish"], 1);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");

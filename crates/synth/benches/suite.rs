@@ -25,7 +25,9 @@
 //! are skipped, and the report has 9 exemplars). Knobs for experiments: `SYNTH_SUITE_CONFIG` (keys as `k=2,j=1,...`, see [`parse_config`]),
 //! `SYNTH_SUITE_ONLY` (a substring of exemplar names), `SYNTH_SUITE_SEEDS` (how many),
 //! `SYNTH_SUITE_SPEED=0` (skip the speed part), `SYNTH_SUITE_WINDOWS=1` (where each output's
-//! energy sits, see [`window_shares`]; the peer's only when it runs, not from the cache). Peer scores are cached in
+//! energy sits, see [`window_shares`]; the peer's only when it runs, not from the cache),
+//! `SYNTH_SUITE_SPECTRA=1` (per-ring spectrum ratios of normal maps), `SYNTH_SUITE_USAGE=1`
+//! (whether the sources copied carry the exemplar's fine detail, see [`detail_usage`]). Peer scores are cached in
 //! `target/synth-suite-peer.tsv` (keyed by exemplar, seed and size; delete it to rerun the peer).
 //! Run with `cargo bench -p skinkit-synth --bench suite` (a plain `main`, `harness = false`).
 
@@ -39,6 +41,7 @@ mod report;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use glam::Vec3;
 use skinkit_maps::Grid;
 use skinkit_synth::energy::{self_energy, window_energy};
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS as BINS};
@@ -135,6 +138,9 @@ fn score(output: &Texels, coords: &Grid<[u32; 2]>, ex: &Exemplar, own: f64) -> S
         let ratio: Vec<String> = so.iter().zip(&se).map(|(a, b)| format!("{:+.2}", (a / b).log10())).collect();
         eprintln!("    spectrum log10(out / exemplar) per ring: {}", ratio.join(" "));
     }
+    if env("SYNTH_SUITE_USAGE").is_some() {
+        detail_usage(output.grid(), coords, ex.texels.grid());
+    }
     let copy = metrics::copy_statistics(coords, (ew, eh), false).largest_block as f64 / (ew * eh) as f64;
     let (distribution, spectrum, variation) = match (output, &ex.texels) {
         (Texels::Normal(o), Texels::Normal(e)) => (
@@ -150,6 +156,33 @@ fn score(output: &Texels, coords: &Grid<[u32; 2]>, ex: &Exemplar, own: f64) -> S
         _ => unreachable!("outputs are of their exemplar's kind"),
     };
     Scores { energy, copy, distribution, spectrum, variation }
+}
+
+/// Squared difference of texel `(x, y)` from the mean of its 4 neighbours (a high-pass).
+fn detail(g: &Grid<Vec3>, x: isize, y: isize, wrap: bool) -> f64 {
+    let at = |x, y| if wrap { *g.get_wrapped(x, y) } else { *g.get_clamped(x, y) };
+    let around = at(x - 1, y) + at(x + 1, y) + at(x, y - 1) + at(x, y + 1);
+    (at(x, y) - 0.25 * around).length_squared() as f64
+}
+
+/// Whether the output draws on the exemplar's detailed texels in their share
+/// (`SYNTH_SUITE_USAGE=1`): the mean [`detail`] of the exemplar (inside a 2-texel margin), of the
+/// sources the output copies, and of the output itself. Nearest-neighbour search favours smooth
+/// windows, so an output that loses fine detail shows it here first.
+fn detail_usage(output: &Grid<Vec3>, coords: &Grid<[u32; 2]>, exemplar: &Grid<Vec3>) {
+    let (ew, eh) = exemplar.size();
+    let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let inner = (2..eh.saturating_sub(2)).flat_map(|y| (2..ew.saturating_sub(2)).map(move |x| (x, y)));
+    let all = mean(inner.map(|(x, y)| detail(exemplar, x as isize, y as isize, false)).collect());
+    let used = mean(coords.as_slice().iter().map(|&[x, y]| detail(exemplar, x as isize, y as isize, false)).collect());
+    let (w, h) = output.size();
+    let cells = (0..h).flat_map(|y| (0..w).map(move |x| (x, y)));
+    let out = mean(cells.map(|(x, y)| detail(output, x as isize, y as isize, true)).collect());
+    eprintln!(
+        "    detail: exemplar {all:.3e}, at the sources used {used:.3e} ({:.2}), output {out:.3e} ({:.2})",
+        used / all,
+        out / all
+    );
 }
 
 /// Where the energy sits (`SYNTH_SUITE_WINDOWS=1`): the share of output windows found verbatim in

@@ -56,7 +56,7 @@ pub struct Args {
     #[arg(long, value_name = "M", value_parser = flags::odd_in(1, 99))]
     pub parent: Option<usize>,
     /// Correction passes at the finest level: every texel chosen again by its full window
-    /// (default 1, as with `--scanline`; the coarser levels get 2, 1 with `--scanline`).
+    /// (default 1, as with `--scanline`; the coarser levels get 3, 1 with `--scanline`).
     #[arg(long, value_name = "P", value_parser = flags::usize_in(0, skinkit_synth::config::MAX_CORRECTIONS))]
     pub corrections: Option<usize>,
     /// Seam-polishing passes at the finest level, after its correction passes: every texel near a
