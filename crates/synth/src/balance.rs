@@ -84,7 +84,7 @@ mod tests {
     use crate::neighbourhood::Neighbourhood;
 
     fn level(side: usize, texel: impl Fn(usize, usize) -> Vec3 + Sync) -> ExemplarLevel {
-        let texels = Grid::from_fn(side, side, |x, y| texel(x, y));
+        let texels = Grid::from_fn(side, side, texel);
         let nb = Neighbourhood::full(3, 1, false);
         ExemplarLevel::new(texels, None, &nb, 3, true)
     }

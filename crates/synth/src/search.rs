@@ -188,6 +188,72 @@ impl ApproximateIndex {
     }
 }
 
+/// Rounds of [`propagate`] after the kd-tree's sets.
+const PROPAGATION_ROUNDS: usize = 4;
+
+/// PCA dimensions of the kd-tree the k-coherence sets start from. With [`PROPAGATION_ROUNDS`]
+/// rounds of propagation, 4 dimensions find neighbours as near as 8 dimensions without
+/// propagation did (median squared distance to the nearest other candidate of a 128x128 skin
+/// exemplar: 0.0697 against 0.0700) in a quarter of the time (0.04 against 0.12 s on 2 cores;
+/// 8 dimensions and 2 rounds reach 0.0625 in 0.085 s).
+pub const SET_DIMS: usize = 4;
+
+/// Writes candidate `i`'s set from `scored` (other candidates with their squared full distances):
+/// `i` first, then the nearest, ties to the lower index, duplicates once; when fewer than `k - 1`
+/// remain (tiny levels), `i` repeats.
+fn fill_set(i: usize, mut scored: Vec<(f32, usize)>, set: &mut [u32]) {
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    scored.dedup_by_key(|c| c.1);
+    set[0] = i as u32;
+    for (s, slot) in set[1..].iter_mut().enumerate() {
+        *slot = scored.get(s).map_or(i, |c| c.1) as u32;
+    }
+}
+
+/// The sets from the kd-tree alone: each candidate's `max(2 k, SET_POOL)` nearest in the projected
+/// space, re-scored in the full space.
+fn tree_sets(full: &ExemplarLevel, k: usize, index: &ApproximateIndex) -> Vec<u32> {
+    let pool = NonZero::new((2 * k).max(SET_POOL)).expect("at least SET_POOL");
+    let mut sets = vec![0u32; full.len() * k];
+    sets.par_chunks_mut(k).enumerate().for_each_init(Vec::new, |found, (i, set)| {
+        found.clear();
+        index.nearest(full.feature(i), f32::INFINITY, pool, found);
+        let scored = found.iter().filter(|&&j| j != i).map(|&j| (full.distance2(j, full.feature(i)), j)).collect();
+        fill_set(i, scored, set);
+    });
+    sets
+}
+
+/// One round of coherent propagation (as in PatchMatch, Barnes et al. 2009, run as a Jacobi
+/// sweep so every candidate reads the previous round and the result does not depend on the thread
+/// count): candidate `i` also considers, for each 4-neighbour `n` (candidate `i` shifted by
+/// `(dx, dy)`), the members of `n`'s set shifted back by `(dx, dy)`. Windows that are alike
+/// usually stay alike one texel over, so this finds near neighbours the projected kd-tree missed.
+fn propagate(full: &ExemplarLevel, k: usize, prev: &[u32]) -> Vec<u32> {
+    let mut sets = vec![0u32; prev.len()];
+    sets.par_chunks_mut(k).enumerate().for_each(|(i, set)| {
+        let query = full.feature(i);
+        let mut scored: Vec<(f32, usize)> = Vec::with_capacity(5 * k);
+        let own = prev[i * k + 1..(i + 1) * k].iter().map(|&j| j as usize);
+        scored.extend(own.filter(|&j| j != i).map(|j| (full.distance2(j, query), j)));
+        let [x, y] = full.position(i);
+        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let Some(n) = full.index_of(x as isize + dx, y as isize + dy) else { continue };
+            for &m in &prev[n * k + 1..(n + 1) * k] {
+                let [mx, my] = full.position(m as usize);
+                match full.index_of(mx as isize - dx, my as isize - dy) {
+                    Some(c) if c != i && !scored.iter().any(|s| s.1 == c) => {
+                        scored.push((full.distance2(c, query), c));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        fill_set(i, scored, set);
+    });
+    sets
+}
+
 /// k-coherence sets (Tong et al. 2002) of one exemplar level: for every candidate, itself and the
 /// `k - 1` other candidates whose full neighbourhoods are nearest.
 pub struct KCoherenceSets {
@@ -203,8 +269,8 @@ impl KCoherenceSets {
     ///
     /// The similar candidates come from a PCA-`dims` kd-tree over `full` whose `max(2 k, SET_POOL)`
     /// nearest are re-scored in the full space (exact when the level has no more candidates than
-    /// that); ties go to the lower index. Every candidate is independent, so the result does not
-    /// depend on the thread count.
+    /// that), then [`PROPAGATION_ROUNDS`] rounds of [`propagate`]; ties go to the lower index.
+    /// Each round reads only the previous one, so the result does not depend on the thread count.
     pub fn new(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, dims: usize) -> Self {
         Self::from_index(full, causal, k, &ApproximateIndex::new(full, dims, 1))
     }
@@ -214,20 +280,10 @@ impl KCoherenceSets {
     pub fn from_index(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, index: &ApproximateIndex) -> Self {
         debug_assert_eq!(full.len(), causal.len());
         let k = k.max(1);
-        let pool = NonZero::new((2 * k).max(SET_POOL)).expect("at least SET_POOL");
-        let mut sets = vec![0u32; full.len() * k];
-        sets.par_chunks_mut(k).enumerate().for_each_init(Vec::new, |found, (i, set)| {
-            found.clear();
-            index.nearest(full.feature(i), f32::INFINITY, pool, found);
-            let mut scored: Vec<(f32, usize)> =
-                found.iter().filter(|&&j| j != i).map(|&j| (full.distance2(j, full.feature(i)), j)).collect();
-            scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            set[0] = i as u32;
-            for (s, slot) in set[1..].iter_mut().enumerate() {
-                // Fewer neighbours than k (tiny levels): repeat the candidate itself.
-                *slot = scored.get(s).map_or(i, |c| c.1) as u32;
-            }
-        });
+        let mut sets = tree_sets(full, k, index);
+        for _ in 0..PROPAGATION_ROUNDS {
+            sets = propagate(full, k, &sets);
+        }
         let median = |level: &ExemplarLevel| {
             let mut nearest: Vec<f32> = (0..level.len())
                 .filter(|&i| k > 1 && sets[i * k + 1] as usize != i)
@@ -277,5 +333,65 @@ mod tests {
         // The mean sits at t = -0.5, so the query lies 1.5 along the axis from it.
         assert!((p[0] - 1.5).abs() < 1e-3, "{p:?}");
         assert!(pca.variances[0] > 3000.0);
+    }
+
+    /// A 40x40 level of a texture with structure at several scales (so windows have near but not
+    /// equal neighbours), full 5x5 features.
+    fn level() -> ExemplarLevel {
+        use glam::Vec3;
+        let texel = |x: usize, y: usize| {
+            let (fx, fy) = (x as f32, y as f32);
+            let hash = ((x * 73 + y * 151) % 97) as f32 / 97.0;
+            Vec3::new((0.7 * fx).sin() + 0.3 * hash, (0.4 * fy + 0.2 * fx).cos(), (0.15 * (fx + fy)).sin() * hash)
+        };
+        let texels = skinkit_maps::Grid::from_fn(40, 40, texel);
+        let nb = crate::neighbourhood::Neighbourhood::full(5, 1, false);
+        ExemplarLevel::new(texels, None, &nb, 5, false)
+    }
+
+    /// Squared full distance from candidate `i` to its set's second member.
+    fn nearest_of(full: &ExemplarLevel, sets: &[u32], k: usize, i: usize) -> f32 {
+        full.distance2(sets[i * k + 1] as usize, full.feature(i))
+    }
+
+    #[test]
+    fn propagation_never_loses_a_neighbour_and_finds_the_exact_ones_a_poor_tree_misses() {
+        let full = level();
+        let k = 2;
+        // A 1-D projection: the tree alone often misses the nearest window.
+        let tree = tree_sets(&full, k, &ApproximateIndex::new(&full, 1, 1));
+        let mut sets = tree.clone();
+        for _ in 0..PROPAGATION_ROUNDS {
+            let next = propagate(&full, k, &sets);
+            for i in 0..full.len() {
+                assert!(nearest_of(&full, &next, k, i) <= nearest_of(&full, &sets, k, i), "candidate {i}");
+                assert_eq!(next[i * k], i as u32);
+            }
+            sets = next;
+        }
+        // Against brute force over every other candidate.
+        let exact = |s: &[u32]| {
+            (0..full.len())
+                .filter(|&i| {
+                    let best = (0..full.len()).filter(|&j| j != i).map(|j| full.distance2(j, full.feature(i)));
+                    nearest_of(&full, s, k, i) <= best.fold(f32::INFINITY, f32::min)
+                })
+                .count()
+        };
+        let (before, after) = (exact(&tree), exact(&sets));
+        assert!(after >= 10 * before.max(1), "exact nearest: {before} from the tree, {after} after propagation");
+        let mean = |s: &[u32]| (0..full.len()).map(|i| nearest_of(&full, s, k, i)).sum::<f32>() / full.len() as f32;
+        let (before, after) = (mean(&tree), mean(&sets));
+        assert!(after < 0.6 * before, "mean squared distance to the nearest: {before} from the tree, {after} after");
+    }
+
+    #[test]
+    fn sets_do_not_depend_on_the_thread_count() {
+        let full = level();
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a pool");
+            pool.install(|| KCoherenceSets::new(&full, &full, 3, SET_DIMS).sets)
+        };
+        assert_eq!(build(1), build(2));
     }
 }

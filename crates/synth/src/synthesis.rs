@@ -97,7 +97,7 @@ use crate::correction::CorrectionLevel;
 use crate::exemplar::{ExemplarLevel, better};
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
-use crate::search::{ApproximateIndex, KCoherenceSets};
+use crate::search::{ApproximateIndex, KCoherenceSets, SET_DIMS};
 use crate::{Error, Result};
 
 /// The result of [`synthesize`].
@@ -552,7 +552,13 @@ impl Occurrence {
     }
 
     /// Adds the histogram balance of `coords` with strength `mu` ([`crate::balance`]).
-    pub(crate) fn balanced(mut self, bins: &crate::balance::Bins, full: &ExemplarLevel, coords: &Grid<[u32; 2]>, mu: f32) -> Self {
+    pub(crate) fn balanced(
+        mut self,
+        bins: &crate::balance::Bins,
+        full: &ExemplarLevel,
+        coords: &Grid<[u32; 2]>,
+        mu: f32,
+    ) -> Self {
         self.balance = bins.weights(full, coords, mu);
         self
     }
@@ -691,13 +697,12 @@ fn build_search(
             (Some(ApproximateIndex::new(ex, dims, rerank)), None, full_tree(dims, rerank))
         }
         Search::KCoherence { k, fallback, dims, rerank } => {
-            // One tree over the full features serves the sets and the correction passes' fallback.
+            // The sets start from a coarser projection of their own (see `search::SET_DIMS`).
             let full = full.as_ref().expect("built for k-coherence");
-            let tree = ApproximateIndex::new(full, dims, rerank);
-            let sets = KCoherenceSets::from_index(full, ex, k, &tree);
+            let sets = KCoherenceSets::new(full, ex, k, SET_DIMS.min(dims));
             let causal = fallback.filter(|_| config.start == Start::Scanline);
             let index = causal.map(|_| ApproximateIndex::new(ex, dims, rerank));
-            (index, Some(sets), fallback.filter(|_| corrections).map(|_| tree))
+            (index, Some(sets), fallback.filter(|_| corrections).map(|_| ApproximateIndex::new(full, dims, rerank)))
         }
     };
     LevelSearch { index, sets, full, full_index }
