@@ -95,8 +95,6 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "w" => config.exemplar_wrap = f > 0.0,
             "m" => config.parent = f as usize,
             "po" => config.polish = f as usize,
-            "hb" => config.balance = f as f32,
-            "fhb" => config.finest_balance = Some(f as f32),
             "fb" => {
                 if let Search::KCoherence { fallback, .. } = &mut config.search {
                     *fallback = (f > 0.0).then_some(f as f32);

@@ -87,12 +87,6 @@ pub struct SynthConfig {
     pub finest_penalty: Option<f32>,
     /// The occurrence penalty of the correction passes, if it differs from the causal pass's.
     pub correction_penalty: Option<f32>,
-    /// Histogram balance `mu` of the correction passes (Kopf et al. 2007's histogram matching; 0 =
-    /// off, see [`crate::balance`]): a candidate whose values the output holds more often than the
-    /// exemplar does has its squared distance multiplied by `1 + mu * excess`.
-    pub balance: f32,
-    /// [`SynthConfig::balance`] at the finest level, if it differs.
-    pub finest_balance: Option<f32>,
     /// Correction passes at the coarser levels, if they differ from [`SynthConfig::corrections`].
     pub coarse_corrections: Option<usize>,
     /// The copy cap, a share of the exemplar's area (`None`: off): the finest level's last
@@ -143,8 +137,6 @@ impl Default for SynthConfig {
             occurrence_penalty: 0.0,
             finest_penalty: None,
             correction_penalty: None,
-            balance: 0.0,
-            finest_balance: None,
             coarse_corrections: Some(DEFAULT_COARSE_CORRECTIONS),
             copy_cap: Some(DEFAULT_COPY_CAP),
             coherence_bias: DEFAULT_COHERENCE_BIAS,

@@ -8,7 +8,6 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use skinkit_maps::Grid;
 
-use crate::balance::Bins;
 use crate::config::{CORRECTION_STRIDE, Search, Start, SynthConfig};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::metrics;
@@ -111,12 +110,8 @@ impl CorrectionLevel<'_> {
         let w = out.width();
         let s = CORRECTION_STRIDE;
         let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
-        let bins = (self.config.balance > 0.0).then(|| Bins::new(full));
         for sub in 0..s * s {
-            let mut occurrence = Occurrence::of(full, coords, lambda);
-            if let Some(bins) = &bins {
-                occurrence = occurrence.balanced(bins, full, coords, self.config.balance);
-            }
+            let occurrence = Occurrence::of(full, coords, lambda);
             sub_pass(full, out, coords, sub, |x, y, read_out, read_coords, scratch: &mut Scratch| {
                 let forbid = breaks.is_some_and(|b| b[y * w + x]);
                 (forbid || !only_cut)

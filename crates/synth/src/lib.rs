@@ -26,7 +26,6 @@
 //! accuracy against time per search mode, and `docs/synthesis-notes.md` keeps what was measured
 //! on the way (the occurrence penalty, correction passes, seams, search modes).
 
-mod balance;
 pub mod config;
 mod correction;
 pub mod energy;

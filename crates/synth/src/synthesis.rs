@@ -221,7 +221,6 @@ fn synthesize_unguarded(
             occurrence_penalty: if level == 0 { config.finest_penalty } else { None }
                 .unwrap_or(config.occurrence_penalty),
             corrections: if level > 0 { config.coarse_corrections } else { None }.unwrap_or(config.corrections),
-            balance: if level == 0 { config.finest_balance } else { None }.unwrap_or(config.balance),
             ..config.clone()
         };
         let coarser_level = coarser.as_ref().zip(coarser_coords.as_ref());
@@ -524,8 +523,6 @@ pub(crate) struct TreeQuery<'a> {
 /// multiplied by `1 + lambda * max(0, count - expected)`.
 pub(crate) struct Occurrence {
     counts: Vec<u32>,
-    /// Histogram balance factors per candidate ([`crate::balance`]; empty: none).
-    balance: Vec<f32>,
     /// Copies per candidate if every candidate were used equally: output texels / candidates.
     expected: f32,
     lambda: f32,
@@ -535,7 +532,7 @@ impl Occurrence {
     /// Zero counts over `candidates`, for a level of `texels` output texels.
     pub(crate) fn new(candidates: usize, texels: usize, lambda: f32) -> Self {
         let counts = vec![0; if lambda > 0.0 { candidates } else { 0 }];
-        Occurrence { counts, balance: Vec::new(), expected: texels as f32 / candidates.max(1) as f32, lambda }
+        Occurrence { counts, expected: texels as f32 / candidates.max(1) as f32, lambda }
     }
 
     /// The counts of the sources in `coords` (positions that are not candidates are not counted).
@@ -551,18 +548,6 @@ impl Occurrence {
         o
     }
 
-    /// Adds the histogram balance of `coords` with strength `mu` ([`crate::balance`]).
-    pub(crate) fn balanced(
-        mut self,
-        bins: &crate::balance::Bins,
-        full: &ExemplarLevel,
-        coords: &Grid<[u32; 2]>,
-        mu: f32,
-    ) -> Self {
-        self.balance = bins.weights(full, coords, mu);
-        self
-    }
-
     /// Counts one more copy of candidate `i`.
     pub(crate) fn add(&mut self, i: usize) {
         if let Some(c) = self.counts.get_mut(i) {
@@ -573,12 +558,11 @@ impl Occurrence {
     /// The factor on candidate `i`'s squared distance; `own` (a texel's current source in a
     /// correction pass) is counted without the texel itself.
     pub(crate) fn factor(&self, i: usize, own: Option<usize>) -> f32 {
-        let balance = self.balance.get(i).copied().unwrap_or(1.0);
         if self.lambda <= 0.0 {
-            return balance;
+            return 1.0;
         }
         let count = self.counts[i] - u32::from(own == Some(i));
-        balance * (1.0 + self.lambda * (count as f32 - self.expected).max(0.0))
+        1.0 + self.lambda * (count as f32 - self.expected).max(0.0)
     }
 }
 
