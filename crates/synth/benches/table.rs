@@ -7,8 +7,8 @@
 //! re-ranking the best 8 in full space (with Ashikhmin coherence candidates, the config's default);
 //! k-coherence k = 4 (the scanline start's search); and, to show what the correction pass adds,
 //! k-coherence and PCA-8 with one correction pass; last, the default ([`SynthConfig::new`]:
-//! coordinate upsampling, k = 2, one pass at the coarser levels and two at the finest, copy cap,
-//! no occurrence penalty). The other rows take [`SynthConfig::scanline`]'s other options (3x3
+//! coordinate upsampling, k = 2, three passes at the coarser levels and one at the finest, seam
+//! polishing, copy cap, no occurrence penalty). The other rows take [`SynthConfig::scanline`]'s other options (3x3
 //! parent window, the occurrence penalty, seed 1).
 //!
 //! * Energy: [`window_energy`] with 5x5 windows for every N (so cells compare), finest level, every
