@@ -488,9 +488,36 @@ pub const COLLAPSE_RATIO: f64 = 0.5;
 /// exemplar's. 1 when no channel varies (a constant exemplar cannot lose variation); 0 for a
 /// constant output of a varied exemplar. A synthesis that regresses to one window (a blank map)
 /// scores near 0; [`COLLAPSE_RATIO`] is the warning threshold.
+///
+/// The exemplar's deviation is taken at the output's scale ([`deviation_at_scale`]): an output
+/// smaller than the exemplar cannot hold its longest waves, and a verbatim crop of it scores 1,
+/// not the crop's share of the whole exemplar's deviation.
 pub fn variation_ratio(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-    let deviation = |g: &Grid<Vec3>, c: usize| std_dev(g.as_slice().iter().map(|v| v[c]));
-    min_ratio((0..3).map(|c| (deviation(output, c), deviation(exemplar, c))))
+    let value = |c: usize| move |v: &Vec3| Some(v[c]);
+    let pairs = (0..3).map(|c| {
+        (std_dev(output.as_slice().iter().filter_map(value(c))), deviation_at_scale(exemplar, output.size(), value(c)))
+    });
+    min_ratio(pairs)
+}
+
+/// The deviation of `value` over `exemplar` at the scale of an `ow x oh` output: the whole
+/// exemplar's standard deviation when the output is at least as large on both axes, otherwise the
+/// mean standard deviation over the exemplar's tiles of `min(ow, ew) x min(oh, eh)` texels
+/// (non-overlapping, from the top-left; a partial last tile is left out).
+fn deviation_at_scale(exemplar: &Grid<Vec3>, (ow, oh): (usize, usize), value: impl Fn(&Vec3) -> Option<f32>) -> f64 {
+    let (ew, eh) = exemplar.size();
+    let (tw, th) = (ow.clamp(1, ew.max(1)), oh.clamp(1, eh.max(1)));
+    if tw >= ew && th >= eh {
+        return std_dev(exemplar.as_slice().iter().filter_map(&value));
+    }
+    let tiles: Vec<f64> = (0..eh / th)
+        .flat_map(|ty| (0..ew / tw).map(move |tx| (tx, ty)))
+        .map(|(tx, ty)| {
+            let rows = (ty * th..(ty + 1) * th).flat_map(|y| (tx * tw..(tx + 1) * tw).map(move |x| (x, y)));
+            std_dev(rows.filter_map(|(x, y)| value(exemplar.get(x, y))))
+        })
+        .collect();
+    tiles.iter().sum::<f64>() / tiles.len().max(1) as f64
 }
 
 /// [`variation_ratio`] for normal maps, on the slopes ([`slopes`]) of each axis.
@@ -500,9 +527,11 @@ pub fn slope_variation_ratio(output: &NormalMap, exemplar: &NormalMap) -> f64 {
 
 /// [`slope_variation_ratio`] of normals held as plain grids (texels with `z <= MIN_NZ` left out).
 pub(crate) fn slope_variation_ratio_of(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-    let deviation =
-        |g: &Grid<Vec3>, c: usize| std_dev(g.as_slice().iter().filter(|v| v.z > MIN_NZ).map(|v| -v[c] / v.z));
-    min_ratio((0..2).map(|c| (deviation(output, c), deviation(exemplar, c))))
+    let slope = |c: usize| move |v: &Vec3| (v.z > MIN_NZ).then(|| -v[c] / v.z);
+    let pairs = (0..2).map(|c| {
+        (std_dev(output.as_slice().iter().filter_map(slope(c))), deviation_at_scale(exemplar, output.size(), slope(c)))
+    });
+    min_ratio(pairs)
 }
 
 /// The smallest `output / exemplar` over the pairs whose exemplar deviation is above `1e-6`.

@@ -297,6 +297,27 @@ fn variation_ratio_has_closed_forms() {
     assert!((variation_ratio(&out, &flat_blue) - 1.0).abs() < 1e-4);
 }
 
+/// An output smaller than the exemplar is measured against the exemplar's deviation at its own
+/// scale: the exemplar is a 16-texel pattern plus a different constant per 16x16 tile, so every
+/// tile's deviation is the pattern's while the whole exemplar's is dominated by the steps. A
+/// verbatim 16x16 crop keeps all of it (1, where the whole exemplar's deviation would give under
+/// 0.5), and a half-amplitude crop keeps half.
+#[test]
+fn variation_ratio_of_a_small_output_is_measured_at_its_scale() {
+    let pattern = |x: usize, y: usize| ((x * 7 + y * 3) % 16) as f32 / 16.0;
+    let ex =
+        Grid::from_fn(64, 48, |x, y| Vec3::splat(pattern(x % 16, y % 16) + 2.0 * ((x / 16) + 3 * (y / 16)) as f32));
+    let crop = Grid::from_fn(16, 16, |x, y| *ex.get(x + 32, y + 16));
+    assert!((variation_ratio(&crop, &ex) - 1.0).abs() < 1e-4, "{}", variation_ratio(&crop, &ex));
+    let mean = crop.as_slice().iter().copied().sum::<Vec3>() / crop.len() as f32;
+    let half = crop.map(|v| mean + 0.5 * (*v - mean));
+    assert!((variation_ratio(&half, &ex) - 0.5).abs() < 1e-4);
+    // At the exemplar's size and above, the whole exemplar's deviation: the pattern alone (a
+    // 64x48 output of it) keeps a small share of the steps' deviation.
+    let flat = Grid::from_fn(64, 48, |x, y| Vec3::splat(pattern(x % 16, y % 16)));
+    assert!(variation_ratio(&flat, &ex) < 0.1, "{}", variation_ratio(&flat, &ex));
+}
+
 /// Slope variation: normals of slopes scaled by `s` have slope deviations scaled by `s`; invalid
 /// (zero) texels are left out.
 #[test]
