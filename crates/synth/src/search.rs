@@ -272,15 +272,9 @@ impl KCoherenceSets {
     /// that), then [`PROPAGATION_ROUNDS`] rounds of [`propagate`]; ties go to the lower index.
     /// Each round reads only the previous one, so the result does not depend on the thread count.
     pub fn new(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, dims: usize) -> Self {
-        Self::from_index(full, causal, k, &ApproximateIndex::new(full, dims, 1))
-    }
-
-    /// [`Self::new`] with the PCA kd-tree over `full` built already (the correction passes'
-    /// fallback shares it); its `rerank` does not matter.
-    pub fn from_index(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, index: &ApproximateIndex) -> Self {
         debug_assert_eq!(full.len(), causal.len());
         let k = k.max(1);
-        let mut sets = tree_sets(full, k, index);
+        let mut sets = tree_sets(full, k, &ApproximateIndex::new(full, dims, 1));
         for _ in 0..PROPAGATION_ROUNDS {
             sets = propagate(full, k, &sets);
         }

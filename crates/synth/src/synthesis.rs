@@ -686,7 +686,7 @@ fn build_search(
             let sets = KCoherenceSets::new(full, ex, k, SET_DIMS.min(dims));
             let causal = fallback.filter(|_| config.start == Start::Scanline);
             let index = causal.map(|_| ApproximateIndex::new(ex, dims, rerank));
-            (index, Some(sets), fallback.filter(|_| corrections).map(|_| ApproximateIndex::new(full, dims, rerank)))
+            (index, Some(sets), fallback.and_then(|_| full_tree(dims, rerank)))
         }
     };
     LevelSearch { index, sets, full, full_index }
