@@ -133,6 +133,7 @@ fn color_exemplars_synthesise_and_replay() {
     let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     let q = &saved["quality"];
     assert!(q["slope_distance"].is_null());
+    assert!(saved["options"]["detail_weight"].is_null(), "normal maps only");
     for key in ["channel_distance", "spectrum_distance", "seam_energy_ratio"] {
         assert!(q[key].as_f64().is_some_and(f64::is_finite), "{key}: {q}");
     }
@@ -195,6 +196,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(options["levels_requested"], 5);
     assert_eq!((options["corrections"].as_u64(), options["coarse_corrections"].as_u64()), (Some(1), Some(3)));
     assert_eq!(options["polish"], 1);
+    assert_eq!(options["detail_weight"], 1.5);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");
     assert!((options["copy_cap"].as_f64().unwrap() - 0.09).abs() < 1e-6, "{options}");
@@ -206,13 +208,26 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     let old: serde_json::Value =
         serde_json::from_slice(&synth(&exemplar, &out, &["--upsampled", "--json"]).stdout).unwrap();
     assert_eq!(old["options"], r["options"]);
-    let flags = ["--levels", "3", "--corrections", "2", "--polish", "0", "--occurrence-penalty", "2", "--json"];
+    let flags = [
+        "--levels",
+        "3",
+        "--corrections",
+        "2",
+        "--polish",
+        "0",
+        "--occurrence-penalty",
+        "2",
+        "--detail-weight",
+        "0",
+        "--json",
+    ];
     let o = synth(&exemplar, &out, &flags);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["options"]["levels"], 3);
     assert_eq!(r["options"]["corrections"], 2);
     assert_eq!(r["options"]["polish"], 0);
     assert_eq!(r["options"]["occurrence_penalty"], 2.0);
+    assert_eq!(r["options"]["detail_weight"], 0.0);
     // The Wei-Levoy scanline start, as before.
     let o = synth(&exemplar, &out, &["--scanline", "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -222,5 +237,6 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert!(r["options"]["copy_cap"].is_null());
     assert_eq!(r["options"]["parent"], 3);
     assert_eq!(r["options"]["polish"], 0);
+    assert_eq!(r["options"]["detail_weight"], 0.0);
     assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }

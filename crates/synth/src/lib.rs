@@ -3,6 +3,8 @@
 //!
 //! * [`config`]: [`SynthConfig`] and [`Search`], validated against the exemplar (levels clamped
 //!   with a warning, memory estimated before anything is allocated).
+//! * [`appearance`]: the pyramid normal maps are matched in (a detail channel in place of `z` at
+//!   the coarser levels, so pores are not averaged away).
 //! * [`neighbourhood`]: causal `N x N` + full coarser `M x M` neighbourhoods as feature vectors.
 //! * [`exemplar`]: candidate texels of one exemplar level and the exact (exhaustive) search.
 //! * [`search`]: PCA (nalgebra, f64) + kiddo kd-tree approximate search; k-coherence sets.
@@ -26,6 +28,7 @@
 //! accuracy against time per search mode, and `docs/synthesis-notes.md` keeps what was measured
 //! on the way (the occurrence penalty, correction passes, seams, search modes).
 
+pub mod appearance;
 pub mod config;
 mod correction;
 pub mod energy;

@@ -80,7 +80,10 @@
 //! synthesised just before it, including, through the toroidal wrap, the end of the previous row,
 //! so a row cannot start before the previous one is finished (see `docs/synthesis-notes.md`).
 //!
-//! Normal maps are synthesised as unnormalised vectors, so pyramid averages stay meaningful. The
+//! Normal maps are synthesised as unnormalised vectors, so pyramid averages stay meaningful; from
+//! level [`crate::appearance::DETAIL_MIN_LEVEL`] up their `z` is replaced by a detail channel
+//! ([`SynthConfig::detail_weight`], [`crate::appearance`]) so that sparse bumps such as pores,
+//! which averaging cancels, still steer the coarse matching. The
 //! finest level copies exemplar texels verbatim, so the output of a unit exemplar is unit (or
 //! invalid zero) without renormalising, bit for bit the exemplar's texels.
 
@@ -148,7 +151,7 @@ fn collapse_warning(variation: f64, what: &str) -> Option<String> {
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
 pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
-    guarded(exemplar, config, progress, &metrics::variation_ratio, "colour")
+    guarded(exemplar, config, progress, &metrics::variation_ratio, false)
 }
 
 /// How much of the exemplar's variation an output kept (colour or slope deviations).
@@ -164,12 +167,13 @@ fn guarded(
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
     measure: &Variation,
-    what: &str,
+    normals: bool,
 ) -> Result<Synthesis> {
-    let mut s = synthesize_unguarded(exemplar, config, progress)?;
+    let what = if normals { "slope" } else { "colour" };
+    let mut s = synthesize_unguarded(exemplar, config, progress, normals)?;
     s.variation = measure(&s.texels, exemplar);
     if let Some(retry) = config.collapse_retry().filter(|_| s.variation < metrics::COLLAPSE_RATIO) {
-        let mut again = synthesize_unguarded(exemplar, &retry, progress)?;
+        let mut again = synthesize_unguarded(exemplar, &retry, progress, normals)?;
         again.variation = measure(&again.texels, exemplar);
         let note = format!(
             "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
@@ -193,6 +197,7 @@ fn synthesize_unguarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
+    normals: bool,
 ) -> Result<Synthesis> {
     let (ew, eh) = exemplar.size();
     let (config, mut warnings) = config.validate(ew, eh)?;
@@ -205,7 +210,12 @@ fn synthesize_unguarded(
     } else {
         exemplar
     };
-    let pyramid = gaussian(exemplar, config.levels, Border::Clamp);
+    // Level 0 of either pyramid is the exemplar itself, so the output holds exemplar texels.
+    let pyramid = if normals {
+        crate::appearance::normal_pyramid(exemplar, config.levels, config.detail_weight)
+    } else {
+        gaussian(exemplar, config.levels, Border::Clamp)
+    };
     let mut sizes = vec![(config.width, config.height)];
     while sizes.len() < config.levels {
         let (w, h) = sizes[sizes.len() - 1];
@@ -248,7 +258,7 @@ pub fn synthesize_normals(
     progress: &dyn Fn(usize, f32),
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
-    let mut s = guarded(exemplar.grid(), config, progress, &metrics::slope_variation_ratio_of, "slope")?;
+    let mut s = guarded(exemplar.grid(), config, progress, &metrics::slope_variation_ratio_of, true)?;
     s.warnings.splice(0..0, exemplar_warning);
     // The finest level copies exemplar texels, which are unit (or invalid zero) already: wrapping
     // them keeps the bits, where renormalising would perturb the last one.

@@ -76,6 +76,11 @@ pub struct Args {
     /// none with `--scanline`): the last correction pass cuts bigger copied blocks apart.
     #[arg(long, value_name = "SHARE", value_parser = flags::non_negative)]
     pub copy_cap: Option<f32>,
+    /// Normal maps: weight of the detail channel the coarser levels match in place of z, so that
+    /// pores, which averaging cancels, still steer where the output grows from (default 1.5, 0
+    /// with `--scanline`; 0 = plain normals).
+    #[arg(long, value_name = "W", value_parser = flags::non_negative)]
+    pub detail_weight: Option<f32>,
     /// Occurrence penalty lambda (0 = off; default 0, 4 with `--scanline`).
     #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
     pub occurrence_penalty: Option<f32>,
@@ -279,6 +284,8 @@ pub struct OptionsReport {
     pub coarse_corrections: usize,
     /// Seam-polishing passes at the finest level.
     pub polish: usize,
+    /// Normal maps: weight of the coarser levels' detail channel (`null` for colour maps).
+    pub detail_weight: Option<f32>,
     /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
     pub search: String,
     /// k-coherence: the tree fallback's ratio at the coarser levels and at the finest (`null`: no
@@ -375,6 +382,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         coherence: !args.no_coherence,
         exemplar_wrap: args.exemplar_wrap,
         copy_cap: args.copy_cap.or(base.copy_cap),
+        detail_weight: args.detail_weight.unwrap_or(base.detail_weight),
         seed: args.seed,
         ..base
     }
@@ -495,6 +503,7 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         corrections: run.corrections,
         coarse_corrections: run.coarse_corrections.unwrap_or(run.corrections),
         polish: run.polish,
+        detail_weight: (!args.map.is_color()).then_some(run.detail_weight),
         search,
         fallback,
         finest_fallback: run.finest_fallback.or(fallback),
