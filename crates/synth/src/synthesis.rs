@@ -151,14 +151,45 @@ fn collapse_warning(variation: f64, what: &str) -> Option<String> {
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
 pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
-    guarded(exemplar, config, progress, &metrics::variation_ratio, false)
+    guarded(exemplar, config, progress, Texels::Colour)
 }
 
-/// How much of the exemplar's variation an output kept (colour or slope deviations).
-type Variation = dyn Fn(&Grid<Vec3>, &Grid<Vec3>) -> f64;
+/// What a synthesis grows: it decides the pyramid the search matches in and how an output's
+/// variation is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Texels {
+    Colour,
+    /// Unnormalised normals, matched with a detail channel ([`crate::appearance`]).
+    Normals,
+}
+
+impl Texels {
+    /// How much of the exemplar's variation `output` kept (channel or slope deviations).
+    fn variation(self, output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
+        match self {
+            Texels::Colour => metrics::variation_ratio(output, exemplar),
+            Texels::Normals => metrics::slope_variation_ratio_of(output, exemplar),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Texels::Colour => "colour",
+            Texels::Normals => "slope",
+        }
+    }
+
+    /// The exemplar pyramid the search matches in (level 0 is the exemplar itself).
+    fn pyramid(self, exemplar: &Grid<Vec3>, config: &SynthConfig) -> Vec<Grid<Vec3>> {
+        match self {
+            Texels::Colour => gaussian(exemplar, config.levels, Border::Clamp),
+            Texels::Normals => crate::appearance::normal_pyramid(exemplar, config.levels, config.detail_weight),
+        }
+    }
+}
 
 /// [`synthesize_unguarded`] behind the collapse guard: an output that kept less than
-/// [`metrics::COLLAPSE_RATIO`] of the exemplar's variation (`measure`) is grown again with
+/// [`metrics::COLLAPSE_RATIO`] of the exemplar's variation is grown again with
 /// [`SynthConfig::collapse_retry`] (the occurrence penalty at the coarse levels, which keeps sparse
 /// features from being averaged away), and the better of the two is kept; a warning says so, and
 /// another one if even that one collapsed.
@@ -166,15 +197,14 @@ fn guarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
-    measure: &Variation,
-    normals: bool,
+    kind: Texels,
 ) -> Result<Synthesis> {
-    let what = if normals { "slope" } else { "colour" };
-    let mut s = synthesize_unguarded(exemplar, config, progress, normals)?;
-    s.variation = measure(&s.texels, exemplar);
+    let what = kind.name();
+    let mut s = synthesize_unguarded(exemplar, config, progress, kind)?;
+    s.variation = kind.variation(&s.texels, exemplar);
     if let Some(retry) = config.collapse_retry().filter(|_| s.variation < metrics::COLLAPSE_RATIO) {
-        let mut again = synthesize_unguarded(exemplar, &retry, progress, normals)?;
-        again.variation = measure(&again.texels, exemplar);
+        let mut again = synthesize_unguarded(exemplar, &retry, progress, kind)?;
+        again.variation = kind.variation(&again.texels, exemplar);
         let note = format!(
             "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
              with occurrence penalty {} at the coarser levels ({:.0} %{})",
@@ -197,7 +227,7 @@ fn synthesize_unguarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
-    normals: bool,
+    kind: Texels,
 ) -> Result<Synthesis> {
     let (ew, eh) = exemplar.size();
     let (config, mut warnings) = config.validate(ew, eh)?;
@@ -210,12 +240,8 @@ fn synthesize_unguarded(
     } else {
         exemplar
     };
-    // Level 0 of either pyramid is the exemplar itself, so the output holds exemplar texels.
-    let pyramid = if normals {
-        crate::appearance::normal_pyramid(exemplar, config.levels, config.detail_weight)
-    } else {
-        gaussian(exemplar, config.levels, Border::Clamp)
-    };
+    // Level 0 is the exemplar itself, so the output holds exemplar texels.
+    let pyramid = kind.pyramid(exemplar, &config);
     let mut sizes = vec![(config.width, config.height)];
     while sizes.len() < config.levels {
         let (w, h) = sizes[sizes.len() - 1];
@@ -258,7 +284,7 @@ pub fn synthesize_normals(
     progress: &dyn Fn(usize, f32),
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
-    let mut s = guarded(exemplar.grid(), config, progress, &metrics::slope_variation_ratio_of, true)?;
+    let mut s = guarded(exemplar.grid(), config, progress, Texels::Normals)?;
     s.warnings.splice(0..0, exemplar_warning);
     // The finest level copies exemplar texels, which are unit (or invalid zero) already: wrapping
     // them keeps the bits, where renormalising would perturb the last one.
