@@ -15,6 +15,7 @@
 //! The finest levels (below [`DETAIL_MIN_LEVEL`]) stay plain: there the pores are resolved, and
 //! the finest level copies its texels to the output, which must be the exemplar's normals.
 
+use crate::metrics::std_dev;
 use glam::Vec3;
 use skinkit_maps::Grid;
 use skinkit_maps::pyramid::{Border, gaussian};
@@ -37,8 +38,8 @@ pub fn normal_pyramid(exemplar: &Grid<Vec3>, levels: usize, weight: f32) -> Vec<
     for (level, d) in pyramid.iter_mut().zip(&detail).skip(DETAIL_MIN_LEVEL) {
         let rms = d.map(|v| v.max(0.0).sqrt());
         let spread =
-            0.5 * (deviation(level.as_slice().iter().map(|t| t.x)) + deviation(level.as_slice().iter().map(|t| t.y)));
-        let own = deviation(rms.as_slice().iter().copied());
+            0.5 * (std_dev(level.as_slice().iter().map(|t| t.x)) + std_dev(level.as_slice().iter().map(|t| t.y)));
+        let own = std_dev(rms.as_slice().iter().copied());
         let scale = if own > 1e-12 { (weight as f64 * spread / own) as f32 } else { 0.0 };
         for (t, r) in level.as_mut_slice().iter_mut().zip(rms.as_slice()) {
             t.z = scale * r;
@@ -55,13 +56,6 @@ fn high_pass(g: &Grid<Vec3>) -> Grid<f32> {
             *g.get_clamped(x - 1, y) + *g.get_clamped(x + 1, y) + *g.get_clamped(x, y - 1) + *g.get_clamped(x, y + 1);
         (*g.get_clamped(x, y) - 0.25 * around).length_squared()
     })
-}
-
-/// Population standard deviation (0 for no values).
-fn deviation(values: impl Iterator<Item = f32> + Clone) -> f64 {
-    let n = values.clone().count().max(1) as f64;
-    let mean = values.clone().map(f64::from).sum::<f64>() / n;
-    (values.map(|v| (f64::from(v) - mean).powi(2)).sum::<f64>() / n).sqrt()
 }
 
 #[cfg(test)]
@@ -120,8 +114,8 @@ mod tests {
         assert!(side_mean(left.clone(), 0).abs() < 0.05 && side_mean(right.clone(), 0).abs() < 0.05);
         assert!(side_mean(left, 2) > 5.0 * side_mean(right, 2).abs().max(1e-6));
         let spread =
-            0.5 * (deviation(level.as_slice().iter().map(|t| t.x)) + deviation(level.as_slice().iter().map(|t| t.y)));
-        let own = deviation(level.as_slice().iter().map(|t| t.z));
+            0.5 * (std_dev(level.as_slice().iter().map(|t| t.x)) + std_dev(level.as_slice().iter().map(|t| t.y)));
+        let own = std_dev(level.as_slice().iter().map(|t| t.z));
         assert!((own - 2.0 * spread).abs() < 1e-4 * spread.max(1e-9), "{own} against {spread}");
     }
 
@@ -132,13 +126,5 @@ mod tests {
         for level in normal_pyramid(&ex, 4, 1.5).iter().skip(DETAIL_MIN_LEVEL) {
             assert!(level.as_slice().iter().all(|t| t.is_finite() && t.z == 0.0));
         }
-    }
-
-    /// The deviation helper against a hand computation.
-    #[test]
-    fn deviation_is_the_population_deviation() {
-        let v = [1.0f32, 3.0, 5.0, 7.0];
-        assert!((deviation(v.iter().copied()) - 5.0f64.sqrt()).abs() < 1e-12);
-        assert_eq!(deviation(std::iter::empty()), 0.0);
     }
 }

@@ -542,7 +542,7 @@ fn min_ratio(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
 
 /// Population standard deviation of the finite values (0 for none), in one pass (f64 sums; the
 /// values are slopes or colours, far from where the shortcut loses precision).
-fn std_dev(values: impl Iterator<Item = f32>) -> f64 {
+pub(crate) fn std_dev(values: impl Iterator<Item = f32>) -> f64 {
     let (mut n, mut sum, mut squares) = (0u64, 0.0f64, 0.0f64);
     for v in values.filter(|v| v.is_finite()).map(f64::from) {
         n += 1;
@@ -554,4 +554,15 @@ fn std_dev(values: impl Iterator<Item = f32>) -> f64 {
     }
     let mean = sum / n as f64;
     (squares / n as f64 - mean * mean).max(0.0).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    /// The one-pass deviation against a hand computation; non-finite values are skipped.
+    #[test]
+    fn std_dev_is_the_population_deviation_of_the_finite_values() {
+        let v = [1.0f32, 3.0, f32::NAN, 5.0, 7.0, f32::INFINITY];
+        assert!((super::std_dev(v.iter().copied()) - 5.0f64.sqrt()).abs() < 1e-12);
+        assert_eq!(super::std_dev(std::iter::empty()), 0.0);
+    }
 }
