@@ -12,7 +12,8 @@ use crate::config::{CORRECTION_STRIDE, Search, Start, SynthConfig};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
-use crate::synthesis::{LevelSearch, Occurrence, Scorer, TreeQuery, coherence_candidates, tree_refine};
+use crate::scoring::{Occurrence, Scorer, TreeQuery, coherence_candidates, tree_refine};
+use crate::synthesis::LevelSearch;
 
 /// What the correction passes of one level read.
 pub(crate) struct CorrectionLevel<'a> {

@@ -10,8 +10,9 @@
 //! * [`search`]: PCA (nalgebra, f64) + kiddo kd-tree approximate search; k-coherence sets.
 //! * [`energy`]: the neighbourhood-matching energy the bench compares search modes with.
 //! * [`synthesis`]: [`synthesize`], [`synthesize_normals`], [`replay`].
-//! * `correction` and `polish` (private): the correction passes with the copy cap, and seam
-//!   polishing of the finest level by every window a texel lies in.
+//! * `causal`, `correction` and `polish` (private): the scanline pass, the correction passes with
+//!   the copy cap, and seam polishing of the finest level by every window a texel lies in;
+//!   `scoring` (private) how all of them score a candidate (occurrence penalty, tree refinement).
 //! * [`metrics`]: quality measures.
 //!
 //! Texels are `Vec3` throughout: colour as linear RGB, normals as unnormalised vectors (pyramid
@@ -29,6 +30,7 @@
 //! on the way (the occurrence penalty, correction passes, seams, search modes).
 
 pub mod appearance;
+mod causal;
 pub mod config;
 mod correction;
 pub mod energy;
@@ -37,6 +39,7 @@ pub mod exemplar;
 pub mod metrics;
 pub mod neighbourhood;
 mod polish;
+mod scoring;
 pub mod search;
 pub mod synthesis;
 

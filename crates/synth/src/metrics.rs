@@ -489,7 +489,7 @@ pub const COLLAPSE_RATIO: f64 = 0.5;
 /// constant output of a varied exemplar. A synthesis that regresses to one window (a blank map)
 /// scores near 0; [`COLLAPSE_RATIO`] is the warning threshold.
 ///
-/// The exemplar's deviation is taken at the output's scale ([`deviation_at_scale`]): an output
+/// The exemplar's deviation is taken at the output's scale (`deviation_at_scale`): an output
 /// smaller than the exemplar cannot hold its longest waves, and a verbatim crop of it scores 1,
 /// not the crop's share of the whole exemplar's deviation.
 pub fn variation_ratio(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {

@@ -191,7 +191,7 @@ impl ApproximateIndex {
 /// Rounds of [`propagate`] after the kd-tree's sets.
 const PROPAGATION_ROUNDS: usize = 4;
 
-/// PCA dimensions of the kd-tree the k-coherence sets start from. With [`PROPAGATION_ROUNDS`]
+/// PCA dimensions of the kd-tree the k-coherence sets start from. With `PROPAGATION_ROUNDS`
 /// rounds of propagation, 4 dimensions find neighbours as near as 8 dimensions without
 /// propagation did (median squared distance to the nearest other candidate of a 128x128 skin
 /// exemplar: 0.0697 against 0.0700) in a quarter of the time (0.04 against 0.12 s on 2 cores;
@@ -269,7 +269,7 @@ impl KCoherenceSets {
     ///
     /// The similar candidates come from a PCA-`dims` kd-tree over `full` whose `max(2 k, SET_POOL)`
     /// nearest are re-scored in the full space (exact when the level has no more candidates than
-    /// that), then [`PROPAGATION_ROUNDS`] rounds of [`propagate`]; ties go to the lower index.
+    /// that), then `PROPAGATION_ROUNDS` rounds of `propagate`; ties go to the lower index.
     /// Each round reads only the previous one, so the result does not depend on the thread count.
     pub fn new(full: &ExemplarLevel, causal: &ExemplarLevel, k: usize, dims: usize) -> Self {
         debug_assert_eq!(full.len(), causal.len());

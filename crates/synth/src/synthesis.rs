@@ -3,23 +3,8 @@
 //! Coarse to fine over Gaussian pyramids of exemplar and output: each output level starts as
 //! copies of seeded random exemplar texels ([`random_copies`]), then its texels are replaced in
 //! scanline order by the exemplar texel whose neighbourhood ([`crate::neighbourhood`]) is nearest
-//! in L2. The output is toroidal, so results tile.
-//!
-//! Edges of the causal pass: an interior texel sees exactly its causal window synthesised. A texel
-//! in the first or last `N / 2` rows or columns is scored instead with its full `N x N` window
-//! (against full-window exemplar features) restricted to the neighbours already synthesised at
-//! this level: wrapped neighbours not yet synthesised are left out (they used to be initial noise,
-//! which put a seam at the wrap-around column), wrapped ones synthesised already (the first
-//! columns and rows, seen from the last) are added. At the coarsest level the rows above the first
-//! read the initial copies, the level's only source of variety.
-//!
-//! Occurrence penalty ([`SynthConfig::occurrence_penalty`]; Kopf et al. 2007, "Solid texture
-//! synthesis from 2D exemplars", section 4.3): greedy L2 search regresses to the most typical,
-//! nearly flat texels (before it, a few were copied 250-390 times where 4 was the share, and the
-//! outputs kept 35-65 % of the exemplar's rms slope). A candidate's squared distance is multiplied
-//! by `1 + lambda * max(0, count - share)`, with `count` the copies of its texel at this level so
-//! far (scanline order in the causal pass; the state at the start of each correction sub-pass,
-//! not counting the texel itself, so the result stays independent of the thread count).
+//! in L2 (the causal pass, `causal`). The output is toroidal, so results tile. How a candidate is
+//! scored, with the occurrence penalty of Kopf et al. 2007, is in `scoring`.
 //!
 //! With [`Search::KCoherence`] (Tong et al. 2002) a texel's candidates are, for each synthesised
 //! causal neighbour, its source shifted back and that source's k-coherence set
@@ -34,7 +19,7 @@
 //! ([`Search::Approximate`]), or from the k-coherence sets of every neighbour's source shifted
 //! back, the texel's own current source among them ([`Search::KCoherence`]; its fallback tree is
 //! also built on full features, thresholded by the full-window typical distance). A pass is split
-//! into [`CORRECTION_STRIDE`]`^2` interleaved sub-passes by `(x mod s, y mod s)`, in row-major
+//! into [`crate::config::CORRECTION_STRIDE`]`^2` interleaved sub-passes by `(x mod s, y mod s)`, in row-major
 //! order of the residues; a sub-pass reads the state the previous sub-passes left (a snapshot for
 //! its own texels), chooses its texels in parallel and then writes them, so the result is the
 //! same on any thread count. With `s` = 3 most texels of a sub-pass see already corrected
@@ -95,9 +80,10 @@ use rand_chacha::ChaCha8Rng;
 use skinkit_maps::pyramid::{Border, gaussian};
 use skinkit_maps::{Grid, NormalMap};
 
+use crate::causal::causal_pass;
 use crate::config::{Search, Start, SynthConfig, half};
 use crate::correction::CorrectionLevel;
-use crate::exemplar::{ExemplarLevel, better};
+use crate::exemplar::ExemplarLevel;
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
 use crate::search::{ApproximateIndex, KCoherenceSets, SET_DIMS};
@@ -434,220 +420,9 @@ fn upsampled(
 }
 
 /// The causal (or, `full`, the full) neighbourhood shape of a level.
-fn shape(config: &SynthConfig, full: bool, has_parent: bool) -> Neighbourhood {
+pub(crate) fn shape(config: &SynthConfig, full: bool, has_parent: bool) -> Neighbourhood {
     let (n, m) = (config.neighbourhood, config.parent);
     if full { Neighbourhood::full(n, m, has_parent) } else { Neighbourhood::new(n, m, has_parent) }
-}
-
-/// The causal scanline pass of one level: every texel, in scanline order, copies the exemplar
-/// texel whose causal neighbourhood is nearest. Sequential: each texel's neighbourhood holds the
-/// texels chosen just before it.
-#[allow(clippy::too_many_arguments)]
-fn causal_pass(
-    level: usize,
-    (w, h): (usize, usize),
-    coarser: Option<&Grid<Vec3>>,
-    nb: &Neighbourhood,
-    ex: &ExemplarLevel,
-    search: &LevelSearch,
-    config: &SynthConfig,
-    report: &dyn Fn(usize),
-) -> (Grid<Vec3>, Grid<[u32; 2]>) {
-    let full = search.full.as_ref().expect("always built");
-    let (mut out, mut coords) = random_copies(ex.texels(), ex.margin(), w, h, config.seed, level);
-    let coarsest = coarser.is_none();
-    let full_nb = shape(config, true, !coarsest);
-    let r = (config.neighbourhood / 2) as isize;
-    let mut done = Grid::filled(w, h, false);
-    let mut query = vec![0.0f32; nb.dim()];
-    let mut full_query = vec![0.0f32; full_nb.dim()];
-    let mut active = vec![true; full_nb.dim() / 3];
-    let mut tree_active = vec![true; nb.dim() / 3];
-    let mut candidates = Vec::new();
-    let mut seen = vec![usize::MAX; if search.sets.is_some() { ex.len() } else { 0 }];
-    let mut occurrence = Occurrence::new(ex.len(), w * h, config.occurrence_penalty);
-    let parent = |sx, sy| coarser.map_or(Vec3::ZERO, |c: &Grid<Vec3>| *c.get_wrapped(sx, sy));
-    for y in 0..h {
-        for x in 0..w {
-            let (xi, yi) = (x as isize, y as isize);
-            nb.gather(xi, yi, |sx, sy| *out.get_wrapped(sx, sy), parent, &mut query);
-            // Interior texels see exactly their causal window synthesised. Near the edges the
-            // wrapped window differs: causal neighbours not synthesised yet are left out, and
-            // neighbours past the end of the row or column that are synthesised already (wrapped
-            // to the first ones) are added, so the texel is scored with the full window masked
-            // by what exists. At the coarsest level the rows above the first wrap to the initial
-            // state, which is read (the level's only source of variety).
-            let edge = x < r as usize || y < r as usize || x + r as usize >= w || y + r as usize >= h;
-            let masked = edge && {
-                let known = |&[dx, dy]: &[isize; 2]| *done.get_wrapped(xi + dx, yi + dy) || (coarsest && yi + dy < 0);
-                active.iter_mut().zip(full_nb.causal()).for_each(|(slot, o)| *slot = known(o));
-                tree_active.iter_mut().zip(nb.causal()).for_each(|(slot, o)| *slot = known(o));
-                let causal = |&[dx, dy]: &[isize; 2]| dy < 0 || (dy == 0 && dx < 0);
-                full_nb.causal().iter().zip(&active).any(|(o, &on)| on != causal(o))
-            };
-            let (scorer, shape, tree_query) = if masked {
-                full_nb.gather(xi, yi, |sx, sy| *out.get_wrapped(sx, sy), parent, &mut full_query);
-                let scorer = Scorer {
-                    ex: full,
-                    query: &full_query,
-                    active: Some(&active[..]),
-                    occurrence: &occurrence,
-                    own: None,
-                    forbidden: &[],
-                };
-                (scorer, &full_nb, TreeQuery { query: &query, active: Some(&tree_active[..]) })
-            } else {
-                let scorer =
-                    Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None, forbidden: &[] };
-                (scorer, nb, TreeQuery { query: &query, active: None })
-            };
-            let score = |&i: &usize| (scorer.score(i), i);
-            candidates.clear();
-            let best = match (&search.index, &search.sets) {
-                (_, Some(sets)) => {
-                    coherence_candidates(ex, shape, &coords, Some(&done), xi, yi, &mut candidates);
-                    // Each candidate is scored once per texel (`seen` holds the last texel that
-                    // scored it); the result does not depend on the order, only the work does.
-                    let texel = y * w + x;
-                    let mut best = (f32::INFINITY, usize::MAX);
-                    for &source in &candidates {
-                        for &j in sets.set(source) {
-                            let j = j as usize;
-                            if std::mem::replace(&mut seen[j], texel) != texel {
-                                best = better(best, (scorer.score_below(j, best.0), j));
-                            }
-                        }
-                    }
-                    let Search::KCoherence { fallback, .. } = config.search else { unreachable!() };
-                    let typical = if masked { sets.typical_full() } else { sets.typical() };
-                    match (&search.index, fallback) {
-                        _ if best.1 == usize::MAX => scorer.nearest_exact(),
-                        (Some(index), Some(ratio)) if best.0 > ratio * typical => {
-                            tree_refine(index, &tree_query, best, &score, &mut candidates)
-                        }
-                        _ => best.1,
-                    }
-                }
-                (None, None) => scorer.nearest_exact(),
-                (Some(index), None) => {
-                    if config.coherence {
-                        coherence_candidates(ex, shape, &coords, Some(&done), xi, yi, &mut candidates);
-                    }
-                    let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
-                    tree_refine(index, &tree_query, coherent, &score, &mut candidates)
-                }
-            };
-            *out.get_mut(x, y) = ex.texel(best);
-            *coords.get_mut(x, y) = ex.position(best);
-            *done.get_mut(x, y) = true;
-            occurrence.add(best);
-        }
-        report(y + 1);
-    }
-    (out, coords)
-}
-
-/// What a kd-tree is queried with: a causal feature, and which of its texel slots hold
-/// synthesised texels (`None`: all).
-pub(crate) struct TreeQuery<'a> {
-    pub(crate) query: &'a [f32],
-    pub(crate) active: Option<&'a [bool]>,
-}
-
-/// The occurrence (histogram) penalty of Kopf et al. 2007, section 4.3: a candidate whose
-/// exemplar texel the level already copies more often than its share has its squared distance
-/// multiplied by `1 + lambda * max(0, count - expected)`.
-pub(crate) struct Occurrence {
-    counts: Vec<u32>,
-    /// Copies per candidate if every candidate were used equally: output texels / candidates.
-    expected: f32,
-    lambda: f32,
-}
-
-impl Occurrence {
-    /// Zero counts over `candidates`, for a level of `texels` output texels.
-    pub(crate) fn new(candidates: usize, texels: usize, lambda: f32) -> Self {
-        let counts = vec![0; if lambda > 0.0 { candidates } else { 0 }];
-        Occurrence { counts, expected: texels as f32 / candidates.max(1) as f32, lambda }
-    }
-
-    /// The counts of the sources in `coords` (positions that are not candidates are not counted).
-    pub(crate) fn of(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, lambda: f32) -> Self {
-        let mut o = Occurrence::new(full.len(), coords.len(), lambda);
-        if lambda > 0.0 {
-            for &[x, y] in coords.as_slice() {
-                if let Some(i) = full.index_of(x as isize, y as isize) {
-                    o.counts[i] += 1;
-                }
-            }
-        }
-        o
-    }
-
-    /// Counts one more copy of candidate `i`.
-    pub(crate) fn add(&mut self, i: usize) {
-        if let Some(c) = self.counts.get_mut(i) {
-            *c += 1;
-        }
-    }
-
-    /// The factor on candidate `i`'s squared distance; `own` (a texel's current source in a
-    /// correction pass) is counted without the texel itself.
-    pub(crate) fn factor(&self, i: usize, own: Option<usize>) -> f32 {
-        if self.lambda <= 0.0 {
-            return 1.0;
-        }
-        let count = self.counts[i] - u32::from(own == Some(i));
-        1.0 + self.lambda * (count as f32 - self.expected).max(0.0)
-    }
-}
-
-/// How one texel scores candidates: squared distance over the active part of its feature (all of
-/// it unless `active` says otherwise), times the occurrence factor.
-pub(crate) struct Scorer<'a> {
-    pub(crate) ex: &'a ExemplarLevel,
-    pub(crate) query: &'a [f32],
-    /// Per texel slot of the feature, whether it counts (`None`: every slot).
-    pub(crate) active: Option<&'a [bool]>,
-    pub(crate) occurrence: &'a Occurrence,
-    pub(crate) own: Option<usize>,
-    /// Candidates the texel may not take (where the copy cap cuts: its current source and every
-    /// source that would continue a neighbour's block, see `correction::cut_forbidden`).
-    pub(crate) forbidden: &'a [usize],
-}
-
-impl Scorer<'_> {
-    /// The score of candidate `i`.
-    pub(crate) fn score(&self, i: usize) -> f32 {
-        if self.forbidden.contains(&i) {
-            return f32::INFINITY;
-        }
-        let d = match self.active {
-            Some(active) => self.ex.distance2_masked(i, self.query, active),
-            None => self.ex.distance2(i, self.query),
-        };
-        d * self.occurrence.factor(i, self.own)
-    }
-
-    /// The score of candidate `i` when it is at most `best`, `f32::INFINITY` otherwise (the
-    /// distance is abandoned early once it cannot win).
-    pub(crate) fn score_below(&self, i: usize, best: f32) -> f32 {
-        if self.forbidden.contains(&i) {
-            return f32::INFINITY;
-        }
-        let f = self.occurrence.factor(i, self.own);
-        let bound = best / f;
-        let d = match self.active {
-            Some(active) => self.ex.distance2_masked(i, self.query, active),
-            None => self.ex.distance2_below(i, self.query, bound),
-        };
-        if d > bound { f32::INFINITY } else { d * f }
-    }
-
-    /// The best candidate of the level by exhaustive scan.
-    pub(crate) fn nearest_exact(&self) -> usize {
-        self.ex.nearest_by(|i| self.score(i))
-    }
 }
 
 /// The initial state of an output level: texels copied from seeded random candidate positions of
@@ -726,56 +501,4 @@ fn build_search(
         }
     };
     LevelSearch { index, sets, full, full_index }
-}
-
-/// The best of `best` and the tree's candidates for the scorer's query. Tree candidates farther
-/// than `best` (in projected distance, a lower bound of the full one, which the occurrence factor
-/// only raises) cannot win, so the tree is searched only within that radius; the margin covers
-/// the rounding of the f32 projection. A masked query has its left-out slots set to the
-/// projection's mean and no radius (the projected distance no longer bounds the masked one).
-pub(crate) fn tree_refine(
-    index: &ApproximateIndex,
-    tree_query: &TreeQuery,
-    best: (f32, usize),
-    score: &dyn Fn(&usize) -> (f32, usize),
-    candidates: &mut Vec<usize>,
-) -> usize {
-    let first = candidates.len();
-    match tree_query.active {
-        None => index.candidates(tree_query.query, best.0 * (1.0 + 1e-4) + 1e-6, candidates),
-        Some(active) => {
-            let mut query = tree_query.query.to_vec();
-            let mean = index.pca().mean();
-            for ((slot, m), &on) in query.chunks_exact_mut(3).zip(mean.chunks_exact(3)).zip(active) {
-                if !on {
-                    slot.copy_from_slice(m);
-                }
-            }
-            index.candidates(&query, f32::INFINITY, candidates);
-        }
-    }
-    candidates[first..].iter().map(score).fold(best, better).1
-}
-
-/// Ashikhmin (2001) candidates: for each already synthesised neighbour at offset `(dx, dy)` in `nb`
-/// (every neighbour when `done` is `None`), the exemplar texel at its source shifted back by
-/// `(dx, dy)`.
-pub(crate) fn coherence_candidates(
-    ex: &ExemplarLevel,
-    nb: &Neighbourhood,
-    coords: &Grid<[u32; 2]>,
-    done: Option<&Grid<bool>>,
-    x: isize,
-    y: isize,
-    out: &mut Vec<usize>,
-) {
-    for &[dx, dy] in nb.causal() {
-        if done.is_some_and(|d| !*d.get_wrapped(x + dx, y + dy)) {
-            continue;
-        }
-        let [sx, sy] = *coords.get_wrapped(x + dx, y + dy);
-        if let Some(i) = ex.index_of(sx as isize - dx, sy as isize - dy) {
-            out.push(i);
-        }
-    }
 }
