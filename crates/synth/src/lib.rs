@@ -36,6 +36,7 @@ mod correction;
 pub mod energy;
 pub mod error;
 pub mod exemplar;
+mod guard;
 pub mod metrics;
 pub mod neighbourhood;
 mod polish;

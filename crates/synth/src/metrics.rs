@@ -12,6 +12,8 @@
 //!   visible, so we measure them).
 //! * Copying: [`copy_statistics`] finds the connected blocks of a source-coordinate map that copy
 //!   the exemplar verbatim.
+//! * The guards' figures (`guard`): the variation an output kept ([`variation_ratio`]) and how far
+//!   its histograms drifted ([`histogram_mismatch`]), both against the exemplar's own spread.
 //!
 //! Every metric is deterministic (fixed summation order, no dependence on the thread count) and
 //! returns finite values on constant or empty inputs; each function says what it returns there.
@@ -23,6 +25,13 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 use skinkit_maps::{ColorMap, Grid, NormalMap};
+
+mod guard;
+pub use guard::{
+    COLLAPSE_RATIO, HISTOGRAM_RATIO, channel_histogram_mismatch, histogram_mismatch, slope_histogram_mismatch,
+    slope_variation_ratio, variation_ratio,
+};
+pub(crate) use guard::{slope_histogram_mismatch_of, slope_variation_ratio_of, std_dev};
 
 /// Normals with `z` at or below this are skipped by [`slopes`]: their slope (over 1000, a surface
 /// tilted beyond 89.94 degrees) carries no usable statistics, and invalid `(0, 0, 0)` normals fall
@@ -476,93 +485,5 @@ impl DisjointSets {
         }
         self.parent[rb] = ra as u32;
         self.size[ra] += self.size[rb];
-    }
-}
-
-/// Below this share of the exemplar's variation an output counts as collapsed (see
-/// [`variation_ratio`]).
-pub const COLLAPSE_RATIO: f64 = 0.5;
-
-/// How much of the exemplar's variation a colour output keeps: the smallest, over the channels
-/// whose exemplar standard deviation is above `1e-6`, of the output's standard deviation over the
-/// exemplar's. 1 when no channel varies (a constant exemplar cannot lose variation); 0 for a
-/// constant output of a varied exemplar. A synthesis that regresses to one window (a blank map)
-/// scores near 0; [`COLLAPSE_RATIO`] is the warning threshold.
-///
-/// The exemplar's deviation is taken at the output's scale (`deviation_at_scale`): an output
-/// smaller than the exemplar cannot hold its longest waves, and a verbatim crop of it scores 1,
-/// not the crop's share of the whole exemplar's deviation.
-pub fn variation_ratio(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-    let value = |c: usize| move |v: &Vec3| Some(v[c]);
-    let pairs = (0..3).map(|c| {
-        (std_dev(output.as_slice().iter().filter_map(value(c))), deviation_at_scale(exemplar, output.size(), value(c)))
-    });
-    min_ratio(pairs)
-}
-
-/// The deviation of `value` over `exemplar` at the scale of an `ow x oh` output: the whole
-/// exemplar's standard deviation when the output is at least as large on both axes, otherwise the
-/// mean standard deviation over the exemplar's tiles of `min(ow, ew) x min(oh, eh)` texels
-/// (non-overlapping, from the top-left; a partial last tile is left out).
-fn deviation_at_scale(exemplar: &Grid<Vec3>, (ow, oh): (usize, usize), value: impl Fn(&Vec3) -> Option<f32>) -> f64 {
-    let (ew, eh) = exemplar.size();
-    let (tw, th) = (ow.clamp(1, ew.max(1)), oh.clamp(1, eh.max(1)));
-    if tw >= ew && th >= eh {
-        return std_dev(exemplar.as_slice().iter().filter_map(&value));
-    }
-    let tiles: Vec<f64> = (0..eh / th)
-        .flat_map(|ty| (0..ew / tw).map(move |tx| (tx, ty)))
-        .map(|(tx, ty)| {
-            let rows = (ty * th..(ty + 1) * th).flat_map(|y| (tx * tw..(tx + 1) * tw).map(move |x| (x, y)));
-            std_dev(rows.filter_map(|(x, y)| value(exemplar.get(x, y))))
-        })
-        .collect();
-    tiles.iter().sum::<f64>() / tiles.len().max(1) as f64
-}
-
-/// [`variation_ratio`] for normal maps, on the slopes ([`slopes`]) of each axis.
-pub fn slope_variation_ratio(output: &NormalMap, exemplar: &NormalMap) -> f64 {
-    slope_variation_ratio_of(output.grid(), exemplar.grid())
-}
-
-/// [`slope_variation_ratio`] of normals held as plain grids (texels with `z <= MIN_NZ` left out).
-pub(crate) fn slope_variation_ratio_of(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-    let slope = |c: usize| move |v: &Vec3| (v.z > MIN_NZ).then(|| -v[c] / v.z);
-    let pairs = (0..2).map(|c| {
-        (std_dev(output.as_slice().iter().filter_map(slope(c))), deviation_at_scale(exemplar, output.size(), slope(c)))
-    });
-    min_ratio(pairs)
-}
-
-/// The smallest `output / exemplar` over the pairs whose exemplar deviation is above `1e-6`.
-fn min_ratio(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
-    let min = pairs.filter(|&(_, e)| e > 1e-6).map(|(o, e)| o / e).fold(f64::INFINITY, f64::min);
-    if min.is_finite() { min } else { 1.0 }
-}
-
-/// Population standard deviation of the finite values (0 for none), in one pass (f64 sums; the
-/// values are slopes or colours, far from where the shortcut loses precision).
-pub(crate) fn std_dev(values: impl Iterator<Item = f32>) -> f64 {
-    let (mut n, mut sum, mut squares) = (0u64, 0.0f64, 0.0f64);
-    for v in values.filter(|v| v.is_finite()).map(f64::from) {
-        n += 1;
-        sum += v;
-        squares += v * v;
-    }
-    if n == 0 {
-        return 0.0;
-    }
-    let mean = sum / n as f64;
-    (squares / n as f64 - mean * mean).max(0.0).sqrt()
-}
-
-#[cfg(test)]
-mod tests {
-    /// The one-pass deviation against a hand computation; non-finite values are skipped.
-    #[test]
-    fn std_dev_is_the_population_deviation_of_the_finite_values() {
-        let v = [1.0f32, 3.0, f32::NAN, 5.0, 7.0, f32::INFINITY];
-        assert!((super::std_dev(v.iter().copied()) - 5.0f64.sqrt()).abs() < 1e-12);
-        assert_eq!(super::std_dev(std::iter::empty()), 0.0);
     }
 }

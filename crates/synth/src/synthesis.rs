@@ -54,10 +54,9 @@
 //! k-coherence fallback), which is where a good seam texel is found; the finest level places the
 //! seams without a bias and with a looser fallback ratio (its tree queries cost the most).
 //!
-//! Collapse guard ([`synthesize`], [`synthesize_normals`]): an output whose variation (slope or
-//! channel deviation over the exemplar's, [`metrics::variation_ratio`]) falls under
-//! [`metrics::COLLAPSE_RATIO`] is grown again with [`SynthConfig::collapse_retry`]; the better
-//! output is kept and a warning says what happened.
+//! Guards ([`synthesize`], [`synthesize_normals`]; `guard`): an output that collapsed, or whose
+//! histograms drifted from the exemplar's, is grown again with an occurrence penalty and the
+//! better output kept.
 //!
 //! What runs in parallel: pyramids, exemplar features, PCA and kd-tree construction, the
 //! exhaustive scan over candidates for one texel, and the texels of a correction sub-pass. The
@@ -103,6 +102,11 @@ pub struct Synthesis {
     /// The collapse guard: the output's variation over the exemplar's
     /// ([`metrics::variation_ratio`]); under [`metrics::COLLAPSE_RATIO`] a warning says so.
     pub variation: f64,
+    /// The histogram guard: how far the output's channel histograms are from the exemplar's
+    /// ([`metrics::channel_histogram_mismatch`]).
+    pub histogram: f64,
+    /// Whether the histogram guard grew the output again (see [`SynthConfig::histogram_retry`]).
+    pub histogram_retry: bool,
 }
 
 /// The result of [`synthesize_normals`].
@@ -116,19 +120,10 @@ pub struct NormalSynthesis {
     pub level_seconds: Vec<f64>,
     /// The collapse guard on slopes ([`metrics::slope_variation_ratio`]).
     pub variation: f64,
-}
-
-/// The warning of an output that kept less than [`metrics::COLLAPSE_RATIO`] of the exemplar's
-/// variation, if it did.
-fn collapse_warning(variation: f64, what: &str) -> Option<String> {
-    (variation < metrics::COLLAPSE_RATIO).then(|| {
-        format!(
-            "the output kept {:.0} % of the exemplar's {what} variation (under {:.0} %): it may be \
-             nearly blank; try another seed",
-            100.0 * variation,
-            100.0 * metrics::COLLAPSE_RATIO
-        )
-    })
+    /// The histogram guard on slopes ([`metrics::slope_histogram_mismatch`]).
+    pub histogram: f64,
+    /// Whether the histogram guard grew the output again.
+    pub histogram_retry: bool,
 }
 
 /// Grows `exemplar` into a `config.width x config.height` map. `progress(level, fraction)` is called
@@ -137,13 +132,13 @@ fn collapse_warning(variation: f64, what: &str) -> Option<String> {
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
 pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
-    guarded(exemplar, config, progress, Texels::Colour)
+    crate::guard::guarded(exemplar, config, progress, Texels::Colour)
 }
 
 /// What a synthesis grows: it decides the pyramid the search matches in and how an output's
 /// variation is measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Texels {
+pub(crate) enum Texels {
     Colour,
     /// Unnormalised normals, matched with a detail channel ([`crate::appearance`]).
     Normals,
@@ -151,14 +146,22 @@ enum Texels {
 
 impl Texels {
     /// How much of the exemplar's variation `output` kept (channel or slope deviations).
-    fn variation(self, output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
+    pub(crate) fn variation(self, output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
         match self {
             Texels::Colour => metrics::variation_ratio(output, exemplar),
             Texels::Normals => metrics::slope_variation_ratio_of(output, exemplar),
         }
     }
 
-    fn name(self) -> &'static str {
+    /// How far `output`'s channel or slope histograms drifted from the exemplar's.
+    pub(crate) fn histogram_mismatch(self, output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
+        match self {
+            Texels::Colour => metrics::channel_histogram_mismatch(output, exemplar),
+            Texels::Normals => metrics::slope_histogram_mismatch_of(output, exemplar),
+        }
+    }
+
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Texels::Colour => "colour",
             Texels::Normals => "slope",
@@ -174,42 +177,8 @@ impl Texels {
     }
 }
 
-/// [`synthesize_unguarded`] behind the collapse guard: an output that kept less than
-/// [`metrics::COLLAPSE_RATIO`] of the exemplar's variation is grown again with
-/// [`SynthConfig::collapse_retry`] (the occurrence penalty at the coarse levels, which keeps sparse
-/// features from being averaged away), and the better of the two is kept; a warning says so, and
-/// another one if even that one collapsed.
-fn guarded(
-    exemplar: &Grid<Vec3>,
-    config: &SynthConfig,
-    progress: &dyn Fn(usize, f32),
-    kind: Texels,
-) -> Result<Synthesis> {
-    let what = kind.name();
-    let mut s = synthesize_unguarded(exemplar, config, progress, kind)?;
-    s.variation = kind.variation(&s.texels, exemplar);
-    if let Some(retry) = config.collapse_retry().filter(|_| s.variation < metrics::COLLAPSE_RATIO) {
-        let mut again = synthesize_unguarded(exemplar, &retry, progress, kind)?;
-        again.variation = kind.variation(&again.texels, exemplar);
-        let note = format!(
-            "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
-             with occurrence penalty {} at the coarser levels ({:.0} %{})",
-            100.0 * s.variation,
-            retry.occurrence_penalty,
-            100.0 * again.variation,
-            if again.variation > s.variation { ", kept" } else { ", not better: the first was kept" }
-        );
-        if again.variation > s.variation {
-            s = again;
-        }
-        s.warnings.push(note);
-    }
-    s.warnings.extend(collapse_warning(s.variation, what));
-    Ok(s)
-}
-
 /// [`synthesize`] without the collapse guard (its `variation` is left for the caller to measure).
-fn synthesize_unguarded(
+pub(crate) fn synthesize_unguarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
@@ -256,7 +225,15 @@ fn synthesize_unguarded(
         }
     }
     let (texels, coords) = result.expect("level 0 is always synthesised");
-    Ok(Synthesis { texels, coords, warnings, level_seconds, variation: f64::NAN })
+    Ok(Synthesis {
+        texels,
+        coords,
+        warnings,
+        level_seconds,
+        variation: f64::NAN,
+        histogram: f64::NAN,
+        histogram_retry: false,
+    })
 }
 
 /// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
@@ -270,7 +247,7 @@ pub fn synthesize_normals(
     progress: &dyn Fn(usize, f32),
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
-    let mut s = guarded(exemplar.grid(), config, progress, Texels::Normals)?;
+    let mut s = crate::guard::guarded(exemplar.grid(), config, progress, Texels::Normals)?;
     s.warnings.splice(0..0, exemplar_warning);
     // The finest level copies exemplar texels, which are unit (or invalid zero) already: wrapping
     // them keeps the bits, where renormalising would perturb the last one.
@@ -281,6 +258,8 @@ pub fn synthesize_normals(
         warnings: s.warnings,
         level_seconds: s.level_seconds,
         variation: s.variation,
+        histogram: s.histogram,
+        histogram_retry: s.histogram_retry,
     })
 }
 

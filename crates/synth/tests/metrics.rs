@@ -337,3 +337,70 @@ fn slope_variation_ratio_scales_with_the_slopes() {
     assert!((r - 0.4).abs() < 0.02, "{r}");
     assert!(slope_variation_ratio(&NormalMap::flat(w, h), &ex) < 1e-6);
 }
+
+/// The histogram mismatch against closed forms: an output equal to the exemplar scores 0; one whose
+/// red channel is shifted by `delta` scores `delta / sd(red) / 3` (W1 of a shift is the shift; the
+/// mean over three channels); a channel the exemplar holds constant is left out; a constant
+/// exemplar scores 0 whatever the output.
+#[test]
+fn histogram_mismatch_has_closed_forms() {
+    let (w, h) = (40, 30);
+    let r = uniform(w * h, 1);
+    let g = uniform(w * h, 2);
+    let ex = Grid::from_fn(w, h, |x, y| Vec3::new(r[y * w + x], g[y * w + x], 0.25));
+    assert_eq!(channel_histogram_mismatch(&ex, &ex), 0.0);
+    let delta = 0.1f32;
+    let shifted = ex.map(|v| *v + Vec3::new(delta, 0.0, 0.0));
+    let sd = {
+        let m = r.iter().map(|&v| v as f64).sum::<f64>() / r.len() as f64;
+        (r.iter().map(|&v| (v as f64 - m).powi(2)).sum::<f64>() / r.len() as f64).sqrt()
+    };
+    // Blue is constant in the exemplar: left out, so the mean is over red and green.
+    let expected = f64::from(delta) / sd / 2.0;
+    let got = channel_histogram_mismatch(&shifted, &ex);
+    assert!((got - expected).abs() < 1e-5, "{got} vs {expected}");
+    let flat = Grid::filled(8, 8, Vec3::splat(0.5));
+    assert_eq!(channel_histogram_mismatch(&ex, &flat), 0.0);
+}
+
+/// Past the sampling limit the output is read at an even stride: a large output tiled from the
+/// exemplar (so every tile holds its histogram exactly) still scores about 0, and a shifted one
+/// about the shift.
+#[test]
+fn histogram_mismatch_samples_large_outputs_evenly() {
+    let side = 64;
+    let v = uniform(side * side, 3);
+    let ex = Grid::from_fn(side, side, |x, y| Vec3::splat(v[y * side + x]));
+    let big = Grid::from_fn(1100, 1000, |x, y| *ex.get(x % side, y % side));
+    assert!(channel_histogram_mismatch(&big, &ex) < 0.02, "{}", channel_histogram_mismatch(&big, &ex));
+    let shifted = big.map(|t| *t + Vec3::splat(0.2));
+    let sd = ex.as_slice().iter().map(|t| t.x as f64).collect::<Vec<_>>();
+    let m = sd.iter().sum::<f64>() / sd.len() as f64;
+    let sd = (sd.iter().map(|v| (v - m).powi(2)).sum::<f64>() / sd.len() as f64).sqrt();
+    let got = channel_histogram_mismatch(&shifted, &ex);
+    assert!((got - 0.2 / sd).abs() < 0.02, "{got} vs {}", 0.2 / sd);
+}
+
+/// For normal maps the mismatch is over the slopes: a map against itself scores 0, against a
+/// tilted copy (every slope shifted by the same amount) the shift over the slopes' deviation.
+#[test]
+fn slope_histogram_mismatch_reads_slopes() {
+    let (w, h) = (32, 32);
+    let a = uniform(w * h, 4);
+    let b = uniform(w * h, 5);
+    let tilted_by = |dx: f32| {
+        let n = Grid::from_fn(w, h, |x, y| Vec3::new(-(0.2 * a[y * w + x] + dx), -0.2 * b[y * w + x], 1.0).normalize());
+        NormalMap::from_unit_grid(n).unwrap()
+    };
+    let (ex, tilted) = (tilted_by(0.0), tilted_by(0.05));
+    assert_eq!(slope_histogram_mismatch(&ex, &ex), 0.0);
+    let (sx, _) = slopes(&ex);
+    let sd = |v: &[f32]| {
+        let m = v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64;
+        (v.iter().map(|&x| (x as f64 - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    // sx shifts by 0.05 (W1 = 0.05), sy does not move: the mean of 0.05 / sd(sx) and 0.
+    let expected = 0.05 / sd(&sx) / 2.0;
+    let got = slope_histogram_mismatch(&tilted, &ex);
+    assert!((got - expected).abs() < 1e-3 * expected.max(1.0), "{got} vs {expected}");
+}

@@ -249,19 +249,29 @@ fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<(
 }
 
 /// What one synthesis gives: the map, its exemplar coordinates, warnings, seconds per level and
-/// the collapse guard's variation.
-type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>, f64);
+/// the guards' figures.
+type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>, Guards);
+
+/// The synthesis guards' figures (see `skinkit_synth::guard`), as the report gives them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Guards {
+    pub variation: f64,
+    pub histogram: f64,
+    pub histogram_retry: bool,
+}
 
 /// Grows `exemplar`, normals or colours, under `config`.
 fn grow_map(exemplar: &Map, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Grown> {
     Ok(match exemplar {
         Map::Normal(n) => {
             let s = skinkit_synth::synthesize_normals(n, config, progress)?;
-            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds, s.variation)
+            let guards = Guards { variation: s.variation, histogram: s.histogram, histogram_retry: s.histogram_retry };
+            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds, guards)
         }
         Map::Color(c) => {
             let s = skinkit_synth::synthesize(c, config, progress)?;
-            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds, s.variation)
+            let guards = Guards { variation: s.variation, histogram: s.histogram, histogram_retry: s.histogram_retry };
+            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds, guards)
         }
     })
 }
@@ -319,6 +329,12 @@ pub struct QualityReport {
     /// over the exemplar's, the smallest over axes or channels; under 0.5 a warning says the output
     /// may be nearly blank.
     pub variation: f64,
+    /// The histogram guard: how far the output's slope or channel histograms are from the
+    /// exemplar's, in the exemplar's deviations (Wasserstein-1 distance over deviation, mean over
+    /// axes or channels); above 0.15 the output was grown again with an occurrence penalty.
+    pub histogram_mismatch: f64,
+    /// Whether the output is the histogram guard's second growth (kept because it came nearer).
+    pub histogram_retry: bool,
     /// Texels of the largest verbatim copied block.
     pub largest_block: usize,
     /// Mean copied block size in texels.
@@ -439,13 +455,13 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let (validated, _) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };
     let progress = |level: usize, fraction: f32| bars.update(level, fraction);
-    let (output, coords, warnings, level_seconds, variation) =
+    let (output, coords, warnings, level_seconds, guards) =
         grow_map(&exemplar, &requested, &progress).with_context(context)?;
     bars.finish();
     for w in &warnings {
         out.warn(w);
     }
-    let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap, variation);
+    let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap, guards);
     // One set: the map, the coordinates and the report appear together or not at all.
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
@@ -518,13 +534,13 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
 }
 
 /// The quality metrics of an output against its exemplar (slopes or channels, spectrum, tiling,
-/// copied blocks); `variation` is the synthesis's own collapse-guard figure.
+/// copied blocks), with the synthesis's own guard figures.
 pub(crate) fn quality(
     exemplar: &Map,
     output: &Map,
     coords: &Grid<[u32; 2]>,
     wrap: bool,
-    variation: f64,
+    guards: Guards,
 ) -> QualityReport {
     let bins = DEFAULT_SPECTRUM_BINS;
     let copies = metrics::copy_statistics(coords, exemplar.size(), wrap);
@@ -551,7 +567,9 @@ pub(crate) fn quality(
         spectrum_distance: spectrum,
         seam_energy_ratio: seam,
         exemplar_seam_energy_ratio: exemplar_seam,
-        variation,
+        variation: guards.variation,
+        histogram_mismatch: guards.histogram,
+        histogram_retry: guards.histogram_retry,
         largest_block: copies.largest_block,
         mean_block: copies.mean_block,
         distinct_offsets: copies.distinct_offsets,
@@ -565,8 +583,9 @@ fn human(r: &SynthReport) -> String {
         (_, Some(d)) => format!("channel distance {d:.4}"),
         _ => String::new(),
     };
+    let retry = if q.histogram_retry { " (grown twice: the histogram guard)" } else { "" };
     format!(
-        "{}: {}x{} from {}x{} in {} levels, {:.2} s\n{histogram}, spectrum distance {:.3}, variation {:.2} of \
+        "{}: {}x{} from {}x{} in {} levels, {:.2} s\n{histogram}{retry}, spectrum distance {:.3}, variation {:.2} of \
          the exemplar's, seam ratio {:.2} (exemplar {:.2}), largest copied block {} texels, mean {:.1}",
         r.out,
         r.width,

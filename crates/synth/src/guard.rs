@@ -1,0 +1,87 @@
+//! The guards every synthesis runs behind ([`crate::synthesize`], [`crate::synthesize_normals`]).
+//!
+//! * Collapse guard: an output whose variation (slope or channel deviation over the exemplar's,
+//!   [`metrics::variation_ratio`]) falls under [`metrics::COLLAPSE_RATIO`] is grown again with
+//!   [`SynthConfig::collapse_retry`]; the better output is kept and a warning says what happened.
+//! * Histogram guard: an output whose slope or channel histograms drifted more than
+//!   [`metrics::HISTOGRAM_RATIO`] of the exemplar's deviation from the exemplar's
+//!   ([`metrics::histogram_mismatch`]) is grown again with [`SynthConfig::histogram_retry`] (Kopf
+//!   et al. 2007's occurrence penalty, which weights texels by their use); the output nearer the
+//!   exemplar's histogram is kept if it has not collapsed (outputs of at least 64 x 64 texels;
+//!   smaller ones are too few to judge a histogram by). The figure and whether it retried are
+//!   in the result, not a warning: a retry that helped is the guard working. The measured case is
+//!   the suite's heightfield nose, whose coarse levels otherwise grow too much of its bulge's
+//!   slopes (`docs/synthesis-notes.md`).
+
+use glam::Vec3;
+use skinkit_maps::Grid;
+
+use crate::synthesis::{Synthesis, Texels, synthesize_unguarded};
+use crate::{Result, SynthConfig, metrics};
+
+/// The histogram guard judges outputs of at least this many texels: the histogram of a random
+/// sample of `n` values lies about `1 / sqrt(n)` deviations from its population's in
+/// Wasserstein-1, so a smaller output could be regrown for its size alone.
+const HISTOGRAM_MIN_TEXELS: usize = 64 * 64;
+
+/// [`synthesize_unguarded`] behind the collapse guard, then the histogram guard (on the config
+/// that made the kept output, so a collapse retry's stronger penalty is not weakened).
+pub(crate) fn guarded(
+    exemplar: &Grid<Vec3>,
+    config: &SynthConfig,
+    progress: &dyn Fn(usize, f32),
+    kind: Texels,
+) -> Result<Synthesis> {
+    let what = kind.name();
+    let mut s = measured(synthesize_unguarded(exemplar, config, progress, kind)?, exemplar, kind);
+    let mut used = config.clone();
+    if let Some(retry) = config.collapse_retry().filter(|_| s.variation < metrics::COLLAPSE_RATIO) {
+        let again = measured(synthesize_unguarded(exemplar, &retry, progress, kind)?, exemplar, kind);
+        let note = format!(
+            "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
+             with occurrence penalty {} at the coarser levels ({:.0} %{})",
+            100.0 * s.variation,
+            retry.occurrence_penalty,
+            100.0 * again.variation,
+            if again.variation > s.variation { ", kept" } else { ", not better: the first was kept" }
+        );
+        if again.variation > s.variation {
+            s = again;
+            used = retry;
+        }
+        s.warnings.push(note);
+    }
+    s.warnings.extend(collapse_warning(s.variation, what));
+    let drifted = s.histogram > metrics::HISTOGRAM_RATIO
+        && s.variation >= metrics::COLLAPSE_RATIO
+        && s.texels.len() >= HISTOGRAM_MIN_TEXELS;
+    if let Some(retry) = used.histogram_retry().filter(|_| drifted) {
+        let mut again = measured(synthesize_unguarded(exemplar, &retry, progress, kind)?, exemplar, kind);
+        if again.histogram < s.histogram && again.variation >= metrics::COLLAPSE_RATIO {
+            again.warnings = std::mem::take(&mut s.warnings);
+            again.histogram_retry = true;
+            s = again;
+        }
+    }
+    Ok(s)
+}
+
+/// `s` with the guards' figures measured against `exemplar`.
+fn measured(mut s: Synthesis, exemplar: &Grid<Vec3>, kind: Texels) -> Synthesis {
+    s.variation = kind.variation(&s.texels, exemplar);
+    s.histogram = kind.histogram_mismatch(&s.texels, exemplar);
+    s
+}
+
+/// The warning of an output that kept less than [`metrics::COLLAPSE_RATIO`] of the exemplar's
+/// variation, if it did.
+fn collapse_warning(variation: f64, what: &str) -> Option<String> {
+    (variation < metrics::COLLAPSE_RATIO).then(|| {
+        format!(
+            "the output kept {:.0} % of the exemplar's {what} variation (under {:.0} %): it may be \
+             nearly blank; try another seed",
+            100.0 * variation,
+            100.0 * metrics::COLLAPSE_RATIO
+        )
+    })
+}
