@@ -204,9 +204,10 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!((options["fallback"].as_f64(), options["finest_fallback"].as_f64()), (Some(3.0), Some(6.0)));
     assert_eq!((options["coherence_bias"].as_f64(), options["finest_coherence_bias"].as_f64()), (Some(0.5), Some(0.0)));
     assert!(r["quality"]["variation"].as_f64().unwrap() >= 0.5, "{}", r["quality"]);
-    // The histogram guard's figure is reported; the forehead is within its limit, so grown once.
+    // The histogram guard's figure is reported; a 48x48 output is too small for the guard to
+    // judge (under 64x64 texels), so it is grown once.
     let mismatch = r["quality"]["histogram_mismatch"].as_f64().unwrap();
-    assert!(mismatch.is_finite() && (0.0..=0.15).contains(&mismatch), "{}", r["quality"]);
+    assert!(mismatch.is_finite() && mismatch > 0.0, "{}", r["quality"]);
     assert_eq!(r["quality"]["histogram_retry"], false);
     // The old flag still runs, and selects the default.
     let old: serde_json::Value =
