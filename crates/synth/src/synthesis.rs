@@ -177,7 +177,8 @@ impl Texels {
     }
 }
 
-/// [`synthesize`] without the collapse guard (its `variation` is left for the caller to measure).
+/// [`synthesize`] without the guards (its `variation` and `histogram` are left for the caller to
+/// measure, see `guard`).
 pub(crate) fn synthesize_unguarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
