@@ -117,7 +117,7 @@ fn grow(
             ("energy", energy),
             ("largest copy (% of exemplar)", copy_share),
             ("slope distance", metrics::slope_distance(&out, ex_normals)),
-            ("variation", grown.variation),
+            ("variation", grown.guards.variation),
         ]),
         seconds,
         runs,

@@ -19,6 +19,28 @@ use skinkit_maps::Grid;
 use crate::synthesis::{Synthesis, Texels, synthesize_unguarded};
 use crate::{Result, SynthConfig, metrics};
 
+/// What the guards measured on an output, as a synthesis returns it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Guards {
+    /// The collapse guard: the output's slope (normals) or channel (colours) deviation over the
+    /// exemplar's, the smallest over axes or channels ([`metrics::variation_ratio`]); under
+    /// [`metrics::COLLAPSE_RATIO`] a warning says so.
+    pub variation: f64,
+    /// The histogram guard: how far the output's slope or channel histograms are from the
+    /// exemplar's, in the exemplar's deviations ([`metrics::histogram_mismatch`]).
+    pub histogram: f64,
+    /// Whether the histogram guard grew the output again and kept the second growth (see
+    /// [`SynthConfig::histogram_retry`]).
+    pub histogram_retry: bool,
+}
+
+impl Guards {
+    /// The figures of an output not yet measured (NaN, so a missed measurement shows).
+    pub(crate) fn unmeasured() -> Self {
+        Guards { variation: f64::NAN, histogram: f64::NAN, histogram_retry: false }
+    }
+}
+
 /// The histogram guard judges outputs of at least this many texels: the histogram of a random
 /// sample of `n` values lies about `1 / sqrt(n)` deviations from its population's in
 /// Wasserstein-1, so a smaller output could be regrown for its size alone.
@@ -35,31 +57,31 @@ pub(crate) fn guarded(
     let what = kind.name();
     let mut s = measured(synthesize_unguarded(exemplar, config, progress, kind)?, exemplar, kind);
     let mut used = config.clone();
-    if let Some(retry) = config.collapse_retry().filter(|_| s.variation < metrics::COLLAPSE_RATIO) {
+    if let Some(retry) = config.collapse_retry().filter(|_| s.guards.variation < metrics::COLLAPSE_RATIO) {
         let again = measured(synthesize_unguarded(exemplar, &retry, progress, kind)?, exemplar, kind);
         let note = format!(
             "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
              with occurrence penalty {} at the coarser levels ({:.0} %{})",
-            100.0 * s.variation,
+            100.0 * s.guards.variation,
             retry.occurrence_penalty,
-            100.0 * again.variation,
-            if again.variation > s.variation { ", kept" } else { ", not better: the first was kept" }
+            100.0 * again.guards.variation,
+            if again.guards.variation > s.guards.variation { ", kept" } else { ", not better: the first was kept" }
         );
-        if again.variation > s.variation {
+        if again.guards.variation > s.guards.variation {
             s = again;
             used = retry;
         }
         s.warnings.push(note);
     }
-    s.warnings.extend(collapse_warning(s.variation, what));
-    let drifted = s.histogram > metrics::HISTOGRAM_RATIO
-        && s.variation >= metrics::COLLAPSE_RATIO
+    s.warnings.extend(collapse_warning(s.guards.variation, what));
+    let drifted = s.guards.histogram > metrics::HISTOGRAM_RATIO
+        && s.guards.variation >= metrics::COLLAPSE_RATIO
         && s.texels.len() >= HISTOGRAM_MIN_TEXELS;
     if let Some(retry) = used.histogram_retry().filter(|_| drifted) {
         let mut again = measured(synthesize_unguarded(exemplar, &retry, progress, kind)?, exemplar, kind);
-        if again.histogram < s.histogram && again.variation >= metrics::COLLAPSE_RATIO {
+        if again.guards.histogram < s.guards.histogram && again.guards.variation >= metrics::COLLAPSE_RATIO {
             again.warnings = std::mem::take(&mut s.warnings);
-            again.histogram_retry = true;
+            again.guards.histogram_retry = true;
             s = again;
         }
     }
@@ -68,8 +90,8 @@ pub(crate) fn guarded(
 
 /// `s` with the guards' figures measured against `exemplar`.
 fn measured(mut s: Synthesis, exemplar: &Grid<Vec3>, kind: Texels) -> Synthesis {
-    s.variation = kind.variation(&s.texels, exemplar);
-    s.histogram = kind.histogram_mismatch(&s.texels, exemplar);
+    s.guards.variation = kind.variation(&s.texels, exemplar);
+    s.guards.histogram = kind.histogram_mismatch(&s.texels, exemplar);
     s
 }
 

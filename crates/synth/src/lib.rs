@@ -46,4 +46,5 @@ pub mod synthesis;
 
 pub use config::{Search, Start, SynthConfig};
 pub use error::{Error, Result};
+pub use guard::Guards;
 pub use synthesis::{NormalSynthesis, Synthesis, replay, synthesize, synthesize_normals};

@@ -83,6 +83,7 @@ use crate::causal::causal_pass;
 use crate::config::{Search, Start, SynthConfig, half};
 use crate::correction::CorrectionLevel;
 use crate::exemplar::ExemplarLevel;
+use crate::guard::Guards;
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
 use crate::search::{ApproximateIndex, KCoherenceSets, SET_DIMS};
@@ -99,14 +100,9 @@ pub struct Synthesis {
     pub warnings: Vec<String>,
     /// Wall-clock seconds per level, `[0]` the finest.
     pub level_seconds: Vec<f64>,
-    /// The collapse guard: the output's variation over the exemplar's
-    /// ([`metrics::variation_ratio`]); under [`metrics::COLLAPSE_RATIO`] a warning says so.
-    pub variation: f64,
-    /// The histogram guard: how far the output's channel histograms are from the exemplar's
-    /// ([`metrics::channel_histogram_mismatch`]).
-    pub histogram: f64,
-    /// Whether the histogram guard grew the output again (see [`SynthConfig::histogram_retry`]).
-    pub histogram_retry: bool,
+    /// The guards' figures on channels ([`metrics::variation_ratio`],
+    /// [`metrics::channel_histogram_mismatch`]).
+    pub guards: Guards,
 }
 
 /// The result of [`synthesize_normals`].
@@ -118,12 +114,9 @@ pub struct NormalSynthesis {
     pub coords: Grid<[u32; 2]>,
     pub warnings: Vec<String>,
     pub level_seconds: Vec<f64>,
-    /// The collapse guard on slopes ([`metrics::slope_variation_ratio`]).
-    pub variation: f64,
-    /// The histogram guard on slopes ([`metrics::slope_histogram_mismatch`]).
-    pub histogram: f64,
-    /// Whether the histogram guard grew the output again.
-    pub histogram_retry: bool,
+    /// The guards' figures on slopes ([`metrics::slope_variation_ratio`],
+    /// [`metrics::slope_histogram_mismatch`]).
+    pub guards: Guards,
 }
 
 /// Grows `exemplar` into a `config.width x config.height` map. `progress(level, fraction)` is called
@@ -226,15 +219,7 @@ pub(crate) fn synthesize_unguarded(
         }
     }
     let (texels, coords) = result.expect("level 0 is always synthesised");
-    Ok(Synthesis {
-        texels,
-        coords,
-        warnings,
-        level_seconds,
-        variation: f64::NAN,
-        histogram: f64::NAN,
-        histogram_retry: false,
-    })
+    Ok(Synthesis { texels, coords, warnings, level_seconds, guards: Guards::unmeasured() })
 }
 
 /// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
@@ -258,9 +243,7 @@ pub fn synthesize_normals(
         coords: s.coords,
         warnings: s.warnings,
         level_seconds: s.level_seconds,
-        variation: s.variation,
-        histogram: s.histogram,
-        histogram_retry: s.histogram_retry,
+        guards: s.guards,
     })
 }
 

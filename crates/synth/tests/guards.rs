@@ -14,12 +14,12 @@ fn a_collapsed_output_is_grown_again_and_reported() {
     let ex = skinkit_heightfield::SkinParams::nose(128, 128, 1).generate().unwrap().normals;
     let quiet = |_: usize, _: f32| {};
     let default = synthesize_normals(&ex, &SynthConfig { seed: 1, ..SynthConfig::new(256, 256) }, &quiet).unwrap();
-    assert!(default.variation >= 0.8, "{}", default.variation);
+    assert!(default.guards.variation >= 0.8, "{}", default.guards.variation);
     assert!(default.warnings.is_empty(), "{:?}", default.warnings);
     let config = SynthConfig { seed: 1, detail_weight: 0.0, ..SynthConfig::new(256, 256) };
     let guarded = synthesize_normals(&ex, &config, &quiet).unwrap();
-    assert_eq!(guarded.variation, metrics::slope_variation_ratio(&guarded.normals, &ex));
-    assert!(guarded.variation >= 0.5, "{}", guarded.variation);
+    assert_eq!(guarded.guards.variation, metrics::slope_variation_ratio(&guarded.normals, &ex));
+    assert!(guarded.guards.variation >= 0.5, "{}", guarded.guards.variation);
     assert!(guarded.warnings.iter().any(|w| w.contains("collapse guard")), "{:?}", guarded.warnings);
     let retry = config.collapse_retry().expect("the default has no coarse penalty");
     let again = synthesize_normals(&ex, &retry, &quiet).unwrap();
@@ -39,15 +39,15 @@ fn a_drifted_histogram_is_grown_again_with_the_occurrence_penalty() {
     let quiet = |_: usize, _: f32| {};
     let config = SynthConfig { seed: 1, ..SynthConfig::new(256, 256) };
     let s = synthesize_normals(&ex, &config, &quiet).unwrap();
-    assert!(s.histogram_retry, "{}", s.histogram);
-    assert_eq!(s.histogram, metrics::slope_histogram_mismatch(&s.normals, &ex));
-    assert!(s.histogram <= HISTOGRAM_RATIO, "{}", s.histogram);
+    assert!(s.guards.histogram_retry, "{}", s.guards.histogram);
+    assert_eq!(s.guards.histogram, metrics::slope_histogram_mismatch(&s.normals, &ex));
+    assert!(s.guards.histogram <= HISTOGRAM_RATIO, "{}", s.guards.histogram);
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let retry = config.histogram_retry().expect("the default has no occurrence penalty");
     assert_eq!((retry.occurrence_penalty, retry.finest_penalty), (0.5, Some(0.5)));
     assert!(retry.histogram_retry().is_none(), "a retry is not retried");
     let direct = synthesize_normals(&ex, &retry, &quiet).unwrap();
-    assert!(!direct.histogram_retry);
+    assert!(!direct.guards.histogram_retry);
     assert_eq!(direct.coords, s.coords, "the guard returns the regrown output");
 }
 
@@ -56,6 +56,6 @@ fn a_drifted_histogram_is_grown_again_with_the_occurrence_penalty() {
 fn a_histogram_within_the_limit_is_grown_once() {
     let ex = skinkit_heightfield::SkinParams::forehead(64, 64, 1).generate().unwrap().normals;
     let s = synthesize_normals(&ex, &SynthConfig { seed: 2, ..SynthConfig::new(128, 128) }, &|_, _| {}).unwrap();
-    assert!(!s.histogram_retry && s.histogram <= HISTOGRAM_RATIO, "{}", s.histogram);
-    assert!(s.histogram.is_finite() && s.histogram > 0.0, "{}", s.histogram);
+    assert!(!s.guards.histogram_retry && s.guards.histogram <= HISTOGRAM_RATIO, "{}", s.guards.histogram);
+    assert!(s.guards.histogram.is_finite() && s.guards.histogram > 0.0, "{}", s.guards.histogram);
 }

@@ -19,7 +19,7 @@ use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
-use skinkit_synth::{Search, SynthConfig};
+use skinkit_synth::{Guards, Search, SynthConfig};
 
 use crate::flags;
 use crate::output::Output;
@@ -252,26 +252,16 @@ fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<(
 /// the guards' figures.
 type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>, Guards);
 
-/// The synthesis guards' figures (see `skinkit_synth::guard`), as the report gives them.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Guards {
-    pub variation: f64,
-    pub histogram: f64,
-    pub histogram_retry: bool,
-}
-
 /// Grows `exemplar`, normals or colours, under `config`.
 fn grow_map(exemplar: &Map, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Grown> {
     Ok(match exemplar {
         Map::Normal(n) => {
             let s = skinkit_synth::synthesize_normals(n, config, progress)?;
-            let guards = Guards { variation: s.variation, histogram: s.histogram, histogram_retry: s.histogram_retry };
-            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds, guards)
+            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds, s.guards)
         }
         Map::Color(c) => {
             let s = skinkit_synth::synthesize(c, config, progress)?;
-            let guards = Guards { variation: s.variation, histogram: s.histogram, histogram_retry: s.histogram_retry };
-            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds, guards)
+            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds, s.guards)
         }
     })
 }

@@ -47,7 +47,7 @@ fn deviation_at_scale(exemplar: &Grid<Vec3>, (ow, oh): (usize, usize), value: im
     tiles.iter().sum::<f64>() / tiles.len().max(1) as f64
 }
 
-/// [`variation_ratio`] for normal maps, on the slopes ([`slopes`]) of each axis.
+/// [`variation_ratio`] for normal maps, on the slopes ([`slopes`](super::slopes)) of each axis.
 pub fn slope_variation_ratio(output: &NormalMap, exemplar: &NormalMap) -> f64 {
     slope_variation_ratio_of(output.grid(), exemplar.grid())
 }
@@ -99,7 +99,7 @@ pub fn channel_histogram_mismatch(output: &Grid<Vec3>, exemplar: &Grid<Vec3>) ->
     histogram_mismatch(output, exemplar, 3, |v, c| Some(v[c]))
 }
 
-/// [`histogram_mismatch`] of normal maps, over the slopes `sx` and `sy` ([`slopes`]).
+/// [`histogram_mismatch`] of normal maps, over the slopes `sx` and `sy` ([`slopes`](super::slopes)).
 pub fn slope_histogram_mismatch(output: &NormalMap, exemplar: &NormalMap) -> f64 {
     slope_histogram_mismatch_of(output.grid(), exemplar.grid())
 }

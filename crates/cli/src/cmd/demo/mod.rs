@@ -25,7 +25,7 @@ use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
 use super::capture::SolveArgs;
 use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
-use super::synth::{Guards, Map, QualityReport, quality, write_coords};
+use super::synth::{Map, QualityReport, quality, write_coords};
 use crate::machine::Machine;
 use crate::output::Output;
 use crate::pipeline;
@@ -350,9 +350,8 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
     }
     .with_context(|| format!("cannot write {}", albedo.display()))?;
     write_coords(&dir.join("coords.png"), &grown.coords)?;
-    let guards =
-        Guards { variation: grown.variation, histogram: grown.histogram, histogram_retry: grown.histogram_retry };
-    let quality = quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false, guards);
+    let quality =
+        quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false, grown.guards);
     Ok(GrowthResult {
         region: region.to_owned(),
         width: size.0,
