@@ -5,7 +5,7 @@
 //!
 //! * the mean angular error against the flat truth (the plotted error),
 //! * [`residual_tilt`]: the tilt left in coarse tiles (the low frequencies it failed to remove),
-//! * [`detail_lost`]: the share of fine-scale slope it flattened along with them.
+//! * `detail_lost`: the share of fine-scale slope it flattened along with them.
 
 use glam::{DVec3, Vec3};
 use skinkit_capture::detrend::detrend;

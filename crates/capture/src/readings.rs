@@ -2,7 +2,7 @@
 //! pixel's readings, kept in one place: which readings are dropped (shadowed, by the one rule
 //! of [`Shadows`], or saturated), how RGB readings combine into the one the normal comes from
 //! ([`LUMA`]), which `|g|` still defines a normal ([`MIN_ALBEDO`]), how the condition number of
-//! a set of lights is measured ([`condition_of`]) and how per-band counts are merged
+//! a set of lights is measured (`condition_of`) and how per-band counts are merged
 //! ([`SolveStats`]).
 //!
 //! The distant solver's vectorised kernels (`solve/fused.rs`) apply the same rules with the
@@ -35,7 +35,7 @@ pub const SHADOW_REL: f32 = 0.1;
 /// The one shadow rule of every solver (least squares aside): a reading `r_i` is shadowed when
 /// `r_i < max(abs, rel * q90)`, below an absolute floor and also far below the pixel's own
 /// reference reading `q90`, the 90th percentile of its usable (finite, unsaturated) readings
-/// ([`shadow_reference`]). The 90th percentile rather than the brightest, so that a few
+/// (`shadow_reference`). The 90th percentile rather than the brightest, so that a few
 /// highlights do not raise the threshold; with up to 9 usable readings the two are the same.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shadows {

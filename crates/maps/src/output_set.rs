@@ -23,7 +23,7 @@
 //! takes that lock and keeps it, so a commit in progress finishes first and none starts after;
 //! then it removes every staging folder. A run that was killed outright (SIGKILL, power loss)
 //! leaves its staging folder: staging folders carry the writer's process id, and the next set
-//! written to the same destination removes those whose process is gone ([`OutputSet::swept`]).
+//! written to the same destination removes those whose process is gone (`OutputSet::swept`).
 //!
 //! Test hook: with `SKINKIT_FAULT_WRITE_AFTER_BYTES=N` in the environment, an atomic write fails
 //! with "No space left on device" once its file passes N bytes, as on a disk with N bytes free

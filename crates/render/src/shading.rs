@@ -332,7 +332,7 @@ pub fn tangent_frame(normal: Vec3, tangent: Vec4) -> (Vec3, Vec3, Vec3) {
     (t, n.cross(t) * sign, n)
 }
 
-/// The unit part of `v` perpendicular to the unit `n`, or [`any_perpendicular`] when `v` is
+/// The unit part of `v` perpendicular to the unit `n`, or `any_perpendicular` when `v` is
 /// (nearly) parallel to `n`, zero or not finite. The threshold is relative (1e-4 of |v|), so a
 /// tangent parallel to the normal up to rounding does not normalise rounding noise.
 pub fn perpendicular_part(v: Vec3, n: Vec3) -> Vec3 {

@@ -1,6 +1,6 @@
 //! What the interactive viewer draws, without a window: a scene's pass graph with some of its
 //! effects switched off and the base pass's ingredients toggled, rendered offscreen. The viewer
-//! ([`crate::viewer`], cargo feature `viewer`) shows these frames; the tests draw them headless,
+//! (`crate::viewer`, cargo feature `viewer`) shows these frames; the tests draw them headless,
 //! so the path a user sees is the path that is tested.
 
 use crate::effect::Effect;

@@ -28,7 +28,7 @@ impl Method {
     }
 }
 
-/// Parameters of [`solve`]; see the module docs for how the thresholds are applied.
+/// Parameters of [`solve`](super::solve()); see the module docs for how the thresholds are applied.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveConfig {
     pub method: Method,

@@ -6,7 +6,7 @@ use skinkit_maps::{ColorMap, NormalMap, ScalarMap};
 use super::SolveStats;
 use super::chunk::{fresh_zeroed, fresh_zeroed_vec3};
 
-/// The result of [`solve`].
+/// The result of [`solve`](super::solve()).
 #[derive(Clone, Debug)]
 pub struct Solution {
     /// Unit normals, `(0, 0, 0)` where invalid.

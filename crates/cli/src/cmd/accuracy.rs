@@ -19,7 +19,7 @@ pub const MARKER: &str = "accuracy.json";
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Folder to write accuracy.md, accuracy.json and the plots (accuracy-<stage>.png) into.
+    /// Folder to write accuracy.md, accuracy.json and the plots (`accuracy-<stage>.png`) into.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Small sizes, a couple of choices per knob, one timed run per choice (a few minutes);

@@ -218,7 +218,7 @@ fn check_face_out(dir: &Path, layout: &Layout) -> Result<()> {
 }
 
 /// Builds a face and writes its folder: normal.png (16-bit), normal.exr, labels.png,
-/// exemplars/<region>.png and report.json, as one output set (all or nothing, report last).
+/// `exemplars/<region>.png` and report.json, as one output set (all or nothing, report last).
 pub fn face_to_dir(
     options: &StitchOptions,
     dir: &Path,

@@ -10,7 +10,7 @@
 //! - tangents are `(T, w)` with `B = cross(N, T) * w` pointing up the image (toward decreasing
 //!   `v`), MikkTSpace run on OpenGL-style `(u, 1 - v)` ([`crate::frames`]): the basis glTF's
 //!   green-up normal textures are made against;
-//! - normal textures are green-up in both ([`images`]).
+//! - normal textures are green-up in both (`images`).
 //!
 //! glTF's unit is the metre: positions are the mesh's units times `mm_per_unit / 1000` (a scene
 //! re-rendering the export says `mm_per_unit = 1000` and puts its cameras in metres). A scene

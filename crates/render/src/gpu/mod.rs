@@ -1,7 +1,7 @@
 //! Headless wgpu: the machinery the passes of [`crate::pass`] run on. The device and its checks
-//! ([`device`]), buffers, textures and the shared bind group ([`resources`]), the pipeline cache
-//! ([`pipelines`]), a scene's upload and the frame's encoder walking the pass graph ([`frame`]),
-//! readback to linear f32 pixels ([`readback`]) and per-pass GPU timestamps ([`timing`]).
+//! (`device`), buffers, textures and the shared bind group (`resources`), the pipeline cache
+//! (`pipelines`), a scene's upload and the frame's encoder walking the pass graph (`frame`),
+//! readback to linear f32 pixels (`readback`) and per-pass GPU timestamps (`timing`).
 //!
 //! Without a GPU, Mesa's lavapipe (software Vulkan) runs everything: set `WGPU_BACKEND=vulkan`.
 //! [`Gpu::new`] reads the backends from `WGPU_BACKEND` (default: the native backends compiled in:

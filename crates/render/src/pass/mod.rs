@@ -1,11 +1,11 @@
 //! The passes of a frame, one module each, in the order [`crate::graph::ordered_passes`] gives:
-//! [`shadow`] (the key light's depth), [`translucent`] (the translucent casters' opacity),
-//! [`tsd_prepass`], [`light_map`] and [`blur`] (texture-space diffusion, with what they share in
-//! [`tsd`]), then [`base`]. Each module owns its WGSL (beside it), the resources it allocates,
-//! its pipeline and how it encodes itself; [`Gpu::encode_pass`] is the one place a
+//! `shadow` (the key light's depth), `translucent` (the translucent casters' opacity),
+//! `tsd_prepass`, `light_map` and `blur` (texture-space diffusion, with what they share in
+//! `tsd`), then `base`. Each module owns its WGSL (beside it), the resources it allocates,
+//! its pipeline and how it encodes itself; `Gpu::encode_pass` is the one place a
 //! [`PassKind`] is dispatched to its pass.
 //!
-//! The mesh passes share one uniform block ([`uniforms`]): a part every pass reads, then one
+//! The mesh passes share one uniform block (`uniforms`): a part every pass reads, then one
 //! named struct per pass, declared beside it.
 //!
 //! The mesh passes share one shader module, [`BASE_WGSL`], assembled here from `common.wgsl` and

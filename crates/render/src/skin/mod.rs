@@ -10,7 +10,7 @@
 //! - [`fit`]: the blog's closed form and our own fit of the diffuse table.
 //! - [`sh`]: order-2 SH environments and the skin's zonal convolution factors.
 //! - [`curvature`]: per-vertex 1/r from the mesh.
-//! - [`reference`]: the exact texture-space convolution.
+//! - [`reference`](mod@reference): the exact texture-space convolution.
 //! - [`tsd`]: texture-space diffusion's blur passes (single kernel or the profile's Gaussians).
 //! - [`options`], [`setup`], [`compare`]: scene settings, the GPU setup of a scene's pass graph,
 //!   and every method side by side.
