@@ -321,7 +321,8 @@ pub struct QualityReport {
     pub variation: f64,
     /// The histogram guard: how far the output's slope or channel histograms are from the
     /// exemplar's, in the exemplar's deviations (Wasserstein-1 distance over deviation, mean over
-    /// axes or channels); above 0.15 the output was grown again with an occurrence penalty.
+    /// axes or channels); above 0.15, on outputs of at least 64x64 texels that have not collapsed,
+    /// the output was grown again with an occurrence penalty.
     pub histogram_mismatch: f64,
     /// Whether the output is the histogram guard's second growth (kept because it came nearer).
     pub histogram_retry: bool,
