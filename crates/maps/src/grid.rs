@@ -87,9 +87,12 @@ impl<T> Grid<T> {
     }
     /// The texel at `(x, y)` with coordinates wrapped (toroidal addressing, used by synthesis).
     pub fn get_wrapped(&self, x: isize, y: isize) -> &T {
-        let xw = x.rem_euclid(self.width as isize) as usize;
-        let yw = y.rem_euclid(self.height as isize) as usize;
-        &self.data[yw * self.width + xw]
+        // Most reads are inside the grid: skip the two integer divisions there (synthesis reads
+        // texels this way in its inner loops).
+        let wrap = |v: isize, n: usize| {
+            if (0..n as isize).contains(&v) { v as usize } else { v.rem_euclid(n as isize) as usize }
+        };
+        &self.data[wrap(y, self.height) * self.width + wrap(x, self.width)]
     }
     /// The texel at `(x, y)` with coordinates clamped to the border.
     pub fn get_clamped(&self, x: isize, y: isize) -> &T {

@@ -154,17 +154,17 @@ fn choose(
     if let Some(blocks) = blocks {
         candidates.retain(|&i| i == own || within_cap(full, blocks, coords, x, y, i));
     }
-    let texels = full.texels();
+    // The candidate's exemplar window is the start of its full feature: the `n x n` texels in
+    // row-major order, the centre (slot `offsets.len() / 2`) among them, as `offsets` are.
+    let centre = offsets.len() / 2;
+    debug_assert!(full.dim() >= 3 * (offsets.len() + 1));
     let cost = |i: usize| {
-        let [sx, sy] = full.position(i);
-        let (sx, sy) = (sx as isize, sy as isize);
         let v = full.texel(i);
         let mut sum: f32 = predictions.iter().map(|p| (v - *p).length_squared()).sum();
-        for (value, &[dx, dy]) in values.iter().zip(offsets) {
-            // Candidates lie `N / 2` inside the exemplar unless it wraps.
-            let e =
-                if full.wraps() { texels.get_wrapped(sx + dx, sy + dy) } else { texels.get_clamped(sx + dx, sy + dy) };
-            sum += (*value - *e).length_squared();
+        let window = full.feature(i);
+        for (k, value) in values.iter().enumerate() {
+            let slot = 3 * (k + usize::from(k >= centre));
+            sum += (*value - Vec3::from_slice(&window[slot..slot + 3])).length_squared();
         }
         sum
     };
