@@ -14,7 +14,7 @@ use crate::neighbourhood::{LANES, Lanes, Neighbourhood, distance2};
 use crate::{Error, Result};
 
 /// Floats summed between two checks of [`ExemplarLevel::distance2_below`] (whole lanes). Each check
-/// adds the lanes up, which costs about as much as summing 16 floats: 32 took 512x512 from 0.83 to
+/// adds the lanes up, which costs about as much as summing 16 floats: 32 took 512x512 from 0.80 to
 /// 0.72 s of processor time against 16 (24 and 48 were slower than 32). The result does not depend
 /// on it (partial sums only grow).
 const EXIT_CHUNK: usize = 4 * LANES;
