@@ -109,6 +109,7 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "kb" => config.coherence_bias = f as f32,
             "fkb" => config.finest_coherence_bias = Some(f as f32),
             "dw" => config.detail_weight = f as f32,
+            "rs" => config.robust_scale = f as f32,
             "cap" => config.copy_cap = (f > 0.0).then_some(f as f32),
             other => panic!("unknown key {other}"),
         }

@@ -72,11 +72,19 @@ pub(crate) fn causal_pass(
                     occurrence: &occurrence,
                     own: None,
                     forbidden: &[],
+                    robust: 0.0,
                 };
                 (scorer, &full_nb, TreeQuery { query: &query, active: Some(&tree_active[..]) })
             } else {
-                let scorer =
-                    Scorer { ex, query: &query, active: None, occurrence: &occurrence, own: None, forbidden: &[] };
+                let scorer = Scorer {
+                    ex,
+                    query: &query,
+                    active: None,
+                    occurrence: &occurrence,
+                    own: None,
+                    forbidden: &[],
+                    robust: 0.0,
+                };
                 (scorer, nb, TreeQuery { query: &query, active: None })
             };
             let score = |&i: &usize| (scorer.score(i), i);

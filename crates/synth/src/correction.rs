@@ -24,6 +24,8 @@ pub(crate) struct CorrectionLevel<'a> {
     pub(crate) polish: usize,
     /// The coherence bias of this level ([`SynthConfig::coherence_bias`]).
     pub(crate) coherence_bias: f32,
+    /// The robust distance's scale at this level ([`SynthConfig::robust_scale`]; 0: squared L2).
+    pub(crate) robust_scale: f32,
     /// The full `N x N` (+ coarser `M x M`) shape.
     pub(crate) nb: &'a Neighbourhood,
     pub(crate) search: &'a LevelSearch,
@@ -150,7 +152,15 @@ impl CorrectionLevel<'_> {
         if forbid_own {
             cut_forbidden(full, coords, x, y, forbidden);
         }
-        let scorer = Scorer { ex: full, query, active: None, occurrence, own, forbidden };
+        // The robust distance's scale per float: the level's typical squared distance per float,
+        // times the configured scale.
+        let robust = match &self.search.sets {
+            Some(sets) if self.robust_scale > 0.0 => {
+                (self.robust_scale * sets.typical_full() / full.dim() as f32).max(f32::MIN_POSITIVE)
+            }
+            _ => 0.0,
+        };
+        let scorer = Scorer { ex: full, query, active: None, occurrence, own, forbidden, robust };
         let score = |&i: &usize| (scorer.score(i), i);
         candidates.clear();
         match (self.config.search, &self.search.sets) {
@@ -190,7 +200,8 @@ impl CorrectionLevel<'_> {
                 }
                 match (&self.search.full_index, fallback) {
                     _ if best.1 == usize::MAX => scorer.nearest_exact(),
-                    (Some(index), Some(ratio)) if best.0 > ratio * sets.typical_full() => {
+                    // The tree searches within an L2 radius, which a robust score does not give.
+                    (Some(index), Some(ratio)) if robust == 0.0 && best.0 > ratio * sets.typical_full() => {
                         tree_refine(index, &TreeQuery { query, active: None }, best, &score, candidates)
                     }
                     _ => best.1,

@@ -19,6 +19,9 @@ use crate::{Error, Result};
 /// on it (partial sums only grow).
 const EXIT_CHUNK: usize = 4 * LANES;
 
+/// Floats summed between two checks of [`ExemplarLevel::robust_distance_below`].
+const ROBUST_CHUNK: usize = 12;
+
 /// Candidates per rayon task in the exhaustive scan.
 const SCAN_CHUNK: usize = 256;
 
@@ -169,6 +172,21 @@ impl ExemplarLevel {
         lanes.total()
     }
 
+    /// The robust (Cauchy) distance from `query` to candidate `i`: the sum over the floats of
+    /// `scale ln(1 + d^2 / scale)`, `d` their difference (`scale` > 0; see
+    /// [`crate::SynthConfig::robust_scale`]). Abandoned once the partial sum exceeds `bound` like
+    /// [`Self::distance2_below`]: exact (same bits) when it is at most `bound`.
+    pub fn robust_distance_below(&self, i: usize, query: &[f32], scale: f32, bound: f32) -> f32 {
+        let mut sum = 0.0f32;
+        for (a, b) in self.feature(i).chunks(ROBUST_CHUNK).zip(query.chunks(ROBUST_CHUNK)) {
+            sum += a.iter().zip(b).map(|(p, q)| scale * ln_1p((p - q) * (p - q) / scale)).sum::<f32>();
+            if sum > bound {
+                return sum;
+            }
+        }
+        sum
+    }
+
     /// [`Self::distance2`] over the texel slots of the feature whose `active` entry is true (one
     /// entry per texel, 3 floats each); the others are left out of the sum.
     pub fn distance2_masked(&self, i: usize, query: &[f32], active: &[bool]) -> f32 {
@@ -199,7 +217,70 @@ impl ExemplarLevel {
     }
 }
 
+/// `ln(1 + x)` for `x >= 0` to about 1e-6 relative (plus the rounding of `1 + x`, about 6e-8
+/// absolute), without a library call, so the robust distance's inner loop stays branch-free:
+/// `1 + x = m 2^e` with `m` in [1, 2), and `ln m = 2 atanh(t)`, `t = (m - 1) / (m + 1)` in
+/// [0, 1/3], by its series to `t^9` (the next term is under 1e-6).
+#[inline]
+fn ln_1p(x: f32) -> f32 {
+    let bits = (1.0 + x).to_bits();
+    let e = ((bits >> 23) & 0xff) as i32 - 127;
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+    let t = (m - 1.0) / (m + 1.0);
+    let t2 = t * t;
+    let series = 1.0 + t2 * (1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (1.0 / 7.0 + t2 * (1.0 / 9.0))));
+    e as f32 * std::f32::consts::LN_2 + 2.0 * t * series
+}
+
 /// The better of two scored candidates: smaller distance, then smaller index.
 pub(crate) fn better(a: (f32, usize), b: (f32, usize)) -> (f32, usize) {
     if b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)).is_lt() { b } else { a }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The robust distance against a direct f64 sum, and its early exit: exact bits at or under
+    /// the bound, some value over it otherwise.
+    #[test]
+    fn robust_distance_is_the_cauchy_sum_and_exits_early() {
+        let texel =
+            |x: usize, y: usize| Vec3::new((x * 7 % 5) as f32 * 0.3, (y * 3 % 4) as f32 * 0.2, (x + y) as f32 * 0.05);
+        let level = ExemplarLevel::new(Grid::from_fn(9, 9, texel), None, &Neighbourhood::full(3, 1, false), 3, false);
+        let query: Vec<f32> = (0..level.dim()).map(|j| (j as f32 * 0.37).sin()).collect();
+        let scale = 0.2f32;
+        for i in 0..level.len() {
+            let exact: f64 = level
+                .feature(i)
+                .iter()
+                .zip(&query)
+                .map(|(&p, &q)| scale as f64 * ((p as f64 - q as f64).powi(2) / scale as f64).ln_1p())
+                .sum();
+            let got = level.robust_distance_below(i, &query, scale, f32::INFINITY);
+            assert!((got as f64 - exact).abs() <= 1e-5 * exact, "candidate {i}: {got} against {exact}");
+            assert_eq!(level.robust_distance_below(i, &query, scale, got).to_bits(), got.to_bits());
+            assert!(level.robust_distance_below(i, &query, scale, 0.5 * got) > 0.5 * got);
+        }
+    }
+
+    /// The fast `ln(1 + x)` against f64's over 13 decades, and at the exact powers of two.
+    #[test]
+    fn ln_1p_matches_the_library() {
+        let mut x = 1e-7f64;
+        while x < 1e6 {
+            for v in [x, x * 1.37, x * 2.9, 1.0 / x] {
+                let exact = v.ln_1p();
+                let got = ln_1p(v as f32) as f64;
+                assert!((got - exact).abs() <= 2e-6 * exact + 1.5e-7, "ln_1p({v}) = {got}, exact {exact}");
+            }
+            x *= 3.1;
+        }
+        assert_eq!(ln_1p(0.0), 0.0);
+        assert!(ln_1p(f32::MAX).is_finite());
+        for k in 0..20 {
+            let v = (2.0f64).powi(k) - 1.0;
+            assert!((ln_1p(v as f32) as f64 - v.ln_1p()).abs() < 1e-5, "2^{k} - 1");
+        }
+    }
 }

@@ -83,6 +83,9 @@ pub(crate) struct Scorer<'a> {
     /// Candidates the texel may not take (where the copy cap cuts: its current source and every
     /// source that would continue a neighbour's block, see `correction::cut_forbidden`).
     pub(crate) forbidden: &'a [usize],
+    /// The robust distance's scale per float ([`ExemplarLevel::robust_distance_below`]); 0:
+    /// squared L2. Unmasked queries only.
+    pub(crate) robust: f32,
 }
 
 impl Scorer<'_> {
@@ -93,6 +96,7 @@ impl Scorer<'_> {
         }
         let d = match self.active {
             Some(active) => self.ex.distance2_masked(i, self.query, active),
+            None if self.robust > 0.0 => self.ex.robust_distance_below(i, self.query, self.robust, f32::INFINITY),
             None => self.ex.distance2(i, self.query),
         };
         d * self.occurrence.factor(i, self.own)
@@ -108,6 +112,7 @@ impl Scorer<'_> {
         let bound = best / f;
         let d = match self.active {
             Some(active) => self.ex.distance2_masked(i, self.query, active),
+            None if self.robust > 0.0 => self.ex.robust_distance_below(i, self.query, self.robust, bound),
             None => self.ex.distance2_below(i, self.query, bound),
         };
         if d > bound { f32::INFINITY } else { d * f }

@@ -338,8 +338,17 @@ fn synthesize_level(
         let coherence_bias =
             if level == 0 { config.finest_coherence_bias } else { None }.unwrap_or(config.coherence_bias);
         let polish = if level == 0 { config.polish } else { 0 };
-        let level =
-            CorrectionLevel { coarser, copy_cap, polish, coherence_bias, nb: &full_nb, search: &search, config };
+        let robust_scale = if level == 0 { 0.0 } else { config.robust_scale };
+        let level = CorrectionLevel {
+            coarser,
+            copy_cap,
+            polish,
+            coherence_bias,
+            robust_scale,
+            nb: &full_nb,
+            search: &search,
+            config,
+        };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
