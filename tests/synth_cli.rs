@@ -197,6 +197,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!((options["corrections"].as_u64(), options["coarse_corrections"].as_u64()), (Some(1), Some(3)));
     assert_eq!(options["polish"], 1);
     assert_eq!(options["detail_weight"], 1.5);
+    assert_eq!(options["robust_scale"], 0.5);
     assert_eq!(options["occurrence_penalty"], 0.0);
     assert_eq!(options["search"], "k-coherence (k = 2)");
     assert!((options["copy_cap"].as_f64().unwrap() - 0.09).abs() < 1e-6, "{options}");
@@ -224,6 +225,8 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
         "2",
         "--detail-weight",
         "0",
+        "--robust-scale",
+        "0.25",
         "--json",
     ];
     let o = synth(&exemplar, &out, &flags);
@@ -233,6 +236,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["polish"], 0);
     assert_eq!(r["options"]["occurrence_penalty"], 2.0);
     assert_eq!(r["options"]["detail_weight"], 0.0);
+    assert_eq!(r["options"]["robust_scale"], 0.25);
     // The Wei-Levoy scanline start, as before.
     let o = synth(&exemplar, &out, &["--scanline", "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -243,5 +247,6 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["parent"], 3);
     assert_eq!(r["options"]["polish"], 0);
     assert_eq!(r["options"]["detail_weight"], 0.0);
+    assert_eq!(r["options"]["robust_scale"], 0.0);
     assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }

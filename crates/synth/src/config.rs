@@ -19,8 +19,9 @@ pub enum Search {
     /// `ratio` times the level's typical squared distance (the median, over exemplar candidates,
     /// of the causal-feature distance to the most similar other candidate) is also searched with
     /// the PCA kd-tree of `dims` / `rerank` (as [`Search::Approximate`], bounded by the best
-    /// distance so far). `None` never queries a tree (a texel without any synthesised neighbour,
-    /// i.e. the first of each level, is scanned exhaustively).
+    /// distance so far; only at the levels that match in squared L2, see
+    /// [`SynthConfig::robust_scale`]). `None` never queries a tree (a texel without any
+    /// synthesised neighbour, i.e. the first of each level, is scanned exhaustively).
     KCoherence { k: usize, fallback: Option<f32>, dims: usize, rerank: usize },
 }
 
@@ -205,7 +206,9 @@ pub const DEFAULT_COHERENCE_BIAS: f32 = 0.5;
 pub const DEFAULT_DETAIL_WEIGHT: f32 = 1.5;
 
 /// The default's k-coherence fallback ratio at the coarser levels (the suite: 1.5 and 2 cost
-/// more time for no lower energy, 4 and 6 raised it on the captured cheek).
+/// more time for no lower energy, 4 and 6 raised it on the captured cheek). With the default's
+/// robust distance there ([`SynthConfig::robust_scale`]) the tree is not searched: it only
+/// applies when the coarser levels match in squared L2.
 pub const DEFAULT_FALLBACK: f32 = 3.0;
 
 /// The default's fallback ratio at the finest level: most of the energy of 3 at about half its

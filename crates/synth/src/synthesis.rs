@@ -469,7 +469,9 @@ fn build_search(
             let sets = KCoherenceSets::new(full, ex, k, SET_DIMS.min(dims));
             let causal = fallback.filter(|_| config.start == Start::Scanline);
             let index = causal.map(|_| ApproximateIndex::new(ex, dims, rerank));
-            (index, Some(sets), fallback.and_then(|_| full_tree(dims, rerank)))
+            // The levels that match with the robust distance never search the tree.
+            let robust = level > 0 && config.robust_scale > 0.0;
+            (index, Some(sets), fallback.filter(|_| !robust).and_then(|_| full_tree(dims, rerank)))
         }
     };
     LevelSearch { index, sets, full, full_index }

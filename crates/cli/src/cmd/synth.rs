@@ -81,6 +81,11 @@ pub struct Args {
     /// with `--scanline`; 0 = plain normals).
     #[arg(long, value_name = "W", value_parser = flags::non_negative)]
     pub detail_weight: Option<f32>,
+    /// Scale of the robust (Cauchy) distance the coarser levels' correction passes match with, in
+    /// the level's typical squared distance per float (default 0.5, 0 with `--scanline`; 0 =
+    /// squared L2, as the finest level always is).
+    #[arg(long, value_name = "S", value_parser = flags::non_negative)]
+    pub robust_scale: Option<f32>,
     /// Occurrence penalty lambda (0 = off; default 0, 4 with `--scanline`).
     #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
     pub occurrence_penalty: Option<f32>,
@@ -286,6 +291,8 @@ pub struct OptionsReport {
     pub polish: usize,
     /// Normal maps: weight of the coarser levels' detail channel (`null` for colour maps).
     pub detail_weight: Option<f32>,
+    /// Scale of the coarser levels' robust distance (0: squared L2).
+    pub robust_scale: f32,
     /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
     pub search: String,
     /// k-coherence: the tree fallback's ratio at the coarser levels and at the finest (`null`: no
@@ -390,6 +397,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         exemplar_wrap: args.exemplar_wrap,
         copy_cap: args.copy_cap.or(base.copy_cap),
         detail_weight: args.detail_weight.unwrap_or(base.detail_weight),
+        robust_scale: args.robust_scale.unwrap_or(base.robust_scale),
         seed: args.seed,
         ..base
     }
@@ -511,6 +519,7 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         coarse_corrections: run.coarse_corrections.unwrap_or(run.corrections),
         polish: run.polish,
         detail_weight: (!args.map.is_color()).then_some(run.detail_weight),
+        robust_scale: run.robust_scale,
         search,
         fallback,
         finest_fallback: run.finest_fallback.or(fallback),
