@@ -153,10 +153,11 @@ impl CorrectionLevel<'_> {
             cut_forbidden(full, coords, x, y, forbidden);
         }
         // The robust distance's scale per float: the level's typical squared distance per float,
-        // times the configured scale.
+        // times the configured scale. A level whose typical distance is 0 (most windows have an
+        // exact twin, as in a mostly flat exemplar) has no scale to measure and matches in L2.
         let robust = match &self.search.sets {
-            Some(sets) if self.robust_scale > 0.0 => {
-                (self.robust_scale * sets.typical_full() / full.dim() as f32).max(f32::MIN_POSITIVE)
+            Some(sets) if self.robust_scale > 0.0 && sets.typical_full() > 0.0 => {
+                self.robust_scale * sets.typical_full() / full.dim() as f32
             }
             _ => 0.0,
         };
