@@ -23,7 +23,8 @@
 //! # Defaults and where they were measured
 //!
 //! [`SynthConfig::default`] is the upsampled start (Lefebvre and Hoppe 2005) with k-coherence
-//! correction passes, seam polishing, a copy cap and a collapse guard; [`SynthConfig::scanline`] the Wei-Levoy
+//! correction passes (a robust distance at the coarser levels, [`SynthConfig::robust_scale`]),
+//! seam polishing, a copy cap and a collapse guard; [`SynthConfig::scanline`] the Wei-Levoy
 //! causal start. Both are scored against the `texture-synthesis` peer on a fixed set of
 //! exemplars by `benches/suite.rs` (its table is in the README); `benches/table.rs` gives
 //! accuracy against time per search mode, and `docs/synthesis-notes.md` keeps what was measured
