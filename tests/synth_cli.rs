@@ -199,6 +199,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(options["detail_weight"], 1.5);
     assert_eq!(options["robust_scale"], 0.5);
     assert_eq!(options["occurrence_penalty"], 0.0);
+    assert!((options["layout_penalty"].as_f64().unwrap() - 0.05).abs() < 1e-6, "{options}");
     assert_eq!(options["search"], "k-coherence (k = 2)");
     assert!((options["copy_cap"].as_f64().unwrap() - 0.09).abs() < 1e-6, "{options}");
     assert_eq!(options["parent"], 1);
@@ -227,6 +228,8 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
         "0",
         "--robust-scale",
         "0.25",
+        "--layout-penalty",
+        "0.5",
         "--json",
     ];
     let o = synth(&exemplar, &out, &flags);
@@ -237,6 +240,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["occurrence_penalty"], 2.0);
     assert_eq!(r["options"]["detail_weight"], 0.0);
     assert_eq!(r["options"]["robust_scale"], 0.25);
+    assert_eq!(r["options"]["layout_penalty"], 0.5);
     // The Wei-Levoy scanline start, as before.
     let o = synth(&exemplar, &out, &["--scanline", "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -248,5 +252,6 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["polish"], 0);
     assert_eq!(r["options"]["detail_weight"], 0.0);
     assert_eq!(r["options"]["robust_scale"], 0.0);
+    assert_eq!(r["options"]["layout_penalty"], 0.0);
     assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }

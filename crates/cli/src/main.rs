@@ -42,7 +42,7 @@ enum Command {
     /// Grow a normal or colour map from an exemplar (Wei-Levoy); `synth replay` copies another
     /// map through the coordinate map of a run.
     #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
-    Synth(cmd::synth::Args),
+    Synth(Box<cmd::synth::Args>),
     /// Stitch one synthesis per face region into a face normal map (multiresolution spline along
     /// random curves).
     Stitch(cmd::stitch::StitchArgs),
@@ -76,7 +76,7 @@ fn main() {
         Command::Batch(args) => cmd::batch::run(args, &out),
         Command::Samples(args) => cmd::samples::run(args, &out),
         Command::Demo(args) => cmd::demo::run(args, &out),
-        Command::Synth(args) => cmd::synth::run(args, &out),
+        Command::Synth(args) => cmd::synth::run(*args, &out),
         Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
         Command::Face(args) => cmd::stitch::run_face(args, &out),
         Command::Render(args) => cmd::render::run(args, &out),

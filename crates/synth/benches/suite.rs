@@ -71,7 +71,7 @@ fn target_dir() -> PathBuf {
 /// penalty, at the finest level, in the corrections; L: levels; up: upsampled start (1) or
 /// scanline (0); j: jitter; w: exemplar wrap; cap: copy cap, share of the exemplar's area; fb /
 /// ffb: k-coherence tree fallback ratio, at the finest level, 0 = none; rr: its rerank count; po: seam-polishing passes; kb / fkb: coherence bias,
-/// at the finest level; dw: detail weight of normal maps, 0 = none).
+/// at the finest level; dw: detail weight of normal maps, 0 = none; rs: robust scale; lp: layout penalty).
 fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConfig {
     let mut config = SynthConfig { seed, ..SynthConfig::new(width, height) };
     for kv in spec.split(',').filter(|s| !s.is_empty()) {
@@ -110,6 +110,7 @@ fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConf
             "fkb" => config.finest_coherence_bias = Some(f as f32),
             "dw" => config.detail_weight = f as f32,
             "rs" => config.robust_scale = f as f32,
+            "lp" => config.layout_penalty = f as f32,
             "cap" => config.copy_cap = (f > 0.0).then_some(f as f32),
             other => panic!("unknown key {other}"),
         }

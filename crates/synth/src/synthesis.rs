@@ -203,8 +203,7 @@ pub(crate) fn synthesize_unguarded(
     for level in (0..config.levels).rev() {
         let start = Instant::now();
         let level_config = SynthConfig {
-            occurrence_penalty: if level == 0 { config.finest_penalty } else { None }
-                .unwrap_or(config.occurrence_penalty),
+            occurrence_penalty: config.occurrence_penalty_at(level),
             corrections: if level > 0 { config.coarse_corrections } else { None }.unwrap_or(config.corrections),
             ..config.clone()
         };

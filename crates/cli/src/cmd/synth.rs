@@ -89,6 +89,11 @@ pub struct Args {
     /// Occurrence penalty lambda (0 = off; default 0, 4 with `--scanline`).
     #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
     pub occurrence_penalty: Option<f32>,
+    /// Occurrence penalty of the two coarsest levels, which lay out where in the exemplar the
+    /// output grows from, so that it draws on all of it (default 0.05, 0 with `--scanline`; the
+    /// larger of it and `--occurrence-penalty` applies there).
+    #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
+    pub layout_penalty: Option<f32>,
     /// k-coherence search (the default): candidates per source texel (Tong et al. 2002; default
     /// 2, 4 with `--scanline`).
     #[arg(long = "k", value_name = "K", conflicts_with_all = ["exact", "pca"], value_parser = flags::usize_in(1, 64))]
@@ -279,6 +284,8 @@ pub struct OptionsReport {
     /// `scanline` (Wei-Levoy causal pass) or `upsampled` (Lefebvre-Hoppe coordinates).
     pub start: String,
     pub occurrence_penalty: f32,
+    /// Occurrence penalty of the two coarsest levels (the larger of it and the general one).
+    pub layout_penalty: f32,
     /// Largest verbatim copy allowed, share of the exemplar's area (`null`: no cap).
     pub copy_cap: Option<f32>,
     pub levels: usize,
@@ -382,6 +389,7 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
         corrections: args.corrections.unwrap_or(base.corrections),
         polish: args.polish.unwrap_or(base.polish),
         occurrence_penalty: args.occurrence_penalty.unwrap_or(base.occurrence_penalty),
+        layout_penalty: args.layout_penalty.unwrap_or(base.layout_penalty),
         search: if args.exact {
             Search::Exact
         } else if args.pca {
@@ -511,6 +519,7 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         }),
         start: format!("{:?}", run.start).to_lowercase(),
         occurrence_penalty: run.occurrence_penalty,
+        layout_penalty: run.layout_penalty,
         copy_cap: run.copy_cap,
         levels: run.levels,
         neighborhood: run.neighbourhood,
