@@ -67,11 +67,12 @@ fn target_dir() -> PathBuf {
 }
 
 /// The configuration under test: the defaults, changed by `key=value` pairs (k: k-coherence k;
-/// n: neighbourhood side; m: coarser window side; c / cc: finest and coarser correction passes; l / fl / cp: occurrence
-/// penalty, at the finest level, in the corrections; L: levels; up: upsampled start (1) or
-/// scanline (0); j: jitter; w: exemplar wrap; cap: copy cap, share of the exemplar's area; fb /
-/// ffb: k-coherence tree fallback ratio, at the finest level, 0 = none; rr: its rerank count; po: seam-polishing passes; kb / fkb: coherence bias,
-/// at the finest level; dw: detail weight of normal maps, 0 = none; rs: robust scale; lp: layout penalty).
+/// n: neighbourhood side; m: coarser window side; c / cc: finest and coarser correction passes;
+/// l / fl / cp: occurrence penalty, at the finest level, in the corrections; lp: layout penalty;
+/// L: levels; up: upsampled start (1) or scanline (0); j: jitter; w: exemplar wrap; cap: copy cap,
+/// share of the exemplar's area; fb / ffb: k-coherence tree fallback ratio, at the finest level,
+/// 0 = none; rr: its rerank count; po: seam-polishing passes; kb / fkb: coherence bias, at the
+/// finest level; dw: detail weight of normal maps, 0 = none; rs: robust scale).
 fn parse_config(spec: &str, width: usize, height: usize, seed: u64) -> SynthConfig {
     let mut config = SynthConfig { seed, ..SynthConfig::new(width, height) };
     for kv in spec.split(',').filter(|s| !s.is_empty()) {

@@ -6,9 +6,10 @@ use skinkit_synth::{SynthConfig, synthesize_normals};
 
 /// The collapse guard: a run reports its output's variation over the exemplar's and grows a
 /// collapsed output again with the occurrence penalty at the coarser levels. Without the detail
-/// channel and the layout penalty, and with squared L2 at the coarser levels, the first growth of the heightfield nose
-/// loses its sparse pores (measured 0.35 of its slope variation at seed 1); the regrown output
-/// keeps most of them (0.7) and is the one returned. The default keeps them the first time.
+/// channel and the layout penalty, and with squared L2 at the coarser levels, the first growth of
+/// the heightfield nose loses its sparse pores (measured 0.35 of its slope variation at seed 1);
+/// the regrown output keeps most of them (0.7) and is the one returned. The default keeps them the
+/// first time.
 #[test]
 fn a_collapsed_output_is_grown_again_and_reported() {
     let ex = skinkit_heightfield::SkinParams::nose(128, 128, 1).generate().unwrap().normals;
