@@ -338,6 +338,12 @@ impl SynthConfig {
         }
     }
 
+    /// The robust distance's scale at pyramid level `level` (0 the finest):
+    /// [`SynthConfig::robust_scale`] at the coarser levels, 0 (squared L2) at the finest.
+    pub fn robust_scale_at(&self, level: usize) -> f32 {
+        if level == 0 { 0.0 } else { self.robust_scale }
+    }
+
     /// The most pyramid levels an `ew x eh` exemplar allows: its coarsest level must still hold a
     /// full `neighbourhood x neighbourhood` window.
     pub fn max_levels(&self, ew: usize, eh: usize) -> usize {

@@ -337,7 +337,7 @@ fn synthesize_level(
         let coherence_bias =
             if level == 0 { config.finest_coherence_bias } else { None }.unwrap_or(config.coherence_bias);
         let polish = if level == 0 { config.polish } else { 0 };
-        let robust_scale = if level == 0 { 0.0 } else { config.robust_scale };
+        let robust_scale = config.robust_scale_at(level);
         let level = CorrectionLevel {
             coarser,
             copy_cap,
@@ -469,7 +469,7 @@ fn build_search(
             let causal = fallback.filter(|_| config.start == Start::Scanline);
             let index = causal.map(|_| ApproximateIndex::new(ex, dims, rerank));
             // The levels that match with the robust distance never search the tree.
-            let robust = level > 0 && config.robust_scale > 0.0;
+            let robust = config.robust_scale_at(level) > 0.0;
             (index, Some(sets), fallback.filter(|_| !robust).and_then(|_| full_tree(dims, rerank)))
         }
     };
