@@ -101,6 +101,70 @@ fn block_bytes(
     data
 }
 
+/// Float samples of one named channel, row-major.
+pub struct Channel<'a> {
+    pub name: &'a str,
+    pub samples: &'a [f32],
+}
+
+/// How a float EXR is stored: its compression, half or full floats, and text attributes to add
+/// to its header (unit, scale, what made it).
+#[derive(Clone, Debug)]
+pub struct ExrOptions {
+    pub compression: Compression,
+    /// Store 16-bit half floats (half the size; about 3 decimal digits).
+    pub half: bool,
+    /// `(name, text)` attributes; readers that do not know a name keep or ignore it.
+    pub attributes: Vec<(String, String)>,
+    /// The OpenEXR `wrapmodes` attribute (`"periodic,periodic"` for a map that tiles).
+    pub wrap_modes: Option<String>,
+}
+
+impl Default for ExrOptions {
+    fn default() -> Self {
+        ExrOptions { compression: Compression::Uncompressed, half: false, attributes: Vec::new(), wrap_modes: None }
+    }
+}
+
+/// Writes named float channels of `width x height` samples as one scanline layer.
+///
+/// # Errors
+/// The `exr` crate's, as text: a write failure, a channel of the wrong length or no channel.
+pub(crate) fn write_channels(
+    out: impl Write + Seek,
+    width: usize,
+    height: usize,
+    channels: &[Channel],
+    options: &ExrOptions,
+) -> Result<(), String> {
+    use exr::image::{AnyChannel, AnyChannels, FlatSamples};
+    use exr::meta::attribute::{AttributeValue, Text};
+    if channels.is_empty() || channels.iter().any(|c| c.samples.len() != width * height) {
+        return Err(format!("{} channels for {width}x{height} samples", channels.len()));
+    }
+    let list = channels
+        .iter()
+        .map(|c| {
+            let samples = if options.half {
+                FlatSamples::F16(c.samples.iter().map(|&v| exr::prelude::f16::from_f32(v)).collect())
+            } else {
+                FlatSamples::F32(c.samples.to_vec())
+            };
+            AnyChannel::new(c.name, samples)
+        })
+        .collect();
+    let mut attributes = LayerAttributes::default();
+    for (name, text) in &options.attributes {
+        let value = Text::new_or_none(text).ok_or_else(|| format!("attribute {name}: not a Latin-1 text"))?;
+        let key = Text::new_or_none(name).ok_or_else(|| format!("attribute name {name}: not a Latin-1 text"))?;
+        attributes.other.insert(key, AttributeValue::Text(value));
+    }
+    attributes.wrap_mode_name = options.wrap_modes.as_deref().and_then(Text::new_or_none);
+    let encoding = Encoding { compression: options.compression, ..Encoding::UNCOMPRESSED };
+    let layer = Layer::new((width, height), attributes, encoding, AnyChannels::sort(list));
+    Image::from_layer(layer).write().to_buffered(out).map_err(|e| e.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

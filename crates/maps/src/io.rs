@@ -209,7 +209,9 @@ pub fn write_png(path: &Path, width: usize, height: usize, layout: PngLayout, sa
             samples.len()
         )));
     }
-    write_png_rows(path, width, height, layout, |y, row| row.copy_from_slice(&samples[y * row_len..(y + 1) * row_len]))
+    write_png_rows(path, width, height, layout, PngColour::for_layout(layout), |y, row| {
+        row.copy_from_slice(&samples[y * row_len..(y + 1) * row_len])
+    })
 }
 
 impl PngLayout {
@@ -236,6 +238,52 @@ pub fn write_png_rows(
     width: usize,
     height: usize,
     layout: PngLayout,
+    colour: PngColour,
+    fill_row: impl Fn(usize, &mut [u16]) + Sync,
+) -> Result<()> {
+    write_png_rows_info(path, width, height, layout, &PngInfo { colour, text: &[] }, fill_row)
+}
+
+/// How a PNG's samples relate to light, written into the file so that readers (OpenImageIO,
+/// Blender, browsers) do not guess: a guessed sRGB curve on linear data reads it 25 % too dark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PngColour {
+    /// Display-encoded sRGB (8-bit pictures, renders, previews): an `sRGB` chunk.
+    Srgb,
+    /// Linear samples (16-bit albedo and photos) or data that is not a colour at all (normal,
+    /// height, confidence and coordinate maps): `gAMA` 1.0 with sRGB primaries in `cHRM`.
+    Linear,
+}
+
+impl PngColour {
+    /// The encoding `write_png` assumes for a layout: 8-bit layouts are pictures (sRGB), 16-bit
+    /// ones linear.
+    pub fn for_layout(layout: PngLayout) -> PngColour {
+        match layout {
+            PngLayout::Gray8 | PngLayout::Rgb8 => PngColour::Srgb,
+            PngLayout::Gray16 | PngLayout::Rgb16 => PngColour::Linear,
+        }
+    }
+}
+
+/// What a PNG says about itself besides its pixels: its colour encoding and `tEXt` entries
+/// (keyword, text; Latin-1 keywords of 1-79 characters, as the PNG specification asks).
+#[derive(Clone, Copy, Debug)]
+pub struct PngInfo<'a> {
+    pub colour: PngColour,
+    pub text: &'a [(String, String)],
+}
+
+/// As [`write_png_rows`], with the colour encoding and text entries of `info`.
+///
+/// # Errors
+/// When writing fails or a text entry is not valid for PNG.
+pub fn write_png_rows_info(
+    path: &Path,
+    width: usize,
+    height: usize,
+    layout: PngLayout,
+    info: &PngInfo,
     fill_row: impl Fn(usize, &mut [u16]) + Sync,
 ) -> Result<()> {
     use rayon::prelude::*;
@@ -253,6 +301,7 @@ pub fn write_png_rows(
         encoder.set_color(color);
         encoder.set_depth(depth);
         encoder.set_compression(png::Compression::Fast);
+        describe(&mut encoder, info).map_err(encode_err)?;
         let mut writer = encoder.write_header().map_err(encode_err)?;
         let mut stream = writer.stream_writer().map_err(encode_err)?;
         let mut bytes = vec![0u8; row_bytes * PNG_BATCH_ROWS.min(height)];
@@ -276,6 +325,26 @@ pub fn write_png_rows(
         stream.finish().map_err(encode_err)?;
         Ok(())
     })
+}
+
+/// Writes the colour chunks and text entries of `info` into the header `encoder` will write.
+fn describe<W: Write>(encoder: &mut png::Encoder<W>, info: &PngInfo) -> std::result::Result<(), png::EncodingError> {
+    match info.colour {
+        PngColour::Srgb => encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual),
+        PngColour::Linear => {
+            encoder.set_source_gamma(png::ScaledFloat::new(1.0));
+            encoder.set_source_chromaticities(png::SourceChromaticities::new(
+                (0.3127, 0.3290),
+                (0.64, 0.33),
+                (0.30, 0.60),
+                (0.15, 0.06),
+            ));
+        }
+    }
+    for (keyword, text) in info.text {
+        encoder.add_text_chunk(keyword.clone(), text.clone())?;
+    }
+    Ok(())
 }
 
 /// EXR compressions ([`write_exr_rgb_compressed`]).
@@ -317,6 +386,28 @@ pub fn write_exr_rgb_compressed(
     })
 }
 
+pub use crate::exr_write::{Channel as ExrChannel, ExrOptions};
+
+/// Writes named float channels (`"Y"` for one grey channel, `"R"`, `"G"`, `"B"` for three) as
+/// one EXR layer with the compression, sample type and header attributes of `options`,
+/// atomically.
+///
+/// # Errors
+/// When a channel's length is not `width * height`, an attribute is not Latin-1 text, or writing
+/// fails.
+pub fn write_exr_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[ExrChannel],
+    options: &ExrOptions,
+) -> Result<()> {
+    write_atomic(path, |out| {
+        crate::exr_write::write_channels(out, width, height, channels, options)
+            .map_err(|reason| Error::Encode { path: path.to_owned(), reason })
+    })
+}
+
 /// Writes a normal map: `.exr` as float, `.png` as 16-bit (or 8-bit with `bits == 8`) RGB, with
 /// invalid texels as all-zero pixels.
 ///
@@ -329,7 +420,7 @@ pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, 
         "png" => {
             let (max, layout) = if bits == 8 { (255, PngLayout::Rgb8) } else { (65535, PngLayout::Rgb16) };
             let texels = map.as_slice();
-            write_png_rows(path, w, h, layout, |y, row| {
+            write_png_rows(path, w, h, layout, PngColour::Linear, |y, row| {
                 for (out, &n) in row.chunks_exact_mut(3).zip(&texels[y * w..(y + 1) * w]) {
                     out.copy_from_slice(&encoding.encode(n, max).map(|c| c as u16));
                 }
@@ -354,7 +445,7 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
         "png" => {
             let texels = map.as_slice();
             let layout = if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 };
-            write_png_rows(path, w, h, layout, |y, row| {
+            write_png_rows(path, w, h, layout, PngColour::for_layout(layout), |y, row| {
                 for (out, c) in row.chunks_exact_mut(3).zip(&texels[y * w..(y + 1) * w]) {
                     out.copy_from_slice(&c.to_array().map(|v| {
                         if bits == 8 {
@@ -377,7 +468,7 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
 pub fn write_scalar_png(path: &Path, map: &ScalarMap, bits: u32) -> Result<()> {
     let (w, h) = map.size();
     let (max, layout) = if bits == 8 { (255.0, PngLayout::Gray8) } else { (65535.0, PngLayout::Gray16) };
-    write_png_rows(path, w, h, layout, |y, row| {
+    write_png_rows(path, w, h, layout, PngColour::Linear, |y, row| {
         row.iter_mut().zip(map.row(y)).for_each(|(out, &v)| *out = quantise(v, max));
     })
 }

@@ -11,7 +11,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::io::{PngLayout, write_png_rows};
+use crate::io::{PngColour, PngLayout, write_png_rows};
 use crate::{Grid, NormalMap, Result};
 
 /// An 8-bit RGB picture.
@@ -124,7 +124,7 @@ pub fn shrink(picture: &Picture, max_side: usize) -> Picture {
 /// When writing fails.
 pub fn write_png(path: &std::path::Path, picture: &Picture) -> Result<()> {
     let (w, h) = picture.size();
-    write_png_rows(path, w, h, PngLayout::Rgb8, |y, row| {
+    write_png_rows(path, w, h, PngLayout::Rgb8, PngColour::Srgb, |y, row| {
         for (out, texel) in row.chunks_exact_mut(3).zip(picture.row(y)) {
             (0..3).for_each(|c| out[c] = u16::from(texel[c]));
         }

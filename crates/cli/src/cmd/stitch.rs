@@ -439,7 +439,7 @@ fn label_colour(label: u16) -> [u16; 3] {
 
 fn encode_labels(path: &Path, labels: &Grid<u16>) -> skinkit_maps::Result<()> {
     let (w, h) = labels.size();
-    io::write_png_rows(path, w, h, PngLayout::Rgb8, |y, row| {
+    io::write_png_rows(path, w, h, PngLayout::Rgb8, io::PngColour::Srgb, |y, row| {
         for (px, &l) in row.chunks_exact_mut(3).zip(labels.row(y)) {
             px.copy_from_slice(&label_colour(l));
         }

@@ -619,7 +619,7 @@ pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
 
 fn encode_coords(path: &Path, coords: &Grid<[u32; 2]>) -> skinkit_maps::Result<()> {
     let (w, h) = coords.size();
-    io::write_png_rows(path, w, h, PngLayout::Rgb16, |y, row| {
+    io::write_png_rows(path, w, h, PngLayout::Rgb16, io::PngColour::Linear, |y, row| {
         for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
             // Sides were checked against MAX_COORD_SIDE, so coordinates fit.
             px.copy_from_slice(&[c[0] as u16, c[1] as u16, 0]);

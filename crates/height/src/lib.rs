@@ -1,0 +1,244 @@
+//! Height from normals: integrating a normal map into a displacement (height) map, and the height
+//! deliverables artists load (float EXR in millimetres, 16-bit PNG at midlevel 0.5, cavity, bands).
+//!
+//! A normal `n` says the surface's slopes: `dh/dx = -nx/nz` along columns and, since image rows
+//! grow downward while y points up, `dh/drow = +ny/nz` along rows (skinkit's frame, DESIGN.md).
+//! Integration is a least-squares problem over the grid's edges: for neighbouring texels `a`, `b`
+//! the height step `h_b - h_a` should equal the mean of their two slopes. Its normal equations are
+//! the 5-point Poisson equation `L h = D^T g`, solved by one of three [`Integrator`]s:
+//!
+//! * [`Integrator::Periodic`]: edges wrap around, `L` is diagonal in the discrete Fourier basis
+//!   (Frankot-Chellappa in its discrete, least-squares form). For maps that tile (a grown map is
+//!   toroidal): the height tiles exactly. A mean slope, which no tiling height can have, is dropped.
+//! * [`Integrator::Neumann`]: no edge crosses the border, `L` is diagonal in the DCT-II basis
+//!   (Simchony, Chellappa and Shao 1990). For rectangular maps that do not wrap: no bowl.
+//! * [`Integrator::Masked`]: edges touching an invalid texel (zero normal, NaN, back-facing) carry
+//!   a weight of [`HOLE_WEIGHT`] and ask for a flat step, so holes are filled smoothly without
+//!   pulling the valid surface; solved by conjugate gradients preconditioned by the Neumann solve.
+//!
+//! [`integrate`] picks the integrator from the map ([`Integrator::choose`]), converts slopes to
+//! millimetres through the map's scale ([`Scale`]) and measures the integrability residual. The
+//! deliverables ([`deliver`]) are computed from the resulting [`Height`].
+
+pub mod deliver;
+mod error;
+mod masked;
+mod poisson;
+mod slopes;
+mod transform;
+
+use std::time::Instant;
+
+use serde::Serialize;
+use skinkit_maps::{NormalMap, ScalarMap};
+
+pub use error::{Error, Result};
+pub use slopes::{MAX_SLOPE, Slopes, TexelCounts};
+
+/// Weight of an edge with an invalid end in the masked solve, against 1 for a valid edge: small,
+/// so a hole's fill barely pulls the surface around it, and not so small that conjugate gradients
+/// crawl through the fill (measured in the crate's tests and the accuracy stage).
+pub const HOLE_WEIGHT: f32 = 0.02;
+
+/// How a normal map is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Integrator {
+    /// Periodic Poisson solve by FFT (the map wraps; the height tiles).
+    Periodic,
+    /// Neumann Poisson solve by DCT (a rectangle that does not wrap).
+    Neumann,
+    /// Masked Poisson solve by DCT-preconditioned conjugate gradients (invalid texels present).
+    Masked,
+}
+
+impl Integrator {
+    /// The integrator that is right for a map: periodic when it wraps, masked when any texel is
+    /// invalid, Neumann otherwise. A wrapping map with invalid texels is integrated periodically
+    /// with the invalid texels' slopes taken as zero (a grown map has none).
+    pub fn choose(wraps: bool, invalid_texels: usize) -> Integrator {
+        match (wraps, invalid_texels) {
+            (true, _) => Integrator::Periodic,
+            (false, 0) => Integrator::Neumann,
+            (false, _) => Integrator::Masked,
+        }
+    }
+
+    /// Its name in reports and file headers.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Periodic => "periodic-fft",
+            Integrator::Neumann => "neumann-dct",
+            Integrator::Masked => "masked-pcg",
+        }
+    }
+}
+
+/// The physical size of a texel, which turns slopes into millimetres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scale {
+    /// Millimetres per texel (`mm_per_pixel` of a rig, `mm_per_texel` of an exemplar or layout).
+    MmPerTexel(f64),
+    /// No scale known: heights are in texel widths.
+    Texels,
+}
+
+impl Scale {
+    /// `Some(mm)` makes a millimetre scale, `None` a texel one.
+    ///
+    /// # Errors
+    /// When `mm` is not finite and positive.
+    pub fn from_mm(mm: Option<f64>) -> Result<Scale> {
+        match mm {
+            None => Ok(Scale::Texels),
+            Some(mm) if mm.is_finite() && mm > 0.0 => Ok(Scale::MmPerTexel(mm)),
+            Some(mm) => Err(Error::Parameter(format!("mm per texel must be finite and positive, not {mm}"))),
+        }
+    }
+
+    /// Length of one texel in the output's unit.
+    pub fn texel(self) -> f64 {
+        match self {
+            Scale::MmPerTexel(mm) => mm,
+            Scale::Texels => 1.0,
+        }
+    }
+
+    /// The output's unit: `"mm"` or `"texel"`.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Scale::MmPerTexel(_) => "mm",
+            Scale::Texels => "texel",
+        }
+    }
+}
+
+/// What to integrate and how.
+#[derive(Clone, Copy, Debug)]
+pub struct HeightOptions {
+    /// The map wraps around (a grown, toroidal map).
+    pub wraps: bool,
+    /// The integrator; `None` chooses ([`Integrator::choose`]).
+    pub integrator: Option<Integrator>,
+    /// The texel's size.
+    pub scale: Scale,
+    /// Relative residual at which the masked solve stops.
+    pub tolerance: f64,
+    /// Iterations after which the masked solve stops.
+    pub max_iterations: usize,
+}
+
+impl Default for HeightOptions {
+    fn default() -> Self {
+        HeightOptions { wraps: false, integrator: None, scale: Scale::Texels, tolerance: 1e-5, max_iterations: 400 }
+    }
+}
+
+/// An integrated height map and how it was made.
+#[derive(Clone, Debug)]
+pub struct Height {
+    /// Heights in [`Scale::unit`]s, mean zero over the valid texels.
+    pub map: ScalarMap,
+    /// Texels that took part (valid normals); invalid ones hold the smooth fill.
+    pub valid: Vec<bool>,
+    /// What was measured along the way.
+    pub report: HeightReport,
+}
+
+/// The numbers a report gives about a height map.
+#[derive(Clone, Debug, Serialize)]
+pub struct HeightReport {
+    pub integrator: Integrator,
+    /// `"mm"` or `"texel"`.
+    pub unit: &'static str,
+    /// Millimetres per texel, when known.
+    pub mm_per_texel: Option<f64>,
+    /// Lowest and highest height over the valid texels, in `unit`.
+    pub min: f32,
+    pub max: f32,
+    /// RMS height about the mean, over the valid texels, in `unit`.
+    pub rms: f32,
+    /// RMS of the edge residual `(h_b - h_a) - slope` over valid edges, as a slope (unitless): the
+    /// part of the normal map no surface has (noise, seams, non-integrable texels).
+    pub residual_rms: f64,
+    /// The same residual against the RMS slope: 0 for an integrable map.
+    pub residual_relative: f64,
+    /// Texel counts: valid, and refused by cause.
+    pub texels: TexelCounts,
+    /// Conjugate-gradient iterations (masked solve only).
+    pub iterations: Option<usize>,
+    /// Wall time of the integration, in seconds.
+    pub seconds: f64,
+}
+
+/// Integrates `normals` into a height map.
+///
+/// # Errors
+/// When no texel has a usable normal, or the options are invalid.
+pub fn integrate(normals: &NormalMap, options: &HeightOptions) -> Result<Height> {
+    let start = Instant::now();
+    let slopes = Slopes::from_normals(normals);
+    if slopes.counts.valid == 0 {
+        return Err(Error::NoValidTexel { texels: normals.width() * normals.height() });
+    }
+    let integrator = options.integrator.unwrap_or(Integrator::choose(options.wraps, slopes.counts.invalid()));
+    let (mut h, iterations) = match integrator {
+        Integrator::Periodic => (poisson::solve_periodic(&slopes), None),
+        Integrator::Neumann => (poisson::solve_neumann(&slopes), None),
+        Integrator::Masked => {
+            let (h, it) = masked::solve(&slopes, options.tolerance, options.max_iterations);
+            (h, Some(it))
+        }
+    };
+    let wraps = integrator == Integrator::Periodic;
+    let (residual_rms, residual_relative) = slopes.residual(&h, wraps);
+    let texel = options.scale.texel() as f32;
+    h.iter_mut().for_each(|v| *v *= texel);
+    let valid = slopes.valid;
+    remove_mean(&mut h, &valid);
+    let (min, max, rms) = stats(&h, &valid);
+    let map = ScalarMap::from_vec(normals.width(), normals.height(), h)?;
+    let report = HeightReport {
+        integrator,
+        unit: options.scale.unit(),
+        mm_per_texel: match options.scale {
+            Scale::MmPerTexel(mm) => Some(mm),
+            Scale::Texels => None,
+        },
+        min,
+        max,
+        rms,
+        residual_rms,
+        residual_relative,
+        texels: slopes.counts,
+        iterations,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(Height { map, valid, report })
+}
+
+/// Shifts `h` so that its valid texels have mean zero (summed in f64, in order: same bits at any
+/// thread count).
+fn remove_mean(h: &mut [f32], valid: &[bool]) {
+    let (sum, n) =
+        h.iter().zip(valid).filter(|(_, v)| **v).fold((0f64, 0usize), |(s, n), (x, _)| (s + *x as f64, n + 1));
+    if n > 0 {
+        let mean = (sum / n as f64) as f32;
+        h.iter_mut().for_each(|v| *v -= mean);
+    }
+}
+
+/// Minimum, maximum and RMS of the valid texels of `h`.
+fn stats(h: &[f32], valid: &[bool]) -> (f32, f32, f32) {
+    let mut lo = f32::INFINITY;
+    let mut hi = f32::NEG_INFINITY;
+    let (mut sq, mut n) = (0f64, 0usize);
+    for (&x, _) in h.iter().zip(valid).filter(|(_, v)| **v) {
+        lo = lo.min(x);
+        hi = hi.max(x);
+        sq += (x as f64) * (x as f64);
+        n += 1;
+    }
+    (lo, hi, if n > 0 { (sq / n as f64).sqrt() as f32 } else { 0.0 })
+}
