@@ -20,6 +20,8 @@ use skinkit_maps::limits;
 use skinkit_maps::normal::AngularStats;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 
+use skinkit_height::{Height, HeightOptions, HeightReport, Scale};
+
 use crate::solve::{self, PhotoStack, SolveConfig};
 use crate::{Error, Result, Rig, detrend, near};
 
@@ -159,16 +161,18 @@ pub enum Stage {
     Solve,
     Detrend,
     Statistics,
+    Height,
 }
 
 impl Stage {
-    /// Lowercase name: `decode`, `solve`, `detrend`, `statistics`.
+    /// Lowercase name: `decode`, `solve`, `detrend`, `statistics`, `height`.
     pub fn name(self) -> &'static str {
         match self {
             Stage::Decode => "decode",
             Stage::Solve => "solve",
             Stage::Detrend => "detrend",
             Stage::Statistics => "statistics",
+            Stage::Height => "height",
         }
     }
 }
@@ -181,6 +185,8 @@ pub struct Timings {
     pub detrend: f64,
     /// Report statistics (normal tilt, error against the truth).
     pub stats: f64,
+    /// Integrating the normals into the height map.
+    pub height: f64,
     /// Writing the outputs: 0 from [`capture`], filled in by whoever writes them.
     pub write: f64,
     /// Seconds per output file (written concurrently, so these overlap); empty from [`capture`].
@@ -212,6 +218,12 @@ pub struct CaptureReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_vs_truth_degrees: Option<AngularStats>,
     pub warnings: Vec<String>,
+    /// The rig's photo pixel size on the mold, which makes the height millimetres.
+    pub mm_per_pixel: Option<f64>,
+    /// The height integrated from the normals: range, unit, integrator, residual (none when no
+    /// pixel could be solved).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_map: Option<HeightReport>,
     pub timings_s: Timings,
     /// Peak resident memory of the process, in MiB: `None` from [`capture`], filled in by a
     /// caller that measures it.
@@ -224,6 +236,9 @@ pub struct CaptureReport {
 pub struct Captured {
     /// Normals (detrended), albedo and confidence.
     pub solution: solve::Solution,
+    /// The normals integrated into heights (mm when the rig gives `mm_per_pixel`); none when no
+    /// pixel could be solved.
+    pub height: Option<Height>,
     pub report: CaptureReport,
 }
 
@@ -302,6 +317,12 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         ));
     }
     timings.stats = t.elapsed().as_secs_f64();
+
+    progress(Stage::Height);
+    let t = Instant::now();
+    let mm_per_pixel = rig.mm_per_pixel().map(f64::from);
+    let heights = integrate_height(&solution.normals, mm_per_pixel)?;
+    timings.height = t.elapsed().as_secs_f64();
     timings.total = start.elapsed().as_secs_f64();
     let solver = format!("{:?}{}", options.solve.method, if near_lights { " (near lights)" } else { "" });
     let report = CaptureReport {
@@ -320,10 +341,12 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         tilt_degrees: tilt,
         error_vs_truth_degrees: error_vs_truth,
         warnings,
+        mm_per_pixel,
+        height_map: heights.as_ref().map(|h| h.report.clone()),
         timings_s: timings,
         peak_memory_mib: None,
     };
-    Ok(Captured { solution, report })
+    Ok(Captured { solution, height: heights, report })
 }
 
 /// Checks a rig against everything [`capture`] refuses of a rig before decoding a photo: at most
@@ -422,6 +445,17 @@ fn ambient_frame(session: &Session, rig: &Rig) -> Option<(PathBuf, String)> {
             Some((path.to_owned(), format!("{}: field `ambient` (the ambient frame)", session.rig.display())))
         }
         (None, None) => None,
+    }
+}
+
+/// The capture's height: masked where pixels are invalid, Neumann otherwise (a capture does not
+/// wrap); `None` when no pixel was solved (the report says so through its counts).
+fn integrate_height(normals: &NormalMap, mm_per_pixel: Option<f64>) -> Result<Option<Height>> {
+    let scale = Scale::from_mm(mm_per_pixel).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    match skinkit_height::integrate(normals, &HeightOptions { scale, ..HeightOptions::default() }) {
+        Ok(height) => Ok(Some(height)),
+        Err(skinkit_height::Error::NoValidTexel { .. }) => Ok(None),
+        Err(e) => Err(Error::InvalidInput(e.to_string())),
     }
 }
 

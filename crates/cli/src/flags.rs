@@ -38,6 +38,14 @@ pub fn non_negative_f64(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A physical texel or pixel size in millimetres: above 0, at most a metre.
+pub fn positive_mm(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1e3 => Ok(v),
+        _ => Err(format!("`{text}` is not a size in millimetres (above 0, at most 1000)")),
+    }
+}
+
 /// A face map size `WxH` of at most [`limits::MAX_MAP_TEXELS`] texels.
 pub fn map_size(text: &str) -> Result<(usize, usize), String> {
     size_within(text, limits::MAX_MAP_TEXELS, "a face map may be", "texels, 32768x32768")

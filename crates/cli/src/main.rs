@@ -48,6 +48,9 @@ enum Command {
     Stitch(cmd::stitch::StitchArgs),
     /// Capture, grow and stitch a face layout in one go into a folder of maps and a report.
     Face(cmd::stitch::FaceArgs),
+    /// Integrate a normal map into a height (displacement) map in millimetres, with the 16-bit
+    /// PNG, cavity and band files artists load.
+    Height(cmd::height::Args),
     /// Render a scene (mesh, maps, Lafortune skin, lights, cameras) with the bundled wgpu renderer.
     Render(cmd::render::Args),
     /// Export a scene's skin for other tools (glTF 2.0: mesh, tangents, albedo, normal map, roughness).
@@ -79,6 +82,7 @@ fn main() {
         Command::Synth(args) => cmd::synth::run(*args, &out),
         Command::Stitch(args) => cmd::stitch::run_stitch(args, &out),
         Command::Face(args) => cmd::stitch::run_face(args, &out),
+        Command::Height(args) => cmd::height::run(args, &out),
         Command::Render(args) => cmd::render::run(args, &out),
         Command::Export(command) => cmd::export::run(command, &out),
         Command::Lut(command) => cmd::lut::run(command, &out),

@@ -16,7 +16,8 @@ use skinkit_maps::{OutputSet, io};
 type WriteJob<'a> = (&'a str, Box<dyn Fn(&Path) -> skinkit_maps::Result<()> + Sync + 'a>);
 
 /// The files of a capture folder; the report is written last and marks a complete set.
-pub const CAPTURE_FILES: [&str; 5] = ["normal.exr", "normal.png", "albedo.png", "confidence.png", CAPTURE_MARKER];
+pub const CAPTURE_FILES: [&str; 6] =
+    ["normal.exr", "normal.png", "albedo.png", "confidence.png", "height.exr", CAPTURE_MARKER];
 /// The file whose presence marks a complete capture folder.
 pub const CAPTURE_MARKER: &str = "report.json";
 
@@ -29,8 +30,9 @@ pub fn capture_set(dir: &Path) -> Result<OutputSet> {
     OutputSet::folder(dir, CAPTURE_MARKER).with_context(|| format!("cannot write output folder {}", dir.display()))
 }
 
-/// Writes `normal.exr`, `normal.png`, `albedo.png`, `confidence.png` and `report.json` into the
-/// folder set `set` (from [`capture_set`]), the four maps concurrently, and commits it: the folder
+/// Writes `normal.exr`, `normal.png`, `albedo.png`, `confidence.png`, `height.exr` (when a pixel
+/// was solved) and `report.json` into the folder set `set` (from [`capture_set`]), the maps
+/// concurrently, and commits it: the folder
 /// gets the whole set or keeps what it had. Adds the write time and the peak memory to the report.
 /// Returns what the commit cleaned up from killed runs.
 ///
@@ -44,12 +46,15 @@ pub fn write_outputs(
 ) -> Result<Vec<PathBuf>> {
     let t = Instant::now();
     let s = &captured.solution;
-    let jobs: [WriteJob; 4] = [
+    let mut jobs: Vec<WriteJob> = vec![
         ("normal.exr", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 32))),
         ("normal.png", Box::new(|p| io::write_normal_map(p, &s.normals, options.encoding, 16))),
         ("albedo.png", Box::new(|p| write_albedo(p, &s.albedo))),
         ("confidence.png", Box::new(|p| io::write_scalar_png(p, &s.confidence, 8))),
     ];
+    if let Some(height) = &captured.height {
+        jobs.push(("height.exr", Box::new(move |p| write_height(p, height))));
+    }
     let seconds: Vec<(String, f64)> = jobs
         .par_iter()
         .map(|(name, job)| {
@@ -72,6 +77,44 @@ fn write_albedo(path: &Path, albedo: &AlbedoMap) -> skinkit_maps::Result<()> {
     match albedo {
         AlbedoMap::Gray(map) => io::write_scalar_png(path, map, 16),
         AlbedoMap::Rgb(map) => io::write_color_map(path, map, 16),
+    }
+}
+
+/// A height map as a float EXR (its unit, scale and integrator in the header).
+pub fn write_height(path: &Path, height: &skinkit_height::Height) -> skinkit_maps::Result<()> {
+    skinkit_height::deliver::write_exr(path, height, Default::default()).map_err(height_error)
+}
+
+/// Integrates a grown (toroidal) normal map periodically, so its height tiles, and adds it to
+/// `set` at `path` (`.exr` float or `.png` 16-bit at midlevel 0.5).
+///
+/// # Errors
+/// When the map has no valid texel or the file cannot be written.
+pub fn grown_height(
+    set: &mut OutputSet,
+    path: &Path,
+    normals: &skinkit_maps::NormalMap,
+    mm_per_texel: Option<f64>,
+) -> Result<skinkit_height::HeightReport> {
+    let options = skinkit_height::HeightOptions {
+        wraps: true,
+        scale: skinkit_height::Scale::from_mm(mm_per_texel)?,
+        ..Default::default()
+    };
+    let height = skinkit_height::integrate(normals, &options).context("cannot integrate the grown map")?;
+    let storage = skinkit_height::deliver::ExrStorage::default();
+    set.write_file(path, |p| {
+        skinkit_height::deliver::write_height(p, &height, storage).map(|_| ()).map_err(height_error)
+    })
+    .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(height.report)
+}
+
+/// The height crate's errors as the maps crate's, which output sets carry.
+pub fn height_error(e: skinkit_height::Error) -> skinkit_maps::Error {
+    match e {
+        skinkit_height::Error::Maps(e) => e,
+        other => skinkit_maps::Error::InvalidParameter(other.to_string()),
     }
 }
 

@@ -197,3 +197,19 @@ pub fn write_cavity_png(path: &Path, cavity: &ScalarMap) -> Result<()> {
     })?;
     Ok(())
 }
+
+/// Writes the height by the extension of `path`: `.exr` as float ([`write_exr`]), `.png` as
+/// 16-bit at midlevel 0.5 ([`write_png16`], whose scale is returned).
+///
+/// # Errors
+/// When the extension is neither, or writing fails.
+pub fn write_height(path: &Path, height: &Height, storage: ExrStorage) -> Result<Option<PngScale>> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("exr") => write_exr(path, height, storage).map(|_| None),
+        Some("png") => write_png16(path, height).map(Some),
+        _ => Err(crate::Error::Parameter(format!(
+            "{}: a height map is written as .exr (float) or .png (16-bit, midlevel 0.5)",
+            path.display()
+        ))),
+    }
+}

@@ -42,13 +42,15 @@ pub const HOLE_WEIGHT: f32 = 0.02;
 
 /// How a normal map is integrated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
 pub enum Integrator {
     /// Periodic Poisson solve by FFT (the map wraps; the height tiles).
+    #[serde(rename = "periodic-fft")]
     Periodic,
     /// Neumann Poisson solve by DCT (a rectangle that does not wrap).
+    #[serde(rename = "neumann-dct")]
     Neumann,
     /// Masked Poisson solve by DCT-preconditioned conjugate gradients (invalid texels present).
+    #[serde(rename = "masked-pcg")]
     Masked,
 }
 

@@ -7,6 +7,7 @@ pub mod demo;
 pub mod export;
 pub mod figure7;
 pub mod figures;
+pub mod height;
 pub mod lut;
 pub mod render;
 pub mod rig;

@@ -139,6 +139,8 @@ pub struct FaceReport {
     pub regions_at_once: usize,
     pub seams: SeamReport,
     pub seconds: FaceSeconds,
+    /// The face's height in mm (height.exr, height.png, cavity.png, bands.exr).
+    pub height_map: Option<FaceHeight>,
     pub peak_memory_mib: Option<f64>,
 }
 
@@ -211,13 +213,21 @@ fn check_face_out(dir: &Path, layout: &Layout) -> Result<()> {
             guard::not_in_input_folder("--out", dir, &format!("region `{}`'s session folder", region.name), session)?;
         }
     }
-    let mut files: Vec<PathBuf> = ["normal.png", "normal.exr", "labels.png", "report.json"].map(|f| dir.join(f)).into();
+    let mut files: Vec<PathBuf> = ["normal.png", "normal.exr", "labels.png", "report.json"]
+        .iter()
+        .chain(&FACE_HEIGHT_FILES)
+        .map(|f| dir.join(f))
+        .collect();
     files.extend(layout.regions.iter().map(|r| dir.join("exemplars").join(format!("{}.png", r.name))));
     let outputs: Vec<(&str, &Path)> = files.iter().map(|f| ("--out", f.as_path())).collect();
     guard::not_an_input(&outputs, &layout_inputs(layout))
 }
 
-/// Builds a face and writes its folder: normal.png (16-bit), normal.exr, labels.png,
+/// The height files of a face folder.
+const FACE_HEIGHT_FILES: [&str; 4] = ["height.exr", "height.png", "cavity.png", "bands.exr"];
+
+/// Builds a face and writes its folder: normal.png (16-bit), normal.exr, labels.png, the height
+/// files (height.exr in mm, height.png at midlevel 0.5, cavity.png, bands.exr),
 /// `exemplars/<region>.png` and report.json, as one output set (all or nothing, report last).
 pub fn face_to_dir(
     options: &StitchOptions,
@@ -232,20 +242,58 @@ pub fn face_to_dir(
     let face = build(options, cache, out, &|layout: &Layout| check_face_out(dir, layout))?;
     let t = Instant::now();
     let map = &face.composed.normals;
-    let (png, exr) = rayon::join(
-        || write_in(&set, dir, "normal.png", |p| encode_map(p, map)),
-        || write_in(&set, dir, "normal.exr", |p| encode_map(p, map)),
+    let ((png, exr), height) = rayon::join(
+        || {
+            rayon::join(
+                || write_in(&set, dir, "normal.png", |p| encode_map(p, map)),
+                || write_in(&set, dir, "normal.exr", |p| encode_map(p, map)),
+            )
+        },
+        || write_height(&set, dir, map, face.layout.mm_per_texel),
     );
     png?;
     exr?;
+    let height = height?;
     write_in(&set, dir, "labels.png", |p| encode_labels(p, &face.composed.labels))?;
     for (region, ex) in face.layout.regions.iter().zip(&face.exemplars) {
         write_in(&set, dir, &format!("exemplars/{}.png", region.name), |p| encode_map(p, ex))?;
     }
-    let report = report(options, &face, &dir.join("normal.png"), t.elapsed().as_secs_f64(), start);
+    let mut report = report(options, &face, &dir.join("normal.png"), t.elapsed().as_secs_f64(), start);
+    report.height_map = Some(height);
     pipeline::write_json_in(&set, "report.json", &dir.join("report.json"), &report)?;
     out.swept(&set.commit().with_context(|| format!("cannot write {}", dir.display()))?);
     Ok(report)
+}
+
+/// What a face's height files hold: the integration's report and how to load height.png.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FaceHeight {
+    #[serde(flatten)]
+    pub height: skinkit_height::HeightReport,
+    pub png: skinkit_height::deliver::PngScale,
+    /// Seconds to integrate, split into bands and write the four files.
+    pub seconds: f64,
+}
+
+/// Integrates the face's normals (Neumann: a face map does not wrap) into millimetres and writes
+/// its height files ([`FACE_HEIGHT_FILES`]; the EXRs ZIP-compressed, since face maps are large).
+fn write_height(set: &OutputSet, dir: &Path, map: &NormalMap, mm_per_texel: f64) -> Result<FaceHeight> {
+    use skinkit_height::deliver::{self, ExrStorage};
+    let t = Instant::now();
+    let scale = skinkit_height::Scale::from_mm(Some(mm_per_texel))?;
+    let options = skinkit_height::HeightOptions { scale, ..Default::default() };
+    let height = skinkit_height::integrate(map, &options).context("cannot integrate the face's normals")?;
+    let storage = ExrStorage { zip: true, half: false };
+    let h = pipeline::height_error;
+    write_in(set, dir, "height.exr", |p| deliver::write_exr(p, &height, storage).map_err(h))?;
+    let mut png = None;
+    write_in(set, dir, "height.png", |p| deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(h))?;
+    let bands = deliver::bands(&height);
+    write_in(set, dir, "bands.exr", |p| deliver::write_bands_exr(p, &height, &bands, storage).map_err(h))?;
+    let cavity = deliver::cavity(&bands);
+    write_in(set, dir, "cavity.png", |p| deliver::write_cavity_png(p, &cavity).map_err(h))?;
+    let png = png.expect("write_png16 returned its scale");
+    Ok(FaceHeight { height: height.report, png, seconds: t.elapsed().as_secs_f64() })
 }
 
 /// Writes `name` of the folder set `set` (destined for `dir`), naming the final path in errors.
@@ -370,6 +418,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
             write,
             total: start.elapsed().as_secs_f64(),
         },
+        height_map: None,
         peak_memory_mib: pipeline::peak_memory_mib(),
     }
 }

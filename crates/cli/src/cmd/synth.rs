@@ -127,6 +127,13 @@ pub struct Args {
     /// Also write the report (sizes, options, timings, quality metrics) as JSON.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Normal maps: also write the grown map's height (`.exr` float or `.png` 16-bit at midlevel
+    /// 0.5), integrated periodically so that it tiles as the map does.
+    #[arg(long, value_name = "FILE")]
+    pub height: Option<PathBuf>,
+    /// Size of an exemplar texel in millimetres, for `--height` (without it: texel widths).
+    #[arg(long, value_name = "MM", value_parser = flags::positive_mm, requires = "height")]
+    pub mm_per_texel: Option<f64>,
 }
 
 /// How maps are read and written: shared by `synth` and `synth replay`.
@@ -254,7 +261,18 @@ fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<(
         return Err(guard::usage(message));
     }
     let out_path = out_path.to_owned();
-    let outputs = [("--out", Some(&out_path)), ("--coords", args.coords.as_ref()), ("--report", args.report.as_ref())];
+    if let Some(height) = &args.height {
+        if args.map.is_color() {
+            return Err(guard::usage(format!("{}: --height needs a normal map (--kind normal)", height.display())));
+        }
+        check_map_extension(height)?;
+    }
+    let outputs = [
+        ("--out", Some(&out_path)),
+        ("--coords", args.coords.as_ref()),
+        ("--report", args.report.as_ref()),
+        ("--height", args.height.as_ref()),
+    ];
     guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.to_owned())])
 }
 
@@ -370,6 +388,9 @@ pub struct SynthReport {
     pub seconds: Seconds,
     pub warnings: Vec<String>,
     pub quality: QualityReport,
+    /// The grown map's height (with `--height`): periodic, so it tiles.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_map: Option<skinkit_height::HeightReport>,
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
@@ -476,7 +497,12 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         let context = || format!("cannot write coordinate map {}", path.display());
         set.write_file(path, |p| encode_coords(p, &coords)).with_context(context)?;
     }
+    let height_map = match (&args.height, &output) {
+        (Some(path), Map::Normal(normals)) => Some(pipeline::grown_height(&mut set, path, normals, args.mm_per_texel)?),
+        _ => None,
+    };
     let report = SynthReport {
+        height_map,
         exemplar: exemplar_path.display().to_string(),
         out: out_path.display().to_string(),
         coords: args.coords.as_ref().map(|p| p.display().to_string()),
