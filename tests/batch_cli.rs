@@ -227,7 +227,8 @@ fn the_review_page_of_300_sessions_puts_the_bad_ones_first_and_opens_in_chromium
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(!html.contains("<script") && !html.contains("http://") && !html.contains("https://"));
     assert!(
-        html.contains("s005 &lt;b&gt;&amp;&quot;#%") && html.contains("review/s005%20%3Cb%3E%26%22%23%25/relief.png")
+        html.contains("s005 &lt;b&gt;&amp;&quot;#%")
+            && html.contains("batch-review/s005%20%3Cb%3E%26%22%23%25/relief.png")
     );
     assert_eq!(html.matches("loading=\"lazy\"").count(), 3 * 300);
     let bad: Vec<&str> = faults.iter().map(|(i, _)| all[*i].as_str()).collect();
@@ -260,4 +261,19 @@ fn the_review_page_of_300_sessions_puts_the_bad_ones_first_and_opens_in_chromium
     }
     let shown: Vec<&str> = seen["rows"].as_array().unwrap()[..9].iter().map(|r| r["id"].as_str().unwrap()).collect();
     assert_eq!(shown, first, "the browser shows the rows in the page's order");
+}
+
+#[test]
+fn a_session_named_like_the_batchs_own_folders_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    for reserved in ["batch-review", "batch-parts"] {
+        let names = vec!["a".to_owned(), reserved.to_owned()];
+        let dir = sessions::sessions(&tmp.path().join(format!("sessions-{reserved}")), &molds, &names, &[]);
+        let out = tmp.path().join("out");
+        let o = skinkit(&["batch", s(&dir), "--out", s(&out)]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(&format!("named `{reserved}`")), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
 }

@@ -109,6 +109,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     if all.iter().all(|u| u.jobs().is_empty()) {
         anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
+    refuse_reserved(&all, sessions)?;
     let units = select(all, shard, &args.only, sessions)?;
     if args.list {
         list(&units, out);
@@ -128,6 +129,23 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     };
     drop(hook);
     code
+}
+
+/// Refuses a session or subject whose output folder would be one of the batch's own
+/// (`batch-review/`, `batch-parts/`).
+fn refuse_reserved(units: &[Unit], root: &Path) -> Result<()> {
+    let reserved = [review::FOLDER, shard::PARTS];
+    let top = |name: &str| name.split('/').next().unwrap_or_default().to_owned();
+    let names = units.iter().flat_map(|u| std::iter::once(top(u.name())).chain(u.jobs().iter().map(|j| top(&j.name))));
+    for name in names {
+        if reserved.contains(&name.as_str()) {
+            return Err(guard::usage(format!(
+                "{}: a session or subject named `{name}` would write into the batch's own `{name}/` folder: rename it",
+                root.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The units of the shard, or those `only` names (each must be one).

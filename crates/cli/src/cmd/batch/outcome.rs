@@ -47,7 +47,7 @@ pub struct Settings<'a> {
     pub force: bool,
     /// Least share of the map's pixels that must be valid (`--min-valid`).
     pub min_valid: f64,
-    /// Where the review previews go (`OUT/review`).
+    /// Where the review previews go (`OUT/batch-review`).
     pub review_dir: &'a Path,
 }
 

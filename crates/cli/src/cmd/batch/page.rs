@@ -3,7 +3,7 @@
 //! batch of hundreds at a glance.
 //!
 //! One file of HTML and CSS (no script, nothing fetched from elsewhere). Each row shows the
-//! session's previews (`review/SESSION/*.png`, [`review`](super::review); small and
+//! session's previews (`batch-review/SESSION/*.png`, [`review`](super::review); small and
 //! `loading="lazy"`, so 500 rows open at once), the numbers that flag a bad capture, its time,
 //! and links to its files. Rows are ordered: failed sessions, then by [`badness`] (the worst of
 //! the signs, each divided by the level that deserves a look), then by name.
@@ -63,7 +63,7 @@ pub fn link(segments: &[&str]) -> String {
     esc(&parts.join("/"))
 }
 
-/// The page of `report`, its previews in `review/` beside it.
+/// The page of `report`, its previews in `batch-review/` beside it.
 pub fn html(report: &BatchReport) -> String {
     let rows = order(&report.outcomes);
     let mut html = String::with_capacity(2048 + 1024 * rows.len());
@@ -120,7 +120,7 @@ fn session_row(html: &mut String, rank: usize, o: &SessionOutcome) {
     let _ = write!(html, "<td><a href=\"{}/\">{name}</a></td>", link(&[&o.session]));
     for preview in PREVIEWS {
         if o.signs.is_some() {
-            let src = link(&["review", &o.session, preview]);
+            let src = link(&[super::review::FOLDER, &o.session, preview]);
             let what = preview.trim_end_matches(".png");
             let _ = write!(
                 html,
@@ -220,7 +220,7 @@ mod tests {
         let page = html(&report);
         assert!(page.contains("&lt;b&gt;&amp;&quot;mold&quot;") && !page.contains("<b>&"), "{page}");
         assert!(page.contains("too few &lt;valid&gt; pixels"));
-        assert!(page.contains("src=\"review/%3Cb%3E%26%22mold%22/relief.png\""), "{page}");
+        assert!(page.contains("src=\"batch-review/%3Cb%3E%26%22mold%22/relief.png\""), "{page}");
         assert_eq!(page.matches("loading=\"lazy\"").count(), 3);
         assert!(!page.contains("<script") && !page.contains("http"));
         assert!(page.contains("class=\"failed\""));

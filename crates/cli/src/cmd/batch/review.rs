@@ -1,6 +1,6 @@
 //! What a person looks at first after a batch: per session, the numbers that flag a bad capture
 //! ([`Signs`]) and three small previews (the normals' relief under a raking light, the albedo,
-//! the confidence), written to `OUT/review/SESSION/` for the review page ([`page`](super::page)).
+//! the confidence), written to `OUT/batch-review/SESSION/` for the review page ([`page`](super::page)).
 //!
 //! The numbers come from the capture in memory. A session skipped as up to date keeps the ones
 //! its earlier run wrote (`signs.json` beside the previews); when those are gone, the previews
@@ -19,8 +19,8 @@ use skinkit_maps::{Grid, NormalEncoding, NormalMap, ScalarMap};
 
 use super::resume::Done;
 
-/// The folder of the previews in the output folder: `review/SESSION/`.
-pub const FOLDER: &str = "review";
+/// The folder of the previews in the output folder: `batch-review/SESSION/`.
+pub const FOLDER: &str = "batch-review";
 /// Longest side of a preview, pixels: small enough for 500 rows of three on one page.
 pub const PREVIEW_SIDE: usize = 96;
 /// The previews of a session, in the order the page shows them.

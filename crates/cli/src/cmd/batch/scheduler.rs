@@ -250,6 +250,19 @@ mod tests {
     }
 
     #[test]
+    fn shard_takes_k_of_n_or_auto_and_checks_the_count() {
+        let none = |_: &str| None;
+        assert_eq!("auto".parse::<ShardSpec>(), Ok(ShardSpec::Auto));
+        let fixed: ShardSpec = "2/3".parse().unwrap();
+        assert_eq!(fixed.resolve(&none, None), k_of_n(2, 3));
+        assert_eq!(fixed.resolve(&none, Some(3)), k_of_n(2, 3));
+        assert!(fixed.resolve(&none, Some(4)).unwrap_err().contains("--shard-count 4"));
+        assert!("automatic".parse::<ShardSpec>().is_err());
+        let slurm = |name: &str| (name == "SLURM_ARRAY_TASK_ID").then(|| "3".to_owned());
+        assert_eq!(ShardSpec::Auto.resolve(&slurm, Some(3)), k_of_n(3, 3));
+    }
+
+    #[test]
     fn no_scheduler_or_two_are_refused() {
         assert!(env(&[], Some(3)).unwrap_err().contains("SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX"));
         let e = env(&[("SLURM_ARRAY_TASK_ID", "1"), ("JOB_COMPLETION_INDEX", "0")], Some(3)).unwrap_err();
