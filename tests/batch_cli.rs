@@ -76,6 +76,12 @@ fn a_session_of_blank_photos_fails_with_its_maps_written() {
     let (code, again) = batch(&[]);
     assert_eq!((code, again["skipped"].as_u64(), again["failed"].as_u64()), (Some(1), Some(2), Some(1)));
     assert_eq!(outcomes(&again), outcomes(&first));
+    // Previews lost (an older batch, a cleaned folder): drawn again from the session's files.
+    std::fs::remove_dir_all(out.join("batch-review/s000")).unwrap();
+    let (_, redrawn) = batch(&[]);
+    assert!(out.join("batch-review/s000/relief.png").is_file() && out.join("batch-review/s000/signs.json").is_file());
+    let signs = &redrawn["outcomes"][0]["signs"];
+    assert_eq!((signs["invalid_share"].as_f64(), signs.get("residual")), (Some(0.0), None), "{signs}");
     let (code, accepted) = batch(&["--min-valid", "0"]);
     assert_eq!((code, accepted["failed"].as_u64()), (Some(0), Some(0)));
     let o = skinkit(&["batch", s(&dir), "--out", s(&out), "--min-valid", "1.5"]);

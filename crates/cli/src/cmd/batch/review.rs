@@ -15,7 +15,7 @@ use skinkit_capture::session::Captured;
 use skinkit_capture::solve::{AlbedoMap, Solution};
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::preview::{self, Picture};
-use skinkit_maps::{Grid, NormalEncoding, NormalMap, ScalarMap};
+use skinkit_maps::{Grid, NormalEncoding, NormalMap, OutputSet, ScalarMap};
 
 use super::resume::Done;
 
@@ -83,7 +83,8 @@ fn median_residual(confidence: &ScalarMap) -> Option<f64> {
     Some(residual_of(f64::from(c)))
 }
 
-/// Writes the previews of `solution` and its `signs` into `dir`, each file atomically.
+/// Writes the previews of `solution` and its `signs` into `dir`, as one output set (all or
+/// nothing, `signs.json` last; an interrupt leaves no half folder).
 ///
 /// # Errors
 /// When the folder or a file cannot be written.
@@ -92,22 +93,25 @@ pub fn write_previews(dir: &Path, solution: &Solution, signs: &Signs) -> Result<
         AlbedoMap::Gray(map) => map.clone(),
         AlbedoMap::Rgb(map) => map.map(|c| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z),
     };
-    write_pictures(dir, &solution.normals, &albedo, &solution.confidence)?;
-    crate::pipeline::write_json(&dir.join(SIGNS), signs)
+    write_set(dir, &solution.normals, &albedo, &solution.confidence, signs)
 }
 
-fn write_pictures(dir: &Path, normals: &NormalMap, albedo: &ScalarMap, confidence: &ScalarMap) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+fn write_set(dir: &Path, normals: &NormalMap, albedo: &ScalarMap, confidence: &ScalarMap, signs: &Signs) -> Result<()> {
+    if let Some(parent) = dir.parent() {
+        std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
+    }
+    let set = OutputSet::folder(dir, SIGNS).with_context(|| format!("cannot write {}", dir.display()))?;
     let pictures = [
         preview::shade_normals(normals, preview::raking_light()),
         preview::gray(albedo),
         confidence_picture(confidence),
     ];
     for (name, picture) in PREVIEWS.iter().zip(&pictures) {
-        let path = dir.join(name);
-        preview::write_png(&path, &preview::shrink(picture, PREVIEW_SIDE))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        set.write(name, |p| preview::write_png(p, &preview::shrink(picture, PREVIEW_SIDE)))
+            .with_context(|| format!("cannot write {}", dir.join(name).display()))?;
     }
+    crate::pipeline::write_json_in(&set, SIGNS, &dir.join(SIGNS), signs)?;
+    set.commit().with_context(|| format!("cannot write {}", dir.display()))?;
     Ok(())
 }
 
@@ -119,27 +123,30 @@ fn confidence_picture(confidence: &ScalarMap) -> Picture {
     })
 }
 
-/// The signs of a session skipped as up to date: its earlier run's (`dir/signs.json`), else
-/// the report's share of invalid pixels and condition number, with the previews drawn again
-/// from the session's files in `out_dir` when any is missing.
+/// The signs of a session skipped as up to date: its earlier run's (`dir/signs.json`, with its
+/// previews), else the report's share of invalid pixels and condition number, with the previews
+/// drawn again from the session's files in `out_dir`.
 ///
 /// # Errors
-/// When a missing preview cannot be drawn from the session's files.
+/// When the previews cannot be drawn from the session's files.
 pub fn signs_of_skipped(out_dir: &Path, dir: &Path, done: &Done) -> Result<Signs> {
-    if PREVIEWS.iter().any(|p| !dir.join(p).is_file()) {
-        redraw(out_dir, dir)?;
+    let earlier: Option<Signs> =
+        std::fs::read_to_string(dir.join(SIGNS)).ok().and_then(|t| serde_json::from_str(&t).ok());
+    if let Some(signs) = earlier.filter(|_| PREVIEWS.iter().all(|p| dir.join(p).is_file())) {
+        return Ok(signs);
     }
-    let earlier = std::fs::read_to_string(dir.join(SIGNS)).ok().and_then(|t| serde_json::from_str(&t).ok());
-    Ok(earlier.unwrap_or_else(|| Signs {
+    let signs = Signs {
         invalid_share: done.invalid_pixels as f64 / done.pixels.max(1) as f64,
         dropped_share: None,
         residual: None,
         condition_number: done.condition_number,
-    }))
+    };
+    redraw(out_dir, dir, &signs)?;
+    Ok(signs)
 }
 
 /// The previews drawn from a capture folder's `normal.exr`, `albedo.png` and `confidence.png`.
-fn redraw(out_dir: &Path, dir: &Path) -> Result<()> {
+fn redraw(out_dir: &Path, dir: &Path, signs: &Signs) -> Result<()> {
     let limits = Limits::default();
     let normal = out_dir.join("normal.exr");
     let normals = io::read_normal_map(&normal, NormalEncoding::default(), &limits)
@@ -149,7 +156,7 @@ fn redraw(out_dir: &Path, dir: &Path) -> Result<()> {
         let photo = io::read_photo(&path, &limits).with_context(|| format!("cannot read {}", path.display()))?;
         Ok(Grid::from_vec(photo.width(), photo.height(), photo.luminance())?)
     };
-    write_pictures(dir, &normals, &gray("albedo.png")?, &gray("confidence.png")?)
+    write_set(dir, &normals, &gray("albedo.png")?, &gray("confidence.png")?, signs)
 }
 
 #[cfg(test)]
