@@ -26,7 +26,10 @@ impl std::str::FromStr for ShardSpec {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        if s.trim() == "auto" { Ok(ShardSpec::Auto) } else { s.parse().map(ShardSpec::Fixed) }
+        if s.trim() == "auto" {
+            return Ok(ShardSpec::Auto);
+        }
+        s.parse().map(ShardSpec::Fixed).map_err(|e| format!("{e}, or auto (from the array job's environment)"))
     }
 }
 
