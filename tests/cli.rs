@@ -172,12 +172,18 @@ fn batch_goes_on_past_a_bad_session_and_says_which() {
     assert!(out.join("batch-report.json").is_file());
 }
 
-/// Every file under `dir` (relative path -> bytes), session reports without what a rerun changes
-/// (timings, the process's peak memory).
+/// Every file in the sub-folders of `dir`, at any depth (relative path -> bytes), session
+/// reports without what a rerun changes (timings, the process's peak memory).
 fn tree_contents(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
     let mut files = std::collections::BTreeMap::new();
-    for session in std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()) {
-        for file in std::fs::read_dir(&session).unwrap().map(|e| e.unwrap().path()) {
+    let mut folders: Vec<std::path::PathBuf> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()).collect();
+    while let Some(folder) = folders.pop() {
+        for file in std::fs::read_dir(&folder).unwrap().map(|e| e.unwrap().path()) {
+            if file.is_dir() {
+                folders.push(file);
+                continue;
+            }
             let mut bytes = std::fs::read(&file).unwrap();
             if file.extension().is_some_and(|e| e == "json") {
                 let mut v: serde_json::Value = serde_json::from_slice(&bytes).unwrap();

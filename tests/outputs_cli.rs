@@ -73,13 +73,14 @@ fn debris(dir: &Path) -> Vec<PathBuf> {
     walk(dir).into_iter().filter(is_debris).collect()
 }
 
-/// Asserts that every session folder under `out` is a complete set, and returns their names.
+/// Asserts that every session folder under `out` is a complete set, and returns their names
+/// (the batch's own folders, `batch-review/` of its previews, are not sessions).
 fn complete_sessions(out: &Path, when: &str) -> Vec<String> {
     assert_eq!(debris(out), Vec::<PathBuf>::new(), "{when}: debris left");
     let mut names = Vec::new();
     for entry in std::fs::read_dir(out).unwrap() {
         let path = entry.unwrap().path();
-        if path.is_dir() {
+        if path.is_dir() && !path.ends_with("batch-review") {
             for f in SET {
                 assert!(path.join(f).is_file(), "{when}: half set in {}: {f} missing", path.display());
             }

@@ -1,8 +1,9 @@
 // Opens a local HTML page in headless Chromium and reports, as JSON on stdout, every image of the
-// page (its source, whether it loaded and its natural width), every console error, page error and
-// failed request, and the page's title; then saves a full-page screenshot.
+// page (its source, whether it loaded, decoded and its natural width; lazy images are scrolled
+// into view first), the rows of its tables, every console error, page error and failed request,
+// and the page's title; then saves a full-page screenshot.
 //
-// Usage: node check-page.mjs PAGE.html SCREENSHOT.png
+// Usage: node check-page.mjs PAGE.html SCREENSHOT.png (`-`: no screenshot)
 // The browser is the system's Chromium (CHROMIUM, else /usr/bin/chromium): nothing is downloaded.
 import { chromium } from 'playwright-core';
 import { pathToFileURL } from 'node:url';
@@ -27,10 +28,24 @@ try {
   page.on('requestfailed', (r) => report.failed_requests.push(`${r.url()}: ${r.failure()?.errorText}`));
   await page.goto(pathToFileURL(resolve(page_path)).href, { waitUntil: 'load', timeout: 120000 });
   report.title = await page.title();
-  report.images = await page.evaluate(() => Array.from(document.images, (img) => ({
-    src: img.getAttribute('src'), complete: img.complete, natural_width: img.naturalWidth,
+  // Lazy images (`loading="lazy"`) load as they come into view: scroll the whole page through,
+  // then wait for each image to decode (at most 20 s each).
+  await page.evaluate(async () => {
+    for (let y = 0; y < document.body.scrollHeight; y += window.innerHeight / 2) {
+      window.scrollTo(0, y);
+      await new Promise((done) => setTimeout(done, 25));
+    }
+    window.scrollTo(0, 0);
+  });
+  report.images = await page.evaluate(() => Promise.all(Array.from(document.images, async (img) => {
+    const timeout = new Promise((_, fail) => setTimeout(() => fail(new Error('timeout')), 20000));
+    const decoded = await Promise.race([img.decode(), timeout]).then(() => true, () => false);
+    return { src: img.getAttribute('src'), complete: img.complete, natural_width: img.naturalWidth, decoded };
   })));
-  await page.screenshot({ path: screenshot, fullPage: true });
+  // The rows of the page's tables in order (id and class), for pages that rank their rows.
+  report.rows = await page.evaluate(() => Array.from(document.querySelectorAll('tbody tr'),
+    (tr) => ({ id: tr.id, class: tr.className })));
+  if (screenshot !== '-') await page.screenshot({ path: screenshot, fullPage: true });
 } finally {
   await browser.close();
 }

@@ -15,25 +15,34 @@
 //! ([`subject`]). With `--json`, stdout has one JSON line per session and per face as each ends,
 //! then one line with the batch report.
 
+mod outcome;
+mod page;
+mod report;
 mod resume;
+mod review;
+mod scheduler;
 mod shard;
 mod subject;
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
+use std::time::Instant;
 
 use anyhow::{Context, Result};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use skinkit_capture::Rig;
-use skinkit_capture::session::{self, CaptureOptions, Session};
-use skinkit_maps::OutputSet;
 use skinkit_maps::limits::{self, MemoryGate};
 
+use skinkit_capture::session::CaptureOptions;
+
 use super::capture::SolveArgs;
+use crate::guard;
 use crate::interrupt::{self, HookGuard};
 use crate::output::Output;
-use crate::{guard, pipeline};
+pub use outcome::SessionOutcome;
+use outcome::{Settings, lock};
+pub use report::BatchReport;
+use scheduler::ShardSpec;
 use shard::Shard;
 use subject::{FaceOutcome, Job, Unit};
 
@@ -47,210 +56,162 @@ pub struct Args {
     pub out: PathBuf,
     /// Process only shard K of N (1 <= K <= N): the sessions whose index in name order is K - 1
     /// modulo N. The report goes to batch-report-K-of-N.json; `--merge` joins the N of them.
-    #[arg(long, value_name = "K/N")]
-    pub shard: Option<Shard>,
-    /// Join the shard reports in OUT_DIR (all N of them) into OUT_DIR/batch-report.json.
+    /// `auto`: K and N from the array job's environment (Slurm, Kubernetes Indexed Job, AWS
+    /// Batch; see the README), refused when they are missing or disagree.
+    #[arg(long, value_name = "K/N|auto")]
+    pub shard: Option<ShardSpec>,
+    /// The number of tasks of the array, for `--shard auto` where the scheduler does not say
+    /// (Kubernetes; AWS Batch without AWS_BATCH_JOB_ARRAY_SIZE); checked against it where it does.
+    #[arg(long, value_name = "N", requires = "shard", value_parser = crate::flags::usize_in(1, 1_000_000))]
+    pub shard_count: Option<usize>,
+    /// Print the sessions and subjects (of the shard, with `--shard`) in shard order, one a line
+    /// (a JSON array with `--json`), and stop: the items `--only` takes.
+    #[arg(long, conflicts_with_all = ["merge", "only"])]
+    pub list: bool,
+    /// Process exactly these sessions or subjects (names as `--list` prints them) into the same
+    /// output tree; each one's report goes to OUT_DIR/batch-parts/NAME.json for `--merge`.
+    #[arg(long, value_name = "NAME", num_args = 1.., conflicts_with = "shard")]
+    pub only: Vec<String>,
+    /// Join what ran in OUT_DIR (the shard reports, all N of them, and the reports of `--only`
+    /// runs) into OUT_DIR/batch-report.json and its review page.
     #[arg(long, conflicts_with_all = ["sessions", "shard", "force"])]
     pub merge: bool,
     /// Capture every session again, even those whose outputs are complete, newer than their
     /// inputs and made with the same options (by default those are skipped).
     #[arg(long)]
     pub force: bool,
+    /// Least share of a session's pixels that must be solved (0 to 1): a session below it (blank
+    /// or dark photos) is a failed outcome, its maps still written for inspection.
+    #[arg(long, value_name = "SHARE", default_value_t = 0.01, value_parser = share)]
+    pub min_valid: f64,
     #[command(flatten)]
     pub solve: SolveArgs,
 }
 
-/// One line of the batch summary.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct SessionOutcome {
-    pub session: String,
-    pub ok: bool,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub error: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub invalid_pixels: Option<usize>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub seconds: Option<f64>,
-    /// Not captured again: its outputs were complete and up to date (`seconds` is the earlier run's).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub skipped: bool,
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-pub struct BatchReport {
-    pub sessions: usize,
-    pub succeeded: usize,
-    pub failed: usize,
-    /// Sessions among the succeeded that were up to date and not captured again.
-    #[serde(default)]
-    pub skipped: usize,
-    /// True when a signal stopped the batch: `outcomes` lists the sessions that finished (their
-    /// folders are complete); the others have no folder.
-    pub interrupted: bool,
-    /// The memory limit the sessions running at once had to fit together (`--memory-limit`).
-    pub memory_limit_mib: u64,
-    /// The most sessions that ran at once.
-    pub most_at_once: usize,
-    pub outcomes: Vec<SessionOutcome>,
-    /// The shard this report covers (`--shard`); absent for a whole or merged batch.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shard: Option<Shard>,
-    /// The subjects' face maps (folders with a `layout.toml`), in subject name order.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub faces: Vec<FaceOutcome>,
-}
-
-/// What one session's run left: its figures, and what its commit cleaned up from killed runs.
-struct SessionRun {
-    invalid_pixels: usize,
-    seconds: f64,
-    skipped: bool,
-    swept: Vec<PathBuf>,
-}
-
-/// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
-/// session that could never fit fails at once with its estimate and the limit. Without `force`,
-/// a session whose outputs are up to date ([`resume::up_to_date`]) is skipped.
-fn run_session(
-    dir: &Path,
-    out_dir: &Path,
-    options: &CaptureOptions,
-    gate: &MemoryGate,
-    force: bool,
-) -> Result<SessionRun> {
-    let files = Session::from_dir(dir)?;
-    // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
-    let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
-    let ambient = files.ambient.clone().or(rig_ambient);
-    if let Some(done) = resume::up_to_date(dir, &files, ambient.as_deref(), out_dir, options).filter(|_| !force) {
-        let swept = skinkit_maps::output_set::sweep_folder(out_dir);
-        return Ok(SessionRun { invalid_pixels: done.invalid_pixels, seconds: done.seconds, skipped: true, swept });
+/// A share between 0 and 1.
+fn share(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{text}' is not a share: expected a number from 0 to 1 (e.g. 0.01 for 1%)")),
     }
-    let estimate = session::memory_estimate(&files, ambient.as_deref(), options)?;
-    limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, gate.budget())?;
-    let _admitted = gate.acquire(estimate);
-    // Staged from the start, so an interrupt during the solve removes this session's folder too.
-    let set = pipeline::capture_set(out_dir)?;
-    let mut captured = session::capture(&files, options, &|_| {})?;
-    let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
-    let report = &captured.report;
-    Ok(SessionRun { invalid_pixels: report.invalid_pixels, seconds: report.timings_s.total, skipped: false, swept })
-}
-
-/// One session's outcome; `swept` collects what its commit cleaned up from killed runs.
-fn outcome(
-    job: &Job,
-    options: &CaptureOptions,
-    gate: &MemoryGate,
-    force: bool,
-    swept: &Mutex<Vec<PathBuf>>,
-) -> SessionOutcome {
-    let name = job.name.clone();
-    match run_session(&job.dir, &job.out, options, gate, force) {
-        Ok(run) => {
-            lock(swept).extend(run.swept);
-            SessionOutcome {
-                session: name,
-                ok: true,
-                error: None,
-                invalid_pixels: Some(run.invalid_pixels),
-                seconds: Some(run.seconds),
-                skipped: run.skipped,
-            }
-        }
-        Err(e) => SessionOutcome {
-            session: name,
-            ok: false,
-            error: Some(crate::output::one_line(&e)),
-            invalid_pixels: None,
-            seconds: None,
-            skipped: false,
-        },
-    }
-}
-
-fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-impl BatchReport {
-    fn new(
-        sessions: usize,
-        mut outcomes: Vec<SessionOutcome>,
-        interrupted: bool,
-        gate: &MemoryGate,
-        shard: Option<Shard>,
-        faces: Vec<FaceOutcome>,
-    ) -> Self {
-        outcomes.sort_by(|a, b| a.session.cmp(&b.session));
-        let failed = outcomes.iter().filter(|o| !o.ok).count();
-        BatchReport {
-            sessions,
-            succeeded: outcomes.len() - failed,
-            failed,
-            skipped: outcomes.iter().filter(|o| o.skipped).count(),
-            interrupted,
-            memory_limit_mib: gate.budget() >> 20,
-            most_at_once: gate.peaks().0,
-            outcomes,
-            shard,
-            faces,
-        }
-    }
-
-    /// Sessions and faces that failed.
-    fn any_failed(&self) -> bool {
-        self.failed > 0 || self.faces.iter().any(|f| !f.ok)
-    }
-}
-
-/// On an interrupt: `batch-report.json` of the sessions that finished, marked interrupted.
-fn report_on_interrupt(
-    path: PathBuf,
-    sessions: usize,
-    finished: Arc<Mutex<Vec<SessionOutcome>>>,
-    gate: Arc<MemoryGate>,
-    shard: Option<Shard>,
-) -> HookGuard {
-    interrupt::on_interrupt(move || {
-        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard, Vec::new());
-        // Written by the signal thread itself, whole (atomically), before the exit.
-        if let Err(e) = pipeline::write_json(&path, &report) {
-            eprintln!("error: {e:#}");
-        }
-    })
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     let Some(sessions) = args.sessions.as_deref().filter(|_| !args.merge) else {
         let report = shard::merge(&args.out)?;
-        return finish(&report, &args.out.join("batch-report.json"), out);
+        return report::finish(report, &args.out.join("batch-report.json"), true, out);
     };
-    let options = args.solve.options(out)?;
-    guard::out_folder("--out", &args.out)?;
-    guard::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
+    let shard = match args.shard {
+        None => None,
+        Some(spec) => Some(spec.resolve(&|name| std::env::var(name).ok(), args.shard_count).map_err(guard::usage)?),
+    };
     let all = subject::units(sessions, &args.out)?;
     if all.iter().all(|u| u.jobs().is_empty()) {
         anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
-    let units = match args.shard {
+    refuse_reserved(&all, sessions)?;
+    let units = select(all, shard, &args.only, sessions)?;
+    if args.list {
+        list(&units, out);
+        return Ok(0);
+    }
+    let options = args.solve.options(out)?;
+    guard::out_folder("--out", &args.out)?;
+    guard::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
+    // Made here, not by the sessions' output sets: one session's failure must not remove it.
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let (report, hook) = capture_units(&units, &args, &options, shard, out);
+    let code = if args.only.is_empty() {
+        let path = args.out.join(shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
+        report::finish(report, &path, shard.is_none(), out)
+    } else {
+        report::write_parts(report, &units, &args.out, out)
+    };
+    drop(hook);
+    code
+}
+
+/// Refuses a session or subject whose output folder would be one of the batch's own
+/// (`batch-review/`, `batch-parts/`).
+fn refuse_reserved(units: &[Unit], root: &Path) -> Result<()> {
+    let reserved = [review::FOLDER, shard::PARTS];
+    let top = |name: &str| name.split('/').next().unwrap_or_default().to_owned();
+    let names = units.iter().flat_map(|u| std::iter::once(top(u.name())).chain(u.jobs().iter().map(|j| top(&j.name))));
+    for name in names {
+        if reserved.contains(&name.as_str()) {
+            return Err(guard::usage(format!(
+                "{}: a session or subject named `{name}` would write into the batch's own `{name}/` folder: rename it",
+                root.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The units of the shard, or those `only` names (each must be one).
+fn select(all: Vec<Unit>, shard: Option<Shard>, only: &[String], root: &Path) -> Result<Vec<Unit>> {
+    let units = match shard {
         Some(shard) => shard.select(&all),
         None => all,
     };
+    if let Some(missing) = only.iter().find(|name| !units.iter().any(|u| u.name() == name.as_str())) {
+        return Err(guard::usage(format!(
+            "--only {missing}: no session or subject of that name in {} (`skinkit batch --list` names them)",
+            root.display()
+        )));
+    }
+    Ok(units.into_iter().filter(|u| only.is_empty() || only.iter().any(|n| n == u.name())).collect())
+}
+
+/// One item of `--list`.
+#[derive(Serialize)]
+struct Item<'a> {
+    name: &'a str,
+    kind: &'static str,
+    sessions: Vec<&'a str>,
+}
+
+/// Prints the units' names, one a line, or as a JSON array with `--json` (nothing with `--quiet`).
+fn list(units: &[Unit], out: &Output) {
+    let items: Vec<Item> = units
+        .iter()
+        .map(|u| Item {
+            name: u.name(),
+            kind: if matches!(u, Unit::Subject(_)) { "subject" } else { "session" },
+            sessions: u.jobs().iter().map(|j| j.name.as_str()).collect(),
+        })
+        .collect();
+    out.result(&items, || items.iter().map(|i| i.name).collect::<Vec<_>>().join("\n"));
+}
+
+/// Captures the units' sessions, in parallel under the memory gate, then stitches their faces.
+/// The interrupt hook is returned to be kept until the report is written.
+fn capture_units(
+    units: &[Unit],
+    args: &Args,
+    options: &CaptureOptions,
+    shard: Option<Shard>,
+    out: &Output,
+) -> (BatchReport, Option<HookGuard>) {
+    let start = Instant::now();
     let jobs: Vec<Job> = units.iter().flat_map(|u| u.jobs().iter().cloned()).collect();
-    // Made here, not by the sessions' output sets: one session's failure must not remove it.
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let report_path = args.out.join(args.shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
     let finished = Arc::new(Mutex::new(Vec::new()));
     // As many sessions at once as there are workers, fewer when their estimates do not fit the
     // memory limit together.
     let gate = Arc::new(MemoryGate::new(options.memory_limit));
-    let hook =
-        report_on_interrupt(report_path.clone(), jobs.len(), Arc::clone(&finished), Arc::clone(&gate), args.shard);
+    // An interrupted `--only` run leaves no report: its finished sessions are complete folders,
+    // which the next run skips.
+    let hook = args.only.is_empty().then(|| {
+        let name = shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name());
+        report::on_interrupt(args.out.join(name), jobs.len(), Arc::clone(&finished), Arc::clone(&gate), shard)
+    });
     let swept = Mutex::new(Vec::new());
+    let review_dir = args.out.join(review::FOLDER);
+    let settings =
+        Settings { options, gate: &gate, force: args.force, min_valid: args.min_valid, review_dir: &review_dir };
     let bar = out.progress(jobs.len() as u64, "batch");
     limits::run_queued(&jobs, rayon::current_num_threads(), |job| {
-        let outcome = outcome(job, &options, &gate, args.force, &swept);
+        let outcome = outcome::outcome(job, &settings, &swept);
         if interrupt::requested() && !outcome.ok {
             // Failed because the interrupt removed its staging folder: unfinished, not failed.
             return;
@@ -265,11 +226,8 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     bar.finish_and_clear();
     out.swept(&lock(&swept));
     let outcomes = lock(&finished).clone();
-    let faces = faces(&units, &outcomes, args.force, out);
-    let report = BatchReport::new(jobs.len(), outcomes, false, &gate, args.shard, faces);
-    let code = finish(&report, &report_path, out);
-    drop(hook);
-    code
+    let faces = faces(units, &outcomes, args.force, out);
+    (BatchReport::new(jobs.len(), outcomes, false, &gate, shard, faces).timed(start), hook)
 }
 
 /// Each subject's face, one after the other (a face map takes the whole machine), once its
@@ -306,33 +264,4 @@ fn faces(units: &[Unit], outcomes: &[SessionOutcome], force: bool, out: &Output)
         faces.push(face);
     }
     faces
-}
-
-/// Writes `report` to `path` and shows it; exit code 1 when a session failed.
-fn finish(report: &BatchReport, path: &Path, out: &Output) -> Result<i32> {
-    let mut set = OutputSet::files();
-    pipeline::write_json_file(&mut set, path, report)?;
-    set.commit().with_context(|| format!("cannot write {}", path.display()))?;
-    out.result_record("batch", report, || {
-        let shard = report.shard.map(|s| format!(" (shard {s})")).unwrap_or_default();
-        let skipped =
-            if report.skipped > 0 { format!(" ({} up to date, skipped)", report.skipped) } else { String::new() };
-        let mut s = format!(
-            "{} sessions{shard}: {} succeeded{skipped}, {} failed",
-            report.sessions, report.succeeded, report.failed
-        );
-        for o in report.outcomes.iter().filter(|o| !o.ok) {
-            s += &format!("\nfailed: {}: {}", o.session, o.error.as_deref().unwrap_or(""));
-        }
-        if !report.faces.is_empty() {
-            let ok = report.faces.iter().filter(|f| f.ok).count();
-            let skipped = report.faces.iter().filter(|f| f.skipped).count();
-            s += &format!("\n{} faces: {ok} written or up to date ({skipped} skipped)", report.faces.len());
-            for f in report.faces.iter().filter(|f| !f.ok) {
-                s += &format!("\nface failed: {}: {}", f.subject, f.error.as_deref().unwrap_or(""));
-            }
-        }
-        s
-    });
-    Ok(if report.any_failed() { 1 } else { 0 })
 }

@@ -15,6 +15,9 @@ use skinkit_capture::session::{CaptureOptions, Session};
 /// What a skipped session's report says.
 pub struct Done {
     pub invalid_pixels: usize,
+    /// Pixels of the map (width x height).
+    pub pixels: usize,
+    pub condition_number: Option<f64>,
     pub seconds: f64,
 }
 
@@ -53,6 +56,8 @@ pub fn up_to_date(
         && report["transfer"].as_str()? == skinkit_capture::session::transfer_name(options.transfer);
     same.then_some(Done {
         invalid_pixels: report["invalid_pixels"].as_u64()? as usize,
+        pixels: (report["width"].as_u64()? * report["height"].as_u64()?) as usize,
+        condition_number: report["condition_number"].as_f64(),
         seconds: report["timings_s"]["total"].as_f64()?,
     })
 }

@@ -56,8 +56,11 @@ impl Shard {
     }
 }
 
-/// The shard reports in `dir`: `batch-report-K-of-N.json` for one N and every K, or an error that
-/// names what is missing or mixed.
+/// The folder, in the output folder, of the reports of `--only` runs: `UNIT.json` per unit.
+pub const PARTS: &str = "batch-parts";
+
+/// The shard reports in `dir`: none, or `batch-report-K-of-N.json` for one N and every K; an
+/// error names what is missing or mixed.
 fn shard_reports(dir: &Path) -> Result<Vec<(Shard, PathBuf)>> {
     let mut found: Vec<(Shard, PathBuf)> = std::fs::read_dir(dir)
         .with_context(|| format!("cannot list {}", dir.display()))?
@@ -70,9 +73,7 @@ fn shard_reports(dir: &Path) -> Result<Vec<(Shard, PathBuf)>> {
         })
         .collect();
     found.sort_by_key(|(s, _)| s.index);
-    let Some(count) = found.first().map(|(s, _)| s.count) else {
-        bail!("{}: no shard reports (batch-report-K-of-N.json) to merge", dir.display());
-    };
+    let Some(count) = found.first().map(|(s, _)| s.count) else { return Ok(found) };
     if let Some((s, p)) = found.iter().find(|(s, _)| s.count != count) {
         bail!("{}: shard {s} does not belong to a batch of {count} shards", p.display());
     }
@@ -84,37 +85,79 @@ fn shard_reports(dir: &Path) -> Result<Vec<(Shard, PathBuf)>> {
     Ok(found)
 }
 
-/// Joins the shard reports of `dir` into one report: counts added, outcomes in name order, the
-/// memory limit and sessions at once the largest of any shard, interrupted if any shard was.
+/// The reports of `--only` runs in `dir/batch-parts`, in name order.
+fn part_reports(dir: &Path) -> Result<Vec<PathBuf>> {
+    let parts = dir.join(PARTS);
+    if !parts.is_dir() {
+        return Ok(Vec::new());
+    }
+    let mut found: Vec<PathBuf> = std::fs::read_dir(&parts)
+        .with_context(|| format!("cannot list {}", parts.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    found.sort();
+    Ok(found)
+}
+
+fn read_report(path: &Path) -> Result<BatchReport> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not a batch report", path.display()))
+}
+
+/// Joins what ran into `dir` into one report: the shard reports (all N of them, when there are
+/// any) and the reports of `--only` runs (`batch-parts/`), a session or face reported twice
+/// taken from the later (a part after the shards). Counts are worked out again, outcomes in name
+/// order, the memory figures the largest of any part, the time the longest, the rate the sum
+/// of the shards', interrupted if any part was.
+///
+/// # Errors
+/// When there is nothing to merge, a shard is missing, or a report does not read.
 pub fn merge(dir: &Path) -> Result<BatchReport> {
-    let mut merged: Option<BatchReport> = None;
+    let mut reports = Vec::new();
     for (shard, path) in shard_reports(dir)? {
-        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        let report: BatchReport =
-            serde_json::from_str(&text).with_context(|| format!("{}: not a batch report", path.display()))?;
+        let report = read_report(&path)?;
         if report.shard != Some(shard) {
             bail!("{}: its `shard` field says {:?}, not {shard}", path.display(), report.shard.map(|s| s.to_string()));
         }
-        merged = Some(match merged {
-            None => BatchReport { shard: None, ..report },
-            Some(m) => BatchReport {
-                sessions: m.sessions + report.sessions,
-                succeeded: m.succeeded + report.succeeded,
-                failed: m.failed + report.failed,
-                skipped: m.skipped + report.skipped,
-                interrupted: m.interrupted || report.interrupted,
-                memory_limit_mib: m.memory_limit_mib.max(report.memory_limit_mib),
-                most_at_once: m.most_at_once.max(report.most_at_once),
-                outcomes: m.outcomes.into_iter().chain(report.outcomes).collect(),
-                shard: None,
-                faces: m.faces.into_iter().chain(report.faces).collect(),
-            },
-        });
+        reports.push(report);
     }
-    let mut merged = merged.expect("shard_reports returns at least one");
-    merged.outcomes.sort_by(|a, b| a.session.cmp(&b.session));
-    merged.faces.sort_by(|a, b| a.subject.cmp(&b.subject));
-    Ok(merged)
+    for path in part_reports(dir)? {
+        reports.push(read_report(&path)?);
+    }
+    if reports.is_empty() {
+        bail!(
+            "{}: nothing to merge: no shard reports (batch-report-K-of-N.json) and no reports of --only runs ({PARTS}/)",
+            dir.display()
+        );
+    }
+    Ok(join(reports))
+}
+
+fn join(reports: Vec<BatchReport>) -> BatchReport {
+    let mut outcomes = std::collections::BTreeMap::new();
+    let mut faces = std::collections::BTreeMap::new();
+    let mut unfinished = 0;
+    let mut merged =
+        BatchReport::new(0, Vec::new(), false, &skinkit_maps::limits::MemoryGate::new(0), None, Vec::new());
+    for report in reports {
+        unfinished += report.sessions.saturating_sub(report.outcomes.len());
+        merged.interrupted |= report.interrupted;
+        merged.memory_limit_mib = merged.memory_limit_mib.max(report.memory_limit_mib);
+        merged.most_at_once = merged.most_at_once.max(report.most_at_once);
+        merged.memory_peak_mib = merged.memory_peak_mib.max(report.memory_peak_mib);
+        merged.seconds = merged.seconds.max(report.seconds);
+        if report.shard.is_some() {
+            merged.sessions_per_minute += report.sessions_per_minute;
+        }
+        outcomes.extend(report.outcomes.into_iter().map(|o| (o.session.clone(), o)));
+        faces.extend(report.faces.into_iter().map(|f| (f.subject.clone(), f)));
+    }
+    merged.sessions = outcomes.len() + unfinished;
+    merged.outcomes = outcomes.into_values().collect();
+    merged.faces = faces.into_values().collect();
+    merged.recount();
+    merged
 }
 
 #[cfg(test)]

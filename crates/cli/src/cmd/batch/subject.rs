@@ -52,6 +52,14 @@ pub enum Unit {
 }
 
 impl Unit {
+    /// The unit's name: the session's, or the subject's (its folder's name).
+    pub fn name(&self) -> &str {
+        match self {
+            Unit::Session(job) => &job.name,
+            Unit::Subject(s) => &s.name,
+        }
+    }
+
     /// The sessions this unit captures.
     pub fn jobs(&self) -> &[Job] {
         match self {

@@ -1,0 +1,162 @@
+//! One session of a batch: captured (or skipped when up to date), judged against `--min-valid`,
+//! its review previews drawn ([`review`](super::review)), and its line of the batch report.
+//!
+//! A session whose solve leaves fewer valid pixels than `--min-valid` of the map (blank or dark
+//! photos, a lens cap, a mold outside the frame) is a failed outcome with the reason, although
+//! its maps are written for inspection: a batch of 300 must not say all succeeded when one
+//! yielded nothing (issue 44).
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use anyhow::Result;
+use serde::{Deserialize, Serialize};
+
+use skinkit_capture::Rig;
+use skinkit_capture::session::{self, CaptureOptions, Session};
+use skinkit_maps::limits::{self, MemoryGate};
+
+use super::resume;
+use super::review::{self, Signs};
+use super::subject::Job;
+use crate::pipeline;
+
+/// One line of the batch summary.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SessionOutcome {
+    pub session: String,
+    pub ok: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub invalid_pixels: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seconds: Option<f64>,
+    /// Not captured again: its outputs were complete and up to date (`seconds` is the earlier run's).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub skipped: bool,
+    /// What flags a bad capture (for the review page); absent when the session wrote no maps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signs: Option<Signs>,
+}
+
+/// How a batch captures each session.
+pub struct Settings<'a> {
+    pub options: &'a CaptureOptions,
+    pub gate: &'a MemoryGate,
+    pub force: bool,
+    /// Least share of the map's pixels that must be valid (`--min-valid`).
+    pub min_valid: f64,
+    /// Where the review previews go (`OUT/batch-review`).
+    pub review_dir: &'a Path,
+}
+
+/// What one session's run left: its figures, and what its commit cleaned up from killed runs.
+struct SessionRun {
+    invalid_pixels: usize,
+    pixels: usize,
+    seconds: f64,
+    skipped: bool,
+    signs: Signs,
+    swept: Vec<PathBuf>,
+}
+
+/// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
+/// session that could never fit fails at once with its estimate and the limit. Without `force`,
+/// a session whose outputs are up to date ([`resume::up_to_date`]) is skipped.
+fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
+    let (dir, out_dir, options) = (&job.dir, &job.out, settings.options);
+    let files = Session::from_dir(dir)?;
+    // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
+    let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
+    let ambient = files.ambient.clone().or(rig_ambient);
+    let previews = settings.review_dir.join(&job.name);
+    if let Some(done) =
+        resume::up_to_date(dir, &files, ambient.as_deref(), out_dir, options).filter(|_| !settings.force)
+    {
+        let swept = skinkit_maps::output_set::sweep_folder(out_dir);
+        let signs = review::signs_of_skipped(out_dir, &previews, &done)?;
+        let (invalid_pixels, pixels, seconds) = (done.invalid_pixels, done.pixels, done.seconds);
+        return Ok(SessionRun { invalid_pixels, pixels, seconds, skipped: true, signs, swept });
+    }
+    let estimate = session::memory_estimate(&files, ambient.as_deref(), options)?;
+    limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, settings.gate.budget())?;
+    let _admitted = settings.gate.acquire(estimate);
+    // Staged from the start, so an interrupt during the solve removes this session's folder too.
+    let set = pipeline::capture_set(out_dir)?;
+    let mut captured = session::capture(&files, options, &|_| {})?;
+    let signs = review::signs(&captured);
+    review::write_previews(&previews, &captured.solution, &signs)?;
+    let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
+    let report = &captured.report;
+    Ok(SessionRun {
+        invalid_pixels: report.invalid_pixels,
+        pixels: report.width * report.height,
+        seconds: report.timings_s.total,
+        skipped: false,
+        signs,
+        swept,
+    })
+}
+
+/// The reason a session with `invalid` of `pixels` pixels unsolved fails `--min-valid`, if it does.
+pub fn too_few_valid(invalid: usize, pixels: usize, min_valid: f64) -> Option<String> {
+    let valid = pixels.saturating_sub(invalid);
+    let share = if pixels == 0 { 0.0 } else { valid as f64 / pixels as f64 };
+    (share < min_valid).then(|| {
+        format!(
+            "only {valid} of {pixels} pixels ({:.2}%) could be solved, below --min-valid {} \
+             (blank, dark or saturated photos?); its maps are written for inspection",
+            100.0 * share,
+            min_valid
+        )
+    })
+}
+
+/// One session's outcome; `swept` collects what its commit cleaned up from killed runs.
+pub fn outcome(job: &Job, settings: &Settings, swept: &Mutex<Vec<PathBuf>>) -> SessionOutcome {
+    let name = job.name.clone();
+    match run_session(job, settings) {
+        Ok(run) => {
+            lock(swept).extend(run.swept);
+            let error = too_few_valid(run.invalid_pixels, run.pixels, settings.min_valid);
+            SessionOutcome {
+                session: name,
+                ok: error.is_none(),
+                error,
+                invalid_pixels: Some(run.invalid_pixels),
+                seconds: Some(run.seconds),
+                skipped: run.skipped,
+                signs: Some(run.signs),
+            }
+        }
+        Err(e) => SessionOutcome {
+            session: name,
+            ok: false,
+            error: Some(crate::output::one_line(&e)),
+            invalid_pixels: None,
+            seconds: None,
+            skipped: false,
+            signs: None,
+        },
+    }
+}
+
+pub fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_session_below_the_valid_share_fails_with_its_numbers() {
+        assert_eq!(too_few_valid(0, 100, 0.01), None);
+        assert_eq!(too_few_valid(99, 100, 0.01), None, "exactly 1% valid is enough");
+        let why = too_few_valid(100, 100, 0.01).unwrap();
+        assert!(why.contains("only 0 of 100 pixels (0.00%)") && why.contains("--min-valid 0.01"), "{why}");
+        assert!(too_few_valid(0, 0, 0.01).is_some(), "an empty map yields nothing");
+        assert_eq!(too_few_valid(100, 100, 0.0), None, "--min-valid 0 accepts anything");
+    }
+}
