@@ -4,6 +4,8 @@
 use std::path::Path;
 use std::process::Output;
 
+#[path = "height_cli.rs"]
+mod height_cli;
 #[path = "support/mod.rs"]
 mod support;
 use support::{mold, skinkit, stderr};
