@@ -19,7 +19,7 @@ fn read_exr_channel(path: &Path, name: &str) -> (usize, usize, Vec<f32>, Vec<(St
         .unwrap();
     let layer = &image.layer_data[0];
     let size = layer.size;
-    let channel = layer.channel_data.list.iter().find(|c| c.name == name).expect("the channel");
+    let channel = layer.channel_data.list.iter().find(|c| c.name == *name).expect("the channel");
     let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
     let attributes = layer
         .attributes
