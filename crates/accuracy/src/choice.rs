@@ -12,6 +12,8 @@ pub enum Stage {
     Capture,
     /// Removal of a mold's low-frequency tilt: block size.
     Detrend,
+    /// Normal integration to height: each integrator on maps that wrap, do not, or have holes.
+    Height,
     /// Texture synthesis: the default and each knob.
     Synthesis,
     /// The face map's boundaries: spline levels, curves, blending.
@@ -22,13 +24,15 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in pipeline order.
-    pub const ALL: [Stage; 5] = [Stage::Capture, Stage::Detrend, Stage::Synthesis, Stage::Stitching, Stage::Rendering];
+    pub const ALL: [Stage; 6] =
+        [Stage::Capture, Stage::Detrend, Stage::Height, Stage::Synthesis, Stage::Stitching, Stage::Rendering];
 
     /// The stage's name in files and tables (`capture`, `detrend`, ...).
     pub fn name(self) -> &'static str {
         match self {
             Stage::Capture => "capture",
             Stage::Detrend => "detrend",
+            Stage::Height => "height",
             Stage::Synthesis => "synthesis",
             Stage::Stitching => "stitching",
             Stage::Rendering => "rendering",

@@ -19,6 +19,9 @@ pub enum Error {
     /// The stitching library refused a layout or its options.
     #[error("{0}")]
     Stitch(#[from] skinkit_stitch::Error),
+    /// The height library refused a map.
+    #[error("{0}")]
+    Height(#[from] skinkit_height::Error),
     /// A scene could not be loaded or drawn (an adapter was found).
     #[error("rendering: {0}")]
     Render(String),

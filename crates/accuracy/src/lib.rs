@@ -3,7 +3,7 @@
 //! bundled samples (or synthetic heightfields with known normals), with its wall-clock time.
 //!
 //! * [`choice`]: the one row type ([`Choice`]) and the per-stage and whole-run reports.
-//! * [`capture`], [`detrend`], [`synthesis`], [`stitching`], [`rendering`]: one module per stage,
+//! * [`capture`], [`detrend`], [`height`], [`synthesis`], [`stitching`], [`rendering`]: one module per stage,
 //!   each a `measure(&Config, progress)` that returns its [`StageReport`].
 //! * [`markdown`] and [`plot`]: the report as `accuracy.md` and one error-against-time PNG per
 //!   stage (plotters, the bitmap backend, text in the bundled font).
@@ -15,6 +15,7 @@ pub mod capture;
 pub mod choice;
 pub mod detrend;
 pub mod error;
+pub mod height;
 pub mod markdown;
 pub mod plot;
 pub mod rendering;
@@ -60,6 +61,7 @@ pub fn measure(stage: Stage, config: &Config, progress: Progress<'_>) -> Result<
     let mut report = match stage {
         Stage::Capture => capture::measure(config, &each)?,
         Stage::Detrend => detrend::measure(config, &each)?,
+        Stage::Height => height::measure(config, &each)?,
         Stage::Synthesis => synthesis::measure(config, &each)?,
         Stage::Stitching => stitching::measure(config, &each)?,
         Stage::Rendering => rendering::measure(config, &each)?,

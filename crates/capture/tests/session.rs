@@ -56,7 +56,7 @@ fn a_session_folder_is_captured_by_the_library_alone() {
         stages.lock().unwrap().clear();
         let captured = session::capture(&files, &options, &|s| stages.lock().unwrap().push(s)).unwrap();
         let stages = stages.lock().unwrap().clone();
-        assert_eq!(stages, [Stage::Decode, Stage::Solve, Stage::Detrend, Stage::Statistics]);
+        assert_eq!(stages, [Stage::Decode, Stage::Solve, Stage::Detrend, Stage::Statistics, Stage::Height]);
         let r = &captured.report;
         assert_eq!((r.width, r.height, r.light_count), (96, 96, 8));
         assert_eq!(r.solver, if method == Method::Robust { "robust" } else { "leastsquares" });

@@ -13,13 +13,16 @@
 //! * [`Integrator::Neumann`]: no edge crosses the border, `L` is diagonal in the DCT-II basis
 //!   (Simchony, Chellappa and Shao 1990). For rectangular maps that do not wrap: no bowl.
 //! * [`Integrator::Masked`]: edges touching an invalid texel (zero normal, NaN, back-facing) carry
-//!   a weight of [`HOLE_WEIGHT`] and ask for a flat step, so holes are filled smoothly without
-//!   pulling the valid surface; solved by conjugate gradients preconditioned by the Neumann solve.
+//!   a weight of [`HOLE_WEIGHT`] and ask for the valid texels' mean slope, so holes are filled
+//!   smoothly (following the surface's overall tilt) without pulling the valid surface; solved by
+//!   conjugate gradients preconditioned by the Neumann solve. Where holes cut the map into
+//!   pieces, the pieces' relative heights are that fill's guess: no normal says them.
 //!
 //! [`integrate`] picks the integrator from the map ([`Integrator::choose`]), converts slopes to
 //! millimetres through the map's scale ([`Scale`]) and measures the integrability residual. The
 //! deliverables ([`deliver`]) are computed from the resulting [`Height`].
 
+pub mod compare;
 pub mod deliver;
 mod error;
 mod masked;

@@ -43,6 +43,9 @@ pub struct Slopes<'a> {
     /// Per texel: the normal is usable.
     pub valid: Vec<bool>,
     pub counts: TexelCounts,
+    /// Mean `(dh/dcol, dh/drow)` over the valid texels: the step a hole's fill asks for, so that a
+    /// tilted surface is not bent flat across a hole.
+    mean: (f32, f32),
 }
 
 /// Why a normal is or is not usable.
@@ -92,7 +95,21 @@ impl<'a> Slopes<'a> {
                 }
             })
             .collect();
-        Slopes { normals, valid, counts }
+        let mut slopes = Slopes { normals, valid, counts, mean: (0.0, 0.0) };
+        slopes.mean = slopes.mean_slope();
+        slopes
+    }
+
+    /// The mean slope over the valid texels, summed in f64 in texel order.
+    fn mean_slope(&self) -> (f32, f32) {
+        let (mut sx, mut sy) = (0f64, 0f64);
+        for i in (0..self.valid.len()).filter(|&i| self.valid[i]) {
+            let (x, y) = self.at(i);
+            sx += f64::from(x);
+            sy += f64::from(y);
+        }
+        let n = self.counts.valid.max(1) as f64;
+        ((sx / n) as f32, (sy / n) as f32)
     }
 
     pub fn width(&self) -> usize {
@@ -113,11 +130,11 @@ impl<'a> Slopes<'a> {
     }
 
     /// The edge from texel `a` to its neighbour `b`: `(weight, target step)`. With `masked`, an
-    /// edge with an invalid end asks for a flat step at [`HOLE_WEIGHT`]; without, every edge has
-    /// weight 1 and invalid texels count as flat.
+    /// edge with an invalid end asks for the mean slope's step at [`HOLE_WEIGHT`]; without, every
+    /// edge has weight 1 and invalid texels count as flat.
     pub fn edge(&self, a: usize, b: usize, horizontal: bool, masked: bool) -> (f32, f32) {
         if masked && !(self.valid[a] && self.valid[b]) {
-            return (HOLE_WEIGHT, 0.0);
+            return (HOLE_WEIGHT, if horizontal { self.mean.0 } else { self.mean.1 });
         }
         let (sa, sb) = (self.at(a), self.at(b));
         let step = if horizontal { 0.5 * (sa.0 + sb.0) } else { 0.5 * (sa.1 + sb.1) };

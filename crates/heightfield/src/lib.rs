@@ -20,12 +20,14 @@
 
 pub mod error;
 pub mod params;
+pub mod periodic;
 pub mod render;
 pub mod skin;
 pub mod surface;
 
 pub use error::{Error, Result};
 pub use params::{Bulge, FurrowFamily, NoiseParams, PoreParams, SkinParams};
+pub use periodic::periodic;
 pub use render::{Albedo, Quantise, RenderConfig, RenderLight, Specular, render, render_ambient};
 pub use skin::{Heightfield, generate};
 pub use surface::{HeightSample, Pore, Surface};

@@ -29,7 +29,7 @@ pub struct Args {
     /// Seed of every random choice (molds, sensor noise, synthesis, curves).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Only these stages (comma-separated: capture, detrend, synthesis, stitching, rendering).
+    /// Only these stages (comma-separated: capture, detrend, height, synthesis, stitching, rendering).
     #[arg(long, value_name = "STAGES", value_delimiter = ',', value_parser = parse_stage)]
     pub only: Vec<Stage>,
     /// The samples folder (sample molds, face layout, scenes) [default: the repository's samples].

@@ -1,7 +1,7 @@
 //! Shared helpers of the height tests: test fields, the error measure and a brute-force solve.
 
 use skinkit_heightfield::{HeightSample, Heightfield};
-use skinkit_maps::{NormalMap, ScalarMap};
+use skinkit_maps::NormalMap;
 
 /// A field of whole sine waves across a `w x h` map at `mm` per texel (wrapping when `periodic`,
 /// else a third of a wave more), 0.02 mm deep.
@@ -23,51 +23,11 @@ pub fn wave_field(w: usize, h: usize, mm: f64, periodic: bool) -> Heightfield {
     .unwrap()
 }
 
-/// RMS of `ours - exact` over the valid texels after removing the mean (and the best plane with
-/// `plane`), as a share of the exact heights' RMS after the same removal.
-pub fn error_share(ours: &ScalarMap, exact: &ScalarMap, valid: Option<&[bool]>, plane: bool) -> f64 {
-    let w = ours.width();
-    let pick: Vec<usize> = (0..ours.len()).filter(|&i| valid.is_none_or(|v| v[i])).collect();
-    let xy = |i: usize| ((i % w) as f64, (i / w) as f64);
-    let detrend = |v: &dyn Fn(usize) -> f64| -> Vec<f64> {
-        let fit = fit_plane(&pick, &xy, v, plane);
-        pick.iter().map(|&i| v(i) - fit(i)).collect()
-    };
-    let diff = detrend(&|i| (ours.as_slice()[i] - exact.as_slice()[i]) as f64);
-    let base = detrend(&|i| exact.as_slice()[i] as f64);
-    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
-    rms(&diff) / rms(&base)
-}
-
-/// The least-squares plane (or constant) through `v` over `pick`, as a function of the texel.
-fn fit_plane<'a>(
-    pick: &[usize],
-    xy: &'a dyn Fn(usize) -> (f64, f64),
-    v: &dyn Fn(usize) -> f64,
-    plane: bool,
-) -> Box<dyn Fn(usize) -> f64 + 'a> {
-    let n = pick.len() as f64;
-    let mean = |f: &dyn Fn(usize) -> f64| pick.iter().map(|&i| f(i)).sum::<f64>() / n;
-    let (mx, my, mv) = (mean(&|i| xy(i).0), mean(&|i| xy(i).1), mean(v));
-    if !plane {
-        return Box::new(move |_| mv);
-    }
-    let s = |f: &dyn Fn(usize) -> f64| pick.iter().map(|&i| f(i)).sum::<f64>();
-    let sxx = s(&|i| (xy(i).0 - mx).powi(2));
-    let syy = s(&|i| (xy(i).1 - my).powi(2));
-    let sxy = s(&|i| (xy(i).0 - mx) * (xy(i).1 - my));
-    let sxv = s(&|i| (xy(i).0 - mx) * (v(i) - mv));
-    let syv = s(&|i| (xy(i).1 - my) * (v(i) - mv));
-    let det = sxx * syy - sxy * sxy;
-    let a = (sxv * syy - syv * sxy) / det;
-    let b = (syv * sxx - sxv * sxy) / det;
-    Box::new(move |i| mv + a * (xy(i).0 - mx) + b * (xy(i).1 - my))
-}
-
 /// The least-squares heights of the edge equations, by Gauss-Seidel on the normal equations in
 /// f64 (written out from the problem's definition, independent of the crate's code): each edge
 /// between texels `a` and `b` asks `h_b - h_a = (s_a + s_b) / 2`; with `masked`, an edge with an
-/// invalid end asks for 0 at `hole_weight`, otherwise invalid texels' slopes count as 0.
+/// invalid end asks for the valid texels' mean slope at `hole_weight`, otherwise invalid texels'
+/// slopes count as 0.
 pub fn brute_force(normals: &NormalMap, wraps: bool, masked: bool, hole_weight: f64) -> Vec<f64> {
     let (w, h) = normals.size();
     let ok = |i: usize| {
@@ -78,6 +38,9 @@ pub fn brute_force(normals: &NormalMap, wraps: bool, masked: bool, hole_weight: 
         let n = normals.as_slice()[i];
         if ok(i) { (-(n.x / n.z) as f64, (n.y / n.z) as f64) } else { (0.0, 0.0) }
     };
+    let valid: Vec<usize> = (0..w * h).filter(|&i| ok(i)).collect();
+    let mean = |axis: usize| valid.iter().map(|&i| [slope(i).0, slope(i).1][axis]).sum::<f64>() / valid.len() as f64;
+    let (mean_x, mean_y) = (mean(0), mean(1));
     let mut edges = Vec::new();
     for y in 0..h {
         for x in 0..w {
@@ -89,7 +52,8 @@ pub fn brute_force(normals: &NormalMap, wraps: bool, masked: bool, hole_weight: 
                 let (sa, sb) = (slope(a), slope(b));
                 let step = if horizontal { (sa.0 + sb.0) / 2.0 } else { (sa.1 + sb.1) / 2.0 };
                 let both = ok(a) && ok(b);
-                let (weight, target) = if masked && !both { (hole_weight, 0.0) } else { (1.0, step) };
+                let fill = if horizontal { mean_x } else { mean_y };
+                let (weight, target) = if masked && !both { (hole_weight, fill) } else { (1.0, step) };
                 edges.push((a, b, weight, target));
             }
         }
