@@ -1,7 +1,26 @@
 //! Comparing a height map with the exact heights it should have (synthetic heightfields): the
 //! error measure of the accuracy stage and the tests.
 
-use skinkit_maps::ScalarMap;
+use skinkit_maps::{Grid, NormalMap, ScalarMap, Vec3};
+
+/// The normals of a height map (the round trip of integration): central differences, one-sided
+/// at the borders of a map that does not wrap; `texel` is the texel's size in the heights' unit.
+pub fn normals_of(heights: &ScalarMap, texel: f32, wraps: bool) -> NormalMap {
+    let (w, h) = heights.size();
+    let at = |x: isize, y: isize| {
+        if wraps { *heights.get_wrapped(x, y) } else { *heights.get_clamped(x, y) }
+    };
+    let grid = Grid::from_fn(w, h, |x, y| {
+        let (x, y) = (x as isize, y as isize);
+        // Texels between the two samples: 2 inside, 1 at a clamped border.
+        let span =
+            |lo: isize, hi: isize, n: usize| if wraps { 2.0 } else { (hi.min(n as isize - 1) - lo.max(0)) as f32 };
+        let dx = (at(x + 1, y) - at(x - 1, y)) / (span(x - 1, x + 1, w).max(1.0) * texel);
+        let drow = (at(x, y + 1) - at(x, y - 1)) / (span(y - 1, y + 1, h).max(1.0) * texel);
+        Vec3::new(-dx, drow, 1.0).normalize()
+    });
+    NormalMap::from_grid(grid)
+}
 
 /// RMS of `ours - exact` over the valid texels after removing the mean (and the best plane with
 /// `plane`), as a share of the exact heights' RMS after the same removal.
@@ -47,7 +66,6 @@ fn fit_plane<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use skinkit_maps::Grid;
 
     /// A map that differs from the truth by a plane scores 0 with `plane` and not without; one
     /// that differs by noise of a tenth of the truth's RMS scores about 0.1.
@@ -64,5 +82,16 @@ mod tests {
         assert!((e - 0.1).abs() < 0.01, "{e}");
         let valid: Vec<bool> = (0..200).map(|i| i % 3 != 0).collect();
         assert!(error_share(&tilted, &truth, Some(&valid), true) < 1e-5);
+    }
+
+    /// A plane's normals come back exact, with the signs of skinkit's frame (rows grow downward,
+    /// y up), inside and at the borders.
+    #[test]
+    fn normals_of_a_plane() {
+        let plane = Grid::from_fn(6, 5, |x, y| 0.5 * x as f32 - 0.25 * y as f32);
+        let expected = Vec3::new(-0.5, -0.25, 1.0).normalize();
+        for n in normals_of(&plane, 1.0, false).as_slice() {
+            assert!((*n - expected).length() < 1e-6, "{n} against {expected}");
+        }
     }
 }

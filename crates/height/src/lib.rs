@@ -32,6 +32,7 @@ mod transform;
 
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 use skinkit_maps::{NormalMap, ScalarMap};
 
@@ -198,11 +199,8 @@ pub fn integrate(normals: &NormalMap, options: &HeightOptions) -> Result<Height>
     };
     let wraps = integrator == Integrator::Periodic;
     let (residual_rms, residual_relative) = slopes.residual(&h, wraps);
-    let texel = options.scale.texel() as f32;
-    h.iter_mut().for_each(|v| *v *= texel);
     let valid = slopes.valid;
-    remove_mean(&mut h, &valid);
-    let (min, max, rms) = stats(&h, &valid);
+    let (min, max, rms) = finish(&mut h, &valid, normals.width(), options.scale.texel() as f32);
     let map = ScalarMap::from_vec(normals.width(), normals.height(), h)?;
     let report = HeightReport {
         integrator,
@@ -223,27 +221,55 @@ pub fn integrate(normals: &NormalMap, options: &HeightOptions) -> Result<Height>
     Ok(Height { map, valid, report })
 }
 
-/// Shifts `h` so that its valid texels have mean zero (summed in f64, in order: same bits at any
-/// thread count).
-fn remove_mean(h: &mut [f32], valid: &[bool]) {
-    let (sum, n) =
-        h.iter().zip(valid).filter(|(_, v)| **v).fold((0f64, 0usize), |(s, n), (x, _)| (s + *x as f64, n + 1));
-    if n > 0 {
-        let mean = (sum / n as f64) as f32;
-        h.iter_mut().for_each(|v| *v -= mean);
+/// Sum, sum of squares, count, minimum and maximum of some texels.
+#[derive(Clone, Copy)]
+struct Moments {
+    sum: f64,
+    squares: f64,
+    n: usize,
+    lo: f32,
+    hi: f32,
+}
+
+impl Moments {
+    const EMPTY: Moments = Moments { sum: 0.0, squares: 0.0, n: 0, lo: f32::INFINITY, hi: f32::NEG_INFINITY };
+
+    fn add(self, o: Moments) -> Moments {
+        Moments {
+            sum: self.sum + o.sum,
+            squares: self.squares + o.squares,
+            n: self.n + o.n,
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+        }
     }
 }
 
-/// Minimum, maximum and RMS of the valid texels of `h`.
-fn stats(h: &[f32], valid: &[bool]) -> (f32, f32, f32) {
-    let mut lo = f32::INFINITY;
-    let mut hi = f32::NEG_INFINITY;
-    let (mut sq, mut n) = (0f64, 0usize);
-    for (&x, _) in h.iter().zip(valid).filter(|(_, v)| **v) {
-        lo = lo.min(x);
-        hi = hi.max(x);
-        sq += (x as f64) * (x as f64);
-        n += 1;
+/// Scales `h` by `texel`, shifts it to mean zero over its valid texels and returns their minimum,
+/// maximum and RMS. Sums per row in f64, then in row order: the same bits at any thread count.
+fn finish(h: &mut [f32], valid: &[bool], width: usize, texel: f32) -> (f32, f32, f32) {
+    let rows: Vec<Moments> = h
+        .par_chunks_mut(width.max(1))
+        .zip(valid.par_chunks(width.max(1)))
+        .map(|(row, ok)| {
+            let mut m = Moments::EMPTY;
+            for (v, _) in row.iter_mut().zip(ok).filter(|(_, ok)| **ok) {
+                *v *= texel;
+                m = m.add(Moments { sum: f64::from(*v), squares: f64::from(*v) * f64::from(*v), n: 1, lo: *v, hi: *v });
+            }
+            m
+        })
+        .collect();
+    let m = rows.iter().fold(Moments::EMPTY, |a, r| a.add(*r));
+    if m.n == 0 {
+        return (0.0, 0.0, 0.0);
     }
-    (lo, hi, if n > 0 { (sq / n as f64).sqrt() as f32 } else { 0.0 })
+    let mean = m.sum / m.n as f64;
+    let shift = mean as f32;
+    h.par_chunks_mut(width.max(1)).zip(valid.par_chunks(width.max(1))).for_each(|(row, ok)| {
+        // Invalid texels (the fill) were not scaled above.
+        row.iter_mut().zip(ok).for_each(|(v, ok)| *v = if *ok { *v - shift } else { *v * texel - shift });
+    });
+    let variance = (m.squares / m.n as f64 - mean * mean).max(0.0);
+    (m.lo - shift, m.hi - shift, variance.sqrt() as f32)
 }

@@ -4,12 +4,11 @@
 
 use std::f64::consts::PI;
 
-use rustdct::DctPlanner;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex32;
 
 use crate::slopes::Slopes;
-use crate::transform::{dct_rows, fft_rows, transpose};
+use crate::transform::{dct_rows, fft_rows, plan_dct, transpose};
 
 /// Integrates `slopes` with edges wrapping around both borders.
 pub fn solve_periodic(slopes: &Slopes) -> Vec<f32> {
@@ -30,8 +29,7 @@ pub fn solve_neumann(slopes: &Slopes) -> Vec<f32> {
 /// `L^-1 b` for the Neumann Laplacian of a `w x h` grid, in place (`scratch` of the same size,
 /// overwritten); the constant mode is set to zero.
 pub fn neumann_in_place(b: &mut [f32], scratch: &mut [f32], w: usize, h: usize) {
-    let mut planner = DctPlanner::new();
-    let (dct_w, dct_h) = (planner.plan_dct2(w), planner.plan_dct2(h));
+    let (dct_w, dct_h) = (plan_dct(w), plan_dct(h));
     dct_rows(b, w, &dct_w, false);
     transpose(b, w, h, scratch);
     dct_rows(scratch, h, &dct_h, false);

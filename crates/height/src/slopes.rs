@@ -48,6 +48,11 @@ pub struct Slopes<'a> {
     mean: (f32, f32),
 }
 
+/// Texels per parallel task of the classification.
+const CHUNK: usize = 1 << 16;
+/// Rows per parallel task of the row passes (each task keeps its neighbours' slopes as it goes).
+const ROWS: usize = 32;
+
 /// Why a normal is or is not usable.
 enum Kind {
     Valid { clamped: bool },
@@ -69,47 +74,80 @@ fn classify(n: Vec3) -> Kind {
 }
 
 impl<'a> Slopes<'a> {
-    /// Classifies every texel of `normals`.
+    /// Classifies every texel of `normals` (in parallel; counts are integers, so the same at any
+    /// thread count).
     pub fn from_normals(normals: &'a NormalMap) -> Slopes<'a> {
-        let mut counts = TexelCounts::default();
-        let valid = normals
-            .as_slice()
-            .iter()
-            .map(|&n| match classify(n) {
-                Kind::Valid { clamped } => {
-                    counts.valid += 1;
-                    counts.clamped += clamped as usize;
-                    true
+        let texels = normals.as_slice();
+        let mut valid = vec![false; texels.len()];
+        let counts = valid
+            .par_chunks_mut(CHUNK)
+            .zip(texels.par_chunks(CHUNK))
+            .map(|(ok, n)| {
+                let mut c = TexelCounts::default();
+                for (ok, &n) in ok.iter_mut().zip(n) {
+                    match classify(n) {
+                        Kind::Valid { clamped } => {
+                            *ok = true;
+                            c.valid += 1;
+                            c.clamped += clamped as usize;
+                        }
+                        Kind::Zero => c.zero += 1,
+                        Kind::NonFinite => c.non_finite += 1,
+                        Kind::BackFacing => c.back_facing += 1,
+                    }
                 }
-                Kind::Zero => {
-                    counts.zero += 1;
-                    false
-                }
-                Kind::NonFinite => {
-                    counts.non_finite += 1;
-                    false
-                }
-                Kind::BackFacing => {
-                    counts.back_facing += 1;
-                    false
-                }
+                c
             })
-            .collect();
+            .reduce(TexelCounts::default, |a, b| TexelCounts {
+                valid: a.valid + b.valid,
+                zero: a.zero + b.zero,
+                non_finite: a.non_finite + b.non_finite,
+                back_facing: a.back_facing + b.back_facing,
+                clamped: a.clamped + b.clamped,
+            });
         let mut slopes = Slopes { normals, valid, counts, mean: (0.0, 0.0) };
-        slopes.mean = slopes.mean_slope();
+        // Only a masked solve's hole fill asks for the mean slope.
+        if counts.invalid() > 0 {
+            slopes.mean = slopes.mean_slope();
+        }
         slopes
     }
 
-    /// The mean slope over the valid texels, summed in f64 in texel order.
+    /// The mean slope over the valid texels, summed in f64 per row and then in row order.
     fn mean_slope(&self) -> (f32, f32) {
-        let (mut sx, mut sy) = (0f64, 0f64);
-        for i in (0..self.valid.len()).filter(|&i| self.valid[i]) {
-            let (x, y) = self.at(i);
-            sx += f64::from(x);
-            sy += f64::from(y);
-        }
+        let w = self.width();
+        let rows: Vec<(f64, f64)> = (0..self.height())
+            .into_par_iter()
+            .map(|y| {
+                (y * w..(y + 1) * w).fold((0.0, 0.0), |(sx, sy), i| {
+                    let (x, y) = self.at(i);
+                    (sx + f64::from(x), sy + f64::from(y))
+                })
+            })
+            .collect();
+        let (sx, sy) = rows.iter().fold((0.0, 0.0), |a, r| (a.0 + r.0, a.1 + r.1));
         let n = self.counts.valid.max(1) as f64;
         ((sx / n) as f32, (sy / n) as f32)
+    }
+
+    /// Row `y`'s slopes, `(0, 0)` at invalid texels.
+    fn row(&self, y: usize, out: &mut Vec<(f32, f32)>) {
+        let w = self.width();
+        out.clear();
+        out.extend((y * w..(y + 1) * w).map(|i| self.at(i)));
+    }
+
+    /// The weighted target step of the edge from texel `a` (slope `sa`) to `b` (slope `sb`),
+    /// along x or along rows: an edge with an invalid end, under `masked`, asks for
+    /// the mean slope at [`HOLE_WEIGHT`]; otherwise every edge has weight 1 and invalid texels
+    /// count as flat.
+    #[inline]
+    fn weighted_step(&self, a: usize, b: usize, sa: f32, sb: f32, horizontal: bool, masked: bool) -> f32 {
+        if masked && !(self.valid[a] && self.valid[b]) {
+            HOLE_WEIGHT * if horizontal { self.mean.0 } else { self.mean.1 }
+        } else {
+            0.5 * (sa + sb)
+        }
     }
 
     pub fn width(&self) -> usize {
@@ -129,56 +167,139 @@ impl<'a> Slopes<'a> {
         ((-n.x / n.z).clamp(-MAX_SLOPE, MAX_SLOPE), (n.y / n.z).clamp(-MAX_SLOPE, MAX_SLOPE))
     }
 
-    /// The edge from texel `a` to its neighbour `b`: `(weight, target step)`. With `masked`, an
-    /// edge with an invalid end asks for the mean slope's step at [`HOLE_WEIGHT`]; without, every
-    /// edge has weight 1 and invalid texels count as flat.
-    pub fn edge(&self, a: usize, b: usize, horizontal: bool, masked: bool) -> (f32, f32) {
-        if masked && !(self.valid[a] && self.valid[b]) {
-            return (HOLE_WEIGHT, if horizontal { self.mean.0 } else { self.mean.1 });
-        }
-        let (sa, sb) = (self.at(a), self.at(b));
-        let step = if horizontal { 0.5 * (sa.0 + sb.0) } else { 0.5 * (sa.1 + sb.1) };
-        (1.0, step)
-    }
-
     /// The right-hand side `D^T W g` of the normal equations: per texel, the weighted steps of
-    /// the edges arriving minus those leaving. With `wraps`, edges cross the borders.
+    /// the edges arriving minus those leaving. With `wraps`, edges cross the borders. Rows in
+    /// parallel, each from its own and its neighbours' slopes.
     pub fn rhs(&self, wraps: bool, masked: bool) -> Vec<f32> {
         let (w, h) = (self.width(), self.height());
         let mut b = vec![0f32; w * h];
-        b.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, out) in row.iter_mut().enumerate() {
-                let i = y * w + x;
-                let mut sum = 0.0;
-                for (from, to, horizontal) in neighbours(x, y, w, h, wraps) {
-                    let (weight, step) = self.edge(from, to, horizontal, masked);
-                    // Arriving (`to == i`) adds the step, leaving subtracts it.
-                    sum += if to == i { weight * step } else { -weight * step };
+        b.par_chunks_mut(w * ROWS).enumerate().for_each(|(chunk, rows)| {
+            let first = chunk * ROWS;
+            let (mut up, mut cur, mut down) = (Vec::new(), Vec::new(), Vec::new());
+            let above = |y: usize| {
+                if y > 0 {
+                    Some(y - 1)
+                } else if wraps && h > 1 {
+                    Some(h - 1)
+                } else {
+                    None
                 }
-                *out = sum;
+            };
+            let below = |y: usize| {
+                if y + 1 < h {
+                    Some(y + 1)
+                } else if wraps && h > 1 {
+                    Some(0)
+                } else {
+                    None
+                }
+            };
+            above(first).inspect(|&a| self.row(a, &mut up));
+            self.row(first, &mut cur);
+            for (k, row) in rows.chunks_exact_mut(w).enumerate() {
+                let y = first + k;
+                below(y).inspect(|&d| self.row(d, &mut down));
+                self.rhs_row(y, row, (above(y), &up), &cur, (below(y), &down), wraps, masked);
+                std::mem::swap(&mut up, &mut cur);
+                std::mem::swap(&mut cur, &mut down);
             }
         });
         b
     }
 
+    /// One row of [`Self::rhs`], from the slopes of the row (`cur`) and its neighbours.
+    #[allow(clippy::too_many_arguments)] // the row's three slope rows and the edge rules, passed once
+    fn rhs_row(
+        &self,
+        y: usize,
+        row: &mut [f32],
+        (above, up): (Option<usize>, &[(f32, f32)]),
+        cur: &[(f32, f32)],
+        (below, down): (Option<usize>, &[(f32, f32)]),
+        wraps: bool,
+        masked: bool,
+    ) {
+        let w = row.len();
+        for (x, out) in row.iter_mut().enumerate() {
+            let i = y * w + x;
+            let mut sum = 0.0;
+            let left = if x > 0 {
+                Some(x - 1)
+            } else if wraps && w > 1 {
+                Some(w - 1)
+            } else {
+                None
+            };
+            let right = if x + 1 < w {
+                Some(x + 1)
+            } else if wraps && w > 1 {
+                Some(0)
+            } else {
+                None
+            };
+            if let Some(l) = left {
+                sum += self.weighted_step(y * w + l, i, cur[l].0, cur[x].0, true, masked);
+            }
+            if let Some(r) = right {
+                sum -= self.weighted_step(i, y * w + r, cur[x].0, cur[r].0, true, masked);
+            }
+            if let Some(a) = above {
+                sum += self.weighted_step(a * w + x, i, up[x].1, cur[x].1, false, masked);
+            }
+            if let Some(d) = below {
+                sum -= self.weighted_step(i, d * w + x, cur[x].1, down[x].1, false, masked);
+            }
+            *out = sum;
+        }
+    }
+
     /// The RMS residual `(h_b - h_a) - step` over the edges whose two texels are valid, and the
-    /// same against the RMS step (0 for an integrable map); `h` in texel units.
+    /// same against the RMS step (0 for an integrable map); `h` in texel units. Summed per block
+    /// of rows in f64, then in block order.
     pub fn residual(&self, h: &[f32], wraps: bool) -> (f64, f64) {
         let (w, hh) = (self.width(), self.height());
-        let rows: Vec<(f64, f64, usize)> = (0..hh)
+        let chunks = hh.div_ceil(ROWS);
+        let rows: Vec<(f64, f64, usize)> = (0..chunks)
             .into_par_iter()
-            .map(|y| {
+            .map(|chunk| {
+                let (mut cur, mut down) = (Vec::new(), Vec::new());
                 let (mut res, mut sq, mut n) = (0f64, 0f64, 0usize);
-                for x in 0..w {
-                    for (a, b, horizontal) in forward_edges(x, y, w, hh, wraps) {
+                let first = chunk * ROWS;
+                self.row(first, &mut cur);
+                for y in first..(first + ROWS).min(hh) {
+                    let below = if y + 1 < hh {
+                        Some(y + 1)
+                    } else if wraps && hh > 1 {
+                        Some(0)
+                    } else {
+                        None
+                    };
+                    below.inspect(|&d| self.row(d, &mut down));
+                    let mut add = |a: usize, b: usize, step: f32| {
                         if self.valid[a] && self.valid[b] {
-                            let (_, step) = self.edge(a, b, horizontal, true);
-                            let r = (h[b] - h[a] - step) as f64;
+                            let r = f64::from(h[b] - h[a] - step);
                             res += r * r;
-                            sq += (step as f64) * (step as f64);
+                            sq += f64::from(step) * f64::from(step);
                             n += 1;
                         }
+                    };
+                    for x in 0..w {
+                        let i = y * w + x;
+                        let right = if x + 1 < w {
+                            Some(x + 1)
+                        } else if wraps && w > 1 {
+                            Some(0)
+                        } else {
+                            None
+                        };
+                        if let Some(r) = right {
+                            add(i, y * w + r, 0.5 * (cur[x].0 + cur[r].0));
+                        }
+                        if let Some(d) = below {
+                            add(i, d * w + x, 0.5 * (cur[x].1 + down[x].1));
+                        }
                     }
+                    std::mem::swap(&mut cur, &mut down);
                 }
                 (res, sq, n)
             })

@@ -133,6 +133,29 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
     NormalMap::from_unit_grid(Grid::from_vec(w, h, normals)?)
 }
 
+/// Reads one float channel (`"Y"` of a height map, say) of the first layer of an EXR file.
+///
+/// # Errors
+/// When the file is not an EXR within the limits or has no channel called `name`.
+pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<ScalarMap> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    crate::signature::check_file(path)?;
+    crate::limits::exr_read_size(path, limits.max_pixels)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| Error::decode(path, e))?;
+    let layer = &image.layer_data;
+    let Some(channel) = layer.channel_data.list.iter().find(|c| c.name == *name) else {
+        return Err(Error::InvalidParameter(format!("{}: no channel `{name}`", path.display())));
+    };
+    Grid::from_vec(layer.size.width(), layer.size.height(), channel.sample_data.values_as_f32().collect())
+}
+
 /// Reads the first RGB(A) layer of an EXR file as float triples (alpha ignored, missing channels 0).
 fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
     use exr::prelude::read_first_rgba_layer_from_file;

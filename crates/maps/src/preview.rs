@@ -131,9 +131,46 @@ pub fn write_png(path: &std::path::Path, picture: &Picture) -> Result<()> {
     })
 }
 
+/// Stops of the height colour ramp, low to high: deep blue, teal, green, yellow (a ramp whose
+/// lightness rises steadily, so the picture also reads in grey).
+const RAMP: [[f32; 3]; 5] =
+    [[40.0, 20.0, 90.0], [35.0, 95.0, 140.0], [35.0, 150.0, 130.0], [120.0, 200.0, 80.0], [250.0, 230.0, 60.0]];
+
+/// Values in `[lo, hi]` as colours of the height ramp (clamped; non-finite values [`INVALID`]).
+pub fn false_colour(values: &Grid<f32>, lo: f32, hi: f32) -> Picture {
+    let span = hi - lo;
+    values.map(|&v| if v.is_finite() { ramp(if span > 0.0 { (v - lo) / span } else { 0.5 }) } else { INVALID })
+}
+
+/// The ramp's colour at `t` in `[0, 1]` (clamped).
+pub fn ramp(t: f32) -> [u8; 3] {
+    let x = t.clamp(0.0, 1.0) * (RAMP.len() - 1) as f32;
+    let i = (x.floor() as usize).min(RAMP.len() - 2);
+    let f = x - i as f32;
+    std::array::from_fn(|c| (RAMP[i][c] * (1.0 - f) + RAMP[i + 1][c] * f).round() as u8)
+}
+
+/// The range that [`shade_normals`] and [`gray`] stretch over: the values' robust extremes.
+pub fn value_range(values: &[f32]) -> (f32, f32) {
+    robust_range(values)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The height ramp runs from its first stop to its last, its lightness rising all the way
+    /// (so a grey print still reads low to high), and clamps outside [0, 1].
+    #[test]
+    fn the_height_ramp_rises_in_lightness() {
+        let luma = |c: [u8; 3]| 0.2126 * c[0] as f32 + 0.7152 * c[1] as f32 + 0.0722 * c[2] as f32;
+        assert_eq!((ramp(0.0), ramp(1.0)), ([40, 20, 90], [250, 230, 60]));
+        assert_eq!((ramp(-3.0), ramp(7.0)), (ramp(0.0), ramp(1.0)));
+        let steps: Vec<f32> = (0..=100).map(|i| luma(ramp(i as f32 / 100.0))).collect();
+        assert!(steps.windows(2).all(|p| p[1] >= p[0]), "{steps:?}");
+        let picture = false_colour(&Grid::from_vec(3, 1, vec![0.0, f32::NAN, 2.0]).unwrap(), 0.0, 2.0);
+        assert_eq!(picture.as_slice(), &[ramp(0.0), INVALID, ramp(1.0)]);
+    }
 
     #[test]
     fn a_bump_is_bright_where_it_faces_the_light_and_dark_where_it_faces_away() {

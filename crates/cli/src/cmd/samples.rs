@@ -108,6 +108,8 @@ fn write_region(region: &str, dir: &Path, args: &Args, rig: &Rig) -> Result<()> 
         )?;
     }
     io::write_normal_map(&dir.join("truth.png"), &field.normals, NormalEncoding::default(), 16)?;
+    // The photo pixel is the field's texel: captures of the samples give heights in mm.
+    let rig = rig.clone().with_mm_per_pixel(Some(field.mm_per_texel as f32), region)?;
     rig.save(&dir.join("rig.toml"))?;
     Ok(())
 }

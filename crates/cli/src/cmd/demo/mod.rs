@@ -8,6 +8,7 @@
 //! choice of every stage costs in time, into `accuracy/`); last the report page, `index.html`
 //! ([`page`]), which shows each stage's accuracy plot beside its pictures.
 
+mod height;
 mod page;
 
 use std::path::{Path, PathBuf};
@@ -331,7 +332,8 @@ fn render_figures(args: &Args, out: &Output) -> Result<Option<FiguresReport>> {
 }
 
 /// Grows a captured mold's normal map to `size` with the default synthesis options, replays its
-/// albedo through the same coordinates, and writes normal.png (16-bit), albedo.png and coords.png.
+/// albedo through the same coordinates, and writes normal.png (16-bit), albedo.png, coords.png
+/// and height.exr.
 fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir: &Path) -> Result<GrowthResult> {
     let start = Instant::now();
     let config = SynthConfig { seed, ..SynthConfig::new(size.0, size.1) };
@@ -350,6 +352,10 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
     }
     .with_context(|| format!("cannot write {}", albedo.display()))?;
     write_coords(&dir.join("coords.png"), &grown.coords)?;
+    // The grown map's height, periodic so it tiles, in mm at the capture's pixel size.
+    let mut set = skinkit_maps::OutputSet::files();
+    crate::pipeline::grown_height(&mut set, &dir.join("height.exr"), &grown.normals, captured.report.mm_per_pixel)?;
+    set.commit().with_context(|| format!("cannot write {}", dir.join("height.exr").display()))?;
     let quality =
         quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false, grown.guards);
     Ok(GrowthResult {

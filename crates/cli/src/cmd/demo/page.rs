@@ -2,7 +2,7 @@
 //! the stage's time and accuracy table, and the machine it ran on. One file of HTML and CSS (no
 //! script, no network); its pictures sit beside it, in the demo's own folders or in `page/`
 //! (8-bit previews drawn here: normal maps as relief under a raking light, photos stretched to
-//! be seen), all linked by relative paths, so the folder can be moved or zipped as a whole.
+//! be seen, heights lit from their own normals and in false colour with a scale bar), all linked by relative paths, so the folder can be moved or zipped as a whole.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -53,7 +53,7 @@ fn rel(out: &Path, path: &Path) -> String {
 }
 
 /// A picture with its caption.
-fn figure(html: &mut String, src: &str, caption: &str, class: &str) {
+pub(super) fn figure(html: &mut String, src: &str, caption: &str, class: &str) {
     let _ = write!(
         html,
         "<figure class=\"{class}\"><a href=\"{s}\"><img src=\"{s}\" alt=\"{c}\"></a><figcaption>{c}</figcaption></figure>",
@@ -88,6 +88,8 @@ fn stage(html: &mut String, id: &str, title: &str, seconds: Option<f64>, what: &
 const STYLE: &str = "body{font:15px/1.45 system-ui,sans-serif;margin:0;background:#f6f5f3;color:#222}\
 main{max-width:1400px;margin:auto;padding:1em 2em}h1{margin-bottom:.2em}\
 h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}.time{color:#777;font-weight:normal;font-size:.8em}\
+.bar .scale{display:flex;gap:.4em}.bar .ramp{width:18px;height:200px;border:1px solid #999}\
+.bar .labels{display:flex;flex-direction:column;justify-content:space-between;font-size:.8em;height:200px}\
 table{border-collapse:collapse;margin:.8em 0}th,td{padding:.2em .7em;border-bottom:1px solid #ddd;text-align:right}\
 th:first-child,td:first-child{text-align:left}.row{display:flex;flex-wrap:wrap;gap:.6em;align-items:flex-start}\
 figure{margin:0}figure img{display:block;max-width:100%;image-rendering:auto;border:1px solid #bbb}\
@@ -155,6 +157,7 @@ fn capture(html: &mut String, out: &Path, samples: &Path, report: &DemoReport) -
         {
             figure(html, &rel(out, &dir.join(name)), caption, "map");
         }
+        super::height::figures(html, out, &dir.join("height.exr"), &format!("capture-{region}"), true, false)?;
         html.push_str("</div>\n");
     }
     accuracy(html, report, &[Stage::Capture, Stage::Detrend]);
@@ -197,6 +200,8 @@ fn synthesis(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
         let grown = out.join("synth").join(&g.region).join("normal.png");
         let src = shaded_normals(out, &grown, &format!("grown-{}.png", g.region))?;
         figure(html, &src, &format!("grown to {}x{} in {:.1} s", g.width, g.height, g.seconds), "native");
+        let height = out.join("synth").join(&g.region).join("height.exr");
+        super::height::figures(html, out, &height, &format!("grown-{}", g.region), true, true)?;
         html.push_str("</div>\n");
     }
     accuracy(html, report, &[Stage::Synthesis]);
@@ -220,6 +225,9 @@ fn face(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
     let (whole, detail) = face_preview(out, &dir.join("normal.png"), &dir.join("labels.png"))?;
     figure(html, &whole, &format!("{}x{} face map, {} regions", f.width, f.height, f.regions.len()), "wide");
     figure(html, &detail, "its centre at one texel a pixel", "native");
+    html.push_str("<div class=\"row\">");
+    super::height::figures(html, out, &dir.join("height.exr"), "face", true, false)?;
+    html.push_str("</div>");
     let rows: Vec<Vec<String>> = f
         .regions
         .iter()
@@ -353,7 +361,7 @@ fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, Str
     Ok((save(out, &picture, "face.png")?, save(out, &detail, "face-detail.png")?))
 }
 
-fn save(out: &Path, picture: &preview::Picture, name: &str) -> Result<String> {
+pub(super) fn save(out: &Path, picture: &preview::Picture, name: &str) -> Result<String> {
     let path = out.join("page").join(name);
     preview::write_png(&path, picture).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(rel(out, &path))
