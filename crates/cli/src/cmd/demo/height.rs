@@ -27,6 +27,13 @@ pub fn figures(html: &mut String, out: &Path, exr: &Path, name: &str, mm: bool, 
     let relief = preview::shade_normals(&normals_of(&heights, 1.0, wraps), preview::raking_light());
     let src = save(out, &preview::shrink(&relief, SIDE), &format!("{name}-height-relief.png"))?;
     figure(html, &src, "height, lit from its own normals", "map");
+    if wraps {
+        // A grown map's height tiles: three by three copies show no seam.
+        let (w, h) = relief.size();
+        let tiled = skinkit_maps::Grid::from_fn(3 * w, 3 * h, |x, y| *relief.get(x % w, y % h));
+        let src = save(out, &preview::shrink(&tiled, SIDE), &format!("{name}-height-tiled.png"))?;
+        figure(html, &src, "the same, tiled 3x3", "map");
+    }
     let (lo, hi) = preview::value_range(heights.as_slice());
     let colour = preview::false_colour(&heights, lo, hi);
     let src = save(out, &preview::shrink(&colour, SIDE), &format!("{name}-height.png"))?;
