@@ -81,6 +81,7 @@ mod finish;
 mod fit;
 #[cfg(target_arch = "x86_64")]
 mod fused;
+mod noise;
 mod plan;
 mod solution;
 mod sources;
@@ -96,6 +97,7 @@ pub use crate::readings::SolveStats;
 use crate::readings::{LUMA, MIN_ALBEDO};
 pub(crate) use chunk::fresh_zeroed_vec3;
 pub use config::{Method, Progress, SolveConfig, no_progress};
+pub use noise::NoiseFloor;
 use plan::Plan;
 pub use solution::{AlbedoMap, Solution};
 pub use stack::PhotoStack;
@@ -127,6 +129,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig, progress: &dyn
         albedo: AlbedoMap::Gray(Grid::filled(0, 0, 0.0)),
         confidence: Grid::filled(0, 0, 0.0),
         stats: SolveStats::default(),
+        noise: None,
     };
     solve_into(stack, rig, config, progress, &mut solution)?;
     Ok(solution)
@@ -147,8 +150,10 @@ pub fn solve_into(
     config.validate()?;
     let lights = check_rig(stack, rig)?;
     let table = srgb_table(stack);
-    let plan = Plan::new(stack, rig, config, lights, table.as_deref())?;
+    let mut plan = Plan::new(stack, rig, config, lights, table.as_deref())?;
+    let noise = plan.adapt_to_noise(stack.height());
     plan.run(stack, progress, out);
+    out.noise = noise;
     Ok(())
 }
 
