@@ -20,7 +20,8 @@
 //!    over all lit readings. A light the current `g` faces away from (`g . L_i <= 0`) predicts an
 //!    attached shadow and carries no linear evidence, so it is left out; every other reading gets
 //!    the weight of its residual `e_i = r_i - g . L_i` against the robust scale
-//!    `s = 1.4826 median |e|` (floored at [`RobustConfig::scale_floor`] `|g|`): Cauchy
+//!    `s = 1.4826 median |e|` (floored at [`RobustConfig::scale_floor`] `|g|` and at
+//!    [`RobustConfig::noise_floor`], the image's noise when the solve measured it): Cauchy
 //!    `1 / (1 + (e / 2.385 s)^2)` (95 % efficient on Gaussian noise) or the L1 weight
 //!    `1 / max(|e|, s / 10)` (the sparse-error regression of Ikehata et al. 2012, convex form).
 //! 3. **Inlier refit.** The lit lights with `g . L_i > 0` and `|e_i| <= 2 s` are solved once more

@@ -16,6 +16,10 @@ use super::{CHUNK, RESIDUAL_SCALE, SolveConfig};
 use crate::Result;
 use crate::robust::{self, Lights, RobustConfig};
 
+/// The fit's residual scale is floored at this many noise sigmas, so that its inlier test
+/// (`2 s`) keeps readings within 3 sigma of the fit (99.7 % of the noise-only ones).
+const NOISE_SCALES: f32 = 1.5;
+
 /// What the robust fit of a solve needs, built once.
 pub(super) struct Fit {
     lights: Lights,
@@ -44,7 +48,7 @@ impl Fit {
     pub(super) fn adapt(&mut self, floor: &super::NoiseFloor) {
         let agreement = floor.gate / RESIDUAL_SCALE;
         self.gate = 1.0 / (1.0 + agreement * agreement);
-        self.config.noise_floor = floor.sigma;
+        self.config.noise_floor = NOISE_SCALES * floor.sigma;
     }
 
     /// Whether a least-squares answer with this residual factor (0 when it failed) stands.

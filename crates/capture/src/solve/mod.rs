@@ -20,8 +20,9 @@
 //! * [`Method::Robust`] (the default) drops readings exactly as [`Method::Threshold`] below and
 //!   solves least squares on the rest, by the same paths (all lights when nothing is dropped;
 //!   otherwise the cached subset pseudo-inverses, grouped and vectorised). That answer stands
-//!   where its relative residual is within [`crate::robust::AGREEMENT`] (2 %): the lit readings
-//!   agree with one Lambertian normal. Only the other pixels are fitted by
+//!   where its relative residual is within [`crate::robust::AGREEMENT`] (2 %), widened to what the
+//!   image's own sensor noise leaves (measured on a sample of rows before solving, `noise.rs`,
+//!   reported as [`Solution::noise`]): the lit readings agree with one Lambertian normal. Only the other pixels are fitted by
 //!   [`crate::robust::fit_pixel`] from their loaded readings (`fit.rs`; the fused kernel hands
 //!   such steps to the chunk path), so a cast shadow costs what it costs the threshold solve and
 //!   only highlights, inter-reflections and the like pay for the per-pixel fit.
