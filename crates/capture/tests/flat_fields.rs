@@ -4,10 +4,12 @@
 
 use glam::Vec3;
 use skinkit_capture::flat::{FlatField, correct};
+use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::{self, PhotoStack, SolveConfig};
 use skinkit_capture::{Light, Rig};
 use skinkit_heightfield::{Heightfield, Quantise, RenderConfig, RenderLight, SkinParams};
-use skinkit_maps::{Channels, Photo, Samples};
+use skinkit_maps::io::{self, PngLayout};
+use skinkit_maps::{Channels, NormalEncoding, Photo, Samples};
 
 const SIDE: usize = 128;
 const K: usize = 8;
@@ -48,6 +50,53 @@ fn mean_error(field: &Heightfield, photos: Vec<Photo>, rig: &Rig) -> f32 {
     let stack = PhotoStack::new(photos, (1..=K).map(|i| format!("{i:02}.png")).collect()).unwrap();
     let solution = solve::solve(&stack, rig, &SolveConfig::default(), &solve::no_progress).unwrap();
     solution.normals.angular_error(&field.normals, None).unwrap().mean
+}
+
+/// The 16-bit samples of a photo `u16_photo` made.
+fn u16_samples(photo: &Photo) -> &[u16] {
+    let Samples::U16(v) = photo.samples() else { panic!("16-bit photo") };
+    v
+}
+
+/// A session folder whose photos have the falloff, with the flats in `flats/` and a rig that
+/// names them (or not): the capture reports the correction and its error drops.
+#[test]
+fn a_session_with_flats_in_its_rig_corrects_them() {
+    let field = SkinParams::cheek(SIDE, SIDE, 4).generate().unwrap();
+    let lights = RenderLight::ring(K, 45.0, Vec3::splat(INTENSITY));
+    let render = RenderConfig { shadows: true, format: Quantise::Float, seed: 3, ..RenderConfig::default() };
+    let uniform = skinkit_heightfield::render(&field, &lights, &render).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("flats")).unwrap();
+    let mut rig_text = String::new();
+    for (i, ((photo, f), l)) in uniform.iter().zip(falloffs()).zip(&lights).enumerate() {
+        let lit = u16_photo(linear(photo).into_iter().zip(&f).map(|(v, f)| v * f));
+        let flat = u16_photo(f.iter().map(|f| 0.5 * INTENSITY as f64 * f));
+        io::write_png(&dir.path().join(format!("{:02}.png", i + 1)), SIDE, SIDE, PngLayout::Gray16, u16_samples(&lit))
+            .unwrap();
+        let flat_name = format!("flats/flat-{:02}.png", i + 1);
+        io::write_png(&dir.path().join(&flat_name), SIDE, SIDE, PngLayout::Gray16, u16_samples(&flat)).unwrap();
+        let d = l.direction;
+        rig_text += &format!(
+            "[[light]]\ndirection = [{}, {}, {}]\nintensity = {INTENSITY}\nflat = \"{flat_name}\"\n",
+            d.x, d.y, d.z
+        );
+    }
+    io::write_normal_map(&dir.path().join("truth.png"), &field.normals, NormalEncoding::default(), 16).unwrap();
+    let error = |rig: &str| {
+        std::fs::write(dir.path().join("rig.toml"), rig).unwrap();
+        let files = Session::from_dir(dir.path()).unwrap();
+        assert_eq!(files.photos.len(), K, "flats in their own folder are not photos");
+        let captured = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap();
+        (captured.report.error_vs_truth_degrees.unwrap().mean, captured.report.corrections)
+    };
+    let (with, corrections) = error(&rig_text);
+    assert_eq!(corrections, vec![format!("flat fields ({K} of {K} lights)")]);
+    let without_flats: String = rig_text.lines().filter(|l| !l.starts_with("flat")).map(|l| format!("{l}\n")).collect();
+    let (without, none) = error(&without_flats);
+    assert!(none.is_empty());
+    eprintln!("session with falloff (detrended): {without:.3} deg without flats, {with:.3} with");
+    assert!(3.0 * with <= without, "flats: {with} against {without} without");
 }
 
 #[test]
