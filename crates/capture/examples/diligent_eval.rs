@@ -107,6 +107,12 @@ impl Object {
         let start = Instant::now();
         let solution = solve(&stack, &rig, &config, &no_progress)?;
         let secs = start.elapsed().as_secs_f64();
+        if let Some(floor) = solution.noise {
+            println!(
+                "{:>24}  noise sigma {:.5} (relative {:.5}), gate {:.4}",
+                "", floor.sigma, floor.relative, floor.gate
+            );
+        }
         Ok((self.error(&solution.normals)?, secs))
     }
 

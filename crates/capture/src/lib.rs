@@ -12,6 +12,7 @@
 
 pub mod detrend;
 pub mod error;
+pub mod flat;
 pub mod import;
 pub mod near;
 pub mod readings;

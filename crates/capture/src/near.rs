@@ -109,6 +109,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
         albedo: if rgb { AlbedoMap::Rgb(albedo) } else { AlbedoMap::Gray(albedo.map(|a| a.x)) },
         confidence: ScalarMap::from_vec(w, h, confidence).expect("sized above"),
         stats,
+        noise: None,
     })
 }
 

@@ -19,6 +19,7 @@
 //! direction = [0.7071, 0.0, 0.7071]    # camera frame; normalised on load
 //! intensity = 1.0                      # optional (default 1.0), or [r, g, b], linear
 //! position = [150.0, 0.0, 150.0]       # optional, mm, a near point light
+//! flat = "flat-01.png"                 # optional flat frame (white target, this light), relative
 //! ```
 //! Unknown keys are errors. Errors name the file and the light, numbered from 1 in file order
 //! (`rig.toml: light 5: direction has zero length`); TOML syntax errors keep toml's line and
@@ -66,6 +67,8 @@ pub struct Light {
     /// Position of a near point light in millimetres, origin at the centre of the photographed
     /// field, when known.
     position: Option<Vec3>,
+    /// A flat frame of a white target under this light ([`crate::flat`]), when the rig names one.
+    flat: Option<PathBuf>,
 }
 
 /// A light rig: the lights in photo order, plus optional metadata. Valid by construction (see
@@ -129,7 +132,7 @@ impl Light {
                 return Err(format!("position {} is not above the mold plane (z > 0)", show(p)));
             }
         }
-        Ok(Light { direction, intensity, position })
+        Ok(Light { direction, intensity, position, flat: None })
     }
 
     /// Unit vector from the surface toward the light.
@@ -146,6 +149,17 @@ impl Light {
     /// field, `z > 0`), when known.
     pub fn position(&self) -> Option<Vec3> {
         self.position
+    }
+
+    /// The light with a flat frame (a white target under it), or none.
+    pub fn with_flat(mut self, flat: Option<PathBuf>) -> Light {
+        self.flat = flat;
+        self
+    }
+
+    /// The flat frame of this light, when the rig names one.
+    pub fn flat(&self) -> Option<&Path> {
+        self.flat.as_deref()
     }
 
     /// Mean of the RGB intensity, for grey solves.
@@ -285,9 +299,12 @@ impl Rig {
     pub fn load(path: &Path) -> Result<Rig> {
         let text = std::fs::read_to_string(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
         let mut rig = Rig::parse(&text, &path.display().to_string())?;
+        let folder = path.parent().unwrap_or(Path::new(""));
         if let Some(ambient) = rig.ambient.take() {
-            let folder = path.parent().unwrap_or(Path::new(""));
             rig.ambient = Some(folder.join(ambient));
+        }
+        for light in &mut rig.lights {
+            light.flat = light.flat.take().map(|f| folder.join(f));
         }
         Ok(rig)
     }
@@ -316,7 +333,7 @@ impl Rig {
             description: self.description.clone(),
             mm_per_pixel: self.mm_per_pixel.map(f32_to_f64),
             ambient,
-            light: self.lights.iter().map(LightOut::from_light).collect(),
+            light: self.lights.iter().map(|l| LightOut::from_light(l, folder)).collect(),
         };
         toml::to_string(&out).expect("a rig always serialises to TOML")
     }
@@ -459,6 +476,7 @@ struct LightFile {
     direction: [f64; 3],
     intensity: Option<toml::Value>,
     position: Option<[f64; 3]>,
+    flat: Option<String>,
 }
 
 impl RigFile {
@@ -483,7 +501,8 @@ impl LightFile {
             None => Vec3::ONE,
             Some(v) => intensity_value(v)?,
         };
-        Light::new(vec3(self.direction), intensity, self.position.map(vec3))
+        Ok(Light::new(vec3(self.direction), intensity, self.position.map(vec3))?
+            .with_flat(self.flat.map(PathBuf::from)))
     }
 }
 
@@ -532,6 +551,8 @@ struct LightOut {
     intensity: IntensityOut,
     #[serde(skip_serializing_if = "Option::is_none")]
     position: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flat: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -542,14 +563,18 @@ enum IntensityOut {
 }
 
 impl LightOut {
-    fn from_light(l: &Light) -> LightOut {
+    fn from_light(l: &Light, folder: Option<&Path>) -> LightOut {
         let e = l.intensity;
         let intensity = if e.x == e.y && e.y == e.z {
             IntensityOut::Scalar(f32_to_f64(e.x))
         } else {
             IntensityOut::Rgb(vec_out(e))
         };
-        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out) }
+        let flat = l.flat.as_ref().map(|f| {
+            let rel = folder.and_then(|d| f.strip_prefix(d).ok()).unwrap_or(f);
+            rel.to_string_lossy().into_owned()
+        });
+        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out), flat }
     }
 }
 

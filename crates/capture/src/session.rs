@@ -23,7 +23,7 @@ use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 use skinkit_height::{Height, HeightOptions, HeightReport, Scale};
 
 use crate::solve::{self, PhotoStack, SolveConfig};
-use crate::{Error, Result, Rig, detrend, near};
+use crate::{Error, Result, Rig, detrend, flat, near};
 
 /// Photo file extensions a session folder's photos may have.
 pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
@@ -229,6 +229,9 @@ pub struct CaptureReport {
     /// caller that measures it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub peak_memory_mib: Option<f64>,
+    /// Corrections applied to the photos before solving, in order (`ambient subtraction`,
+    /// `flat fields (3 of 8 lights)`).
+    pub corrections: Vec<String>,
 }
 
 /// A finished capture in memory.
@@ -278,8 +281,10 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     timings.decode = t.elapsed().as_secs_f64();
 
     let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
-    let mut stack = PhotoStack::new(inputs.photos, names.clone())?;
-    if let (Some(frame), Some((path, _))) = (inputs.ambient, &ambient) {
+    let corrections = corrections(&rig, inputs.ambient.is_some());
+    let (photos, ambient_frame, scale) = flatten(&rig, inputs.photos, inputs.ambient, &names, options)?;
+    let mut stack = PhotoStack::new(photos, names.clone())?;
+    if let (Some(frame), Some((path, _))) = (ambient_frame, &ambient) {
         stack = stack.with_ambient(frame, &path.display().to_string())?;
     }
     if let Some(mask) = inputs.mask {
@@ -296,6 +301,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         solve::solve(&stack, &rig, &options.solve, &solve::no_progress).map_err(in_rig)?
     };
     drop(stack);
+    unscale_albedo(&mut solution.albedo, scale);
     timings.solve = t.elapsed().as_secs_f64();
 
     progress(Stage::Detrend);
@@ -345,6 +351,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         height_map: heights.as_ref().map(|h| h.report.clone()),
         timings_s: timings,
         peak_memory_mib: None,
+        corrections,
     };
     Ok(Captured { solution, height: heights, report })
 }
@@ -485,6 +492,86 @@ fn decode(session: &Session, ambient: Option<(&Path, &str)>, options: &CaptureOp
         },
     );
     Ok(Inputs { photos: photos?, ambient: ambient?, mask: mask?, truth: truth? })
+}
+
+/// What [`flatten`] will do to the photos, for the report and `rig check`.
+pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {
+    let flats = rig.lights().iter().filter(|l| l.flat().is_some()).count();
+    let mut out = Vec::new();
+    if ambient {
+        out.push("ambient subtraction".to_owned());
+    }
+    if flats > 0 {
+        out.push(format!("flat fields ({flats} of {} lights)", rig.light_count()));
+    }
+    out
+}
+
+/// With flat frames in the rig: every photo minus the ambient frame, divided by its light's
+/// flat field ([`crate::flat`]), as linear f32 readings, and no ambient frame left to subtract.
+/// Without: the photos and the ambient frame unchanged. Division by a gain under 1 can lift a
+/// reading over the solver's saturation level, so when it does, every corrected photo is
+/// divided by one common `scale` (returned; normals do not change, the albedo is multiplied back).
+fn flatten(
+    rig: &Rig,
+    photos: Vec<Photo>,
+    ambient: Option<Photo>,
+    names: &[String],
+    options: &CaptureOptions,
+) -> Result<(Vec<Photo>, Option<Photo>, f32)> {
+    if rig.lights().iter().all(|l| l.flat().is_none()) {
+        return Ok((photos, ambient, 1.0));
+    }
+    let saturation = options.solve.saturation;
+    let corrected = photos
+        .par_iter()
+        .zip(rig.lights())
+        .zip(names)
+        .enumerate()
+        .map(|(i, ((photo, light), name))| {
+            let flat = light
+                .flat()
+                .map(|path| {
+                    let role = format!("rig light {}: flat", i + 1);
+                    let frame = read_photo(path, &role, options)?;
+                    flat::FlatField::from_photo(&frame, ambient.as_ref(), &path.display().to_string())
+                })
+                .transpose()?;
+            flat::correct(photo, ambient.as_ref(), flat.as_ref(), saturation, name)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let top = corrected.iter().flat_map(|p| samples_f32(p).iter().copied()).fold(0.0f32, f32::max);
+    let scale = if top >= 0.9 * saturation { top / (0.9 * saturation) } else { 1.0 };
+    if scale == 1.0 {
+        return Ok((corrected, None, 1.0));
+    }
+    let rescaled = corrected
+        .into_iter()
+        .map(|p| {
+            let v = samples_f32(&p).iter().map(|x| x / scale).collect();
+            Photo::new(p.width(), p.height(), p.channels(), skinkit_maps::Samples::F32(v)).map_err(Error::Maps)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((rescaled, None, scale))
+}
+
+/// The f32 samples of a corrected photo.
+fn samples_f32(photo: &Photo) -> &[f32] {
+    match photo.samples() {
+        skinkit_maps::Samples::F32(v) => v,
+        _ => &[],
+    }
+}
+
+/// Multiplies the albedo by the common scale [`flatten`] divided the photos by.
+fn unscale_albedo(albedo: &mut solve::AlbedoMap, scale: f32) {
+    if scale == 1.0 {
+        return;
+    }
+    match albedo {
+        solve::AlbedoMap::Gray(m) => m.as_mut_slice().iter_mut().for_each(|a| *a *= scale),
+        solve::AlbedoMap::Rgb(m) => m.as_mut_slice().iter_mut().for_each(|a| *a *= scale),
+    }
 }
 
 /// Reads a photo; `role` (`photo 3`, `ambient frame`) prefixes its errors, which name the file.

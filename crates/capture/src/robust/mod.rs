@@ -20,7 +20,8 @@
 //!    over all lit readings. A light the current `g` faces away from (`g . L_i <= 0`) predicts an
 //!    attached shadow and carries no linear evidence, so it is left out; every other reading gets
 //!    the weight of its residual `e_i = r_i - g . L_i` against the robust scale
-//!    `s = 1.4826 median |e|` (floored at [`RobustConfig::scale_floor`] `|g|`): Cauchy
+//!    `s = 1.4826 median |e|` (floored at [`RobustConfig::scale_floor`] `|g|` and at
+//!    [`RobustConfig::noise_floor`], the image's noise when the solve measured it): Cauchy
 //!    `1 / (1 + (e / 2.385 s)^2)` (95 % efficient on Gaussian noise) or the L1 weight
 //!    `1 / max(|e|, s / 10)` (the sparse-error regression of Ikehata et al. 2012, convex form).
 //! 3. **Inlier refit.** The lit lights with `g . L_i > 0` and `|e_i| <= 2 s` are solved once more
@@ -86,6 +87,10 @@ pub struct RobustConfig {
     pub iterations: usize,
     /// Smallest residual scale, as a fraction of `|g|` (keeps noise-free pixels well posed).
     pub scale_floor: f32,
+    /// Smallest residual scale in reading units (full scale 1, unit light): the image's own noise
+    /// `sigma` (the solve measures it, `solve/noise.rs`), so no reading is rejected for noise
+    /// alone; 0 for none.
+    pub noise_floor: f32,
     /// Fewest inliers for a valid pixel (at least 3).
     pub min_lights: usize,
     /// Largest condition number `sigma_max / sigma_min` of the inliers' direction matrix.
@@ -101,6 +106,7 @@ impl Default for RobustConfig {
             trim_bright: 0.4,
             iterations: 12,
             scale_floor: 1e-3,
+            noise_floor: 0.0,
             min_lights: 3,
             max_condition: 50.0,
         }
@@ -130,6 +136,9 @@ impl RobustConfig {
         }
         if !(self.scale_floor > 0.0 && self.scale_floor < 1.0) {
             return bad("scale_floor", self.scale_floor.to_string(), "in (0, 1)");
+        }
+        if !(self.noise_floor >= 0.0 && self.noise_floor < 1.0) {
+            return bad("noise_floor", self.noise_floor.to_string(), "in [0, 1)");
         }
         if self.min_lights < 3 {
             return bad("min_lights", self.min_lights.to_string(), "at least 3");
@@ -338,8 +347,9 @@ impl<'a> Pixel<'a> {
         eq.solve()
     }
 
-    /// The robust residual scale at `g` over the lights `g` faces: `1.4826 median |e|`, floored.
-    fn scale(&self, g: Vec3, floor: f32) -> f32 {
+    /// The robust residual scale at `g` over the lights `g` faces: `1.4826 median |e|`, floored
+    /// at `floor |g|` and at the noise floor `noise`.
+    fn scale(&self, g: Vec3, floor: f32, noise: f32) -> f32 {
         let mut abs = [0.0f32; MAX_LIGHTS];
         let mut m = 0;
         for i in self.usable() {
@@ -349,7 +359,7 @@ impl<'a> Pixel<'a> {
                 m += 1;
             }
         }
-        let floor = floor * g.length();
+        let floor = (floor * g.length()).max(noise);
         if m == 0 {
             return floor;
         }
@@ -361,7 +371,7 @@ impl<'a> Pixel<'a> {
     /// Iteratively reweighted least squares from `g`; returns the last solvable `g`.
     fn reweight(&self, mut g: Vec3, config: &RobustConfig) -> Vec3 {
         for _ in 0..config.iterations {
-            let s = self.scale(g, config.scale_floor);
+            let s = self.scale(g, config.scale_floor, config.noise_floor);
             let mut eq = Normal3::default();
             for i in self.usable() {
                 let l = self.lights[i];
@@ -395,7 +405,7 @@ impl<'a> Pixel<'a> {
         config: &RobustConfig,
         known: &dyn Fn(u128) -> Option<f64>,
     ) -> PixelFit {
-        let s = self.scale(g, config.scale_floor);
+        let s = self.scale(g, config.scale_floor, config.noise_floor);
         let mut eq = Normal3::default();
         let (mut inliers, mut rr) = (0u128, 0.0f32);
         for i in self.usable() {

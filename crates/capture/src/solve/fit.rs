@@ -16,6 +16,10 @@ use super::{CHUNK, RESIDUAL_SCALE, SolveConfig};
 use crate::Result;
 use crate::robust::{self, Lights, RobustConfig};
 
+/// The fit's residual scale is floored at this many noise sigmas, so that its inlier test
+/// (`2 s`) keeps readings within 3 sigma of the fit (99.7 % of the noise-only ones).
+const NOISE_SCALES: f32 = 1.5;
+
 /// What the robust fit of a solve needs, built once.
 pub(super) struct Fit {
     lights: Lights,
@@ -40,6 +44,13 @@ impl Fit {
         Ok(Fit { lights: Lights::new(lights)?, config, gate: 1.0 / (1.0 + agreement * agreement) })
     }
 
+    /// Adapts the gate and the fit's residual scale to a measured noise floor.
+    pub(super) fn adapt(&mut self, floor: &super::NoiseFloor) {
+        let agreement = floor.gate / RESIDUAL_SCALE;
+        self.gate = 1.0 / (1.0 + agreement * agreement);
+        self.config.noise_floor = NOISE_SCALES * floor.sigma;
+    }
+
     /// Whether a least-squares answer with this residual factor (0 when it failed) stands.
     #[inline(always)]
     pub(super) fn agrees(&self, factor: f32) -> bool {
@@ -48,6 +59,17 @@ impl Fit {
 }
 
 impl Plan<'_> {
+    /// [`Method::Robust`](super::Method::Robust): measures the stack's noise floor and adapts the
+    /// fit to it (`noise.rs`); returns what was measured.
+    pub(super) fn adapt_to_noise(&mut self, height: usize) -> Option<super::NoiseFloor> {
+        self.fit.as_ref()?;
+        let floor = self.noise_floor(height, robust::AGREEMENT)?;
+        if let Some(fit) = self.fit.as_mut() {
+            fit.adapt(&floor);
+        }
+        Some(floor)
+    }
+
     /// Normal, albedo, confidence and lights used of pixel `j` of the chunk, by the robust fit of
     /// its loaded readings (condition numbers from the dense subset table when there is one).
     pub(super) fn finish_fit(&self, fit: &Fit, j: usize, s: &Scratch, subsets: &Subsets) -> (Vec3, Vec3, f32, usize) {

@@ -20,8 +20,9 @@
 //! * [`Method::Robust`] (the default) drops readings exactly as [`Method::Threshold`] below and
 //!   solves least squares on the rest, by the same paths (all lights when nothing is dropped;
 //!   otherwise the cached subset pseudo-inverses, grouped and vectorised). That answer stands
-//!   where its relative residual is within [`crate::robust::AGREEMENT`] (2 %): the lit readings
-//!   agree with one Lambertian normal. Only the other pixels are fitted by
+//!   where its relative residual is within [`crate::robust::AGREEMENT`] (2 %), widened to what the
+//!   image's own sensor noise leaves (measured on a sample of rows before solving, `noise.rs`,
+//!   reported as [`Solution::noise`]): the lit readings agree with one Lambertian normal. Only the other pixels are fitted by
 //!   [`crate::robust::fit_pixel`] from their loaded readings (`fit.rs`; the fused kernel hands
 //!   such steps to the chunk path), so a cast shadow costs what it costs the threshold solve and
 //!   only highlights, inter-reflections and the like pay for the per-pixel fit.
@@ -81,6 +82,7 @@ mod finish;
 mod fit;
 #[cfg(target_arch = "x86_64")]
 mod fused;
+mod noise;
 mod plan;
 mod solution;
 mod sources;
@@ -96,6 +98,7 @@ pub use crate::readings::SolveStats;
 use crate::readings::{LUMA, MIN_ALBEDO};
 pub(crate) use chunk::fresh_zeroed_vec3;
 pub use config::{Method, Progress, SolveConfig, no_progress};
+pub use noise::NoiseFloor;
 use plan::Plan;
 pub use solution::{AlbedoMap, Solution};
 pub use stack::PhotoStack;
@@ -127,6 +130,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig, progress: &dyn
         albedo: AlbedoMap::Gray(Grid::filled(0, 0, 0.0)),
         confidence: Grid::filled(0, 0, 0.0),
         stats: SolveStats::default(),
+        noise: None,
     };
     solve_into(stack, rig, config, progress, &mut solution)?;
     Ok(solution)
@@ -147,8 +151,10 @@ pub fn solve_into(
     config.validate()?;
     let lights = check_rig(stack, rig)?;
     let table = srgb_table(stack);
-    let plan = Plan::new(stack, rig, config, lights, table.as_deref())?;
+    let mut plan = Plan::new(stack, rig, config, lights, table.as_deref())?;
+    let noise = plan.adapt_to_noise(stack.height());
     plan.run(stack, progress, out);
+    out.noise = noise;
     Ok(())
 }
 

@@ -17,6 +17,9 @@ pub struct Solution {
     /// Confidence in [0, 1] (see the module docs); 0 where invalid.
     pub confidence: ScalarMap,
     pub stats: SolveStats,
+    /// [`Method::Robust`](super::Method::Robust): the noise floor measured before solving and the
+    /// gate it set; `None` for other methods, 3 lights or too few usable pixels.
+    pub noise: Option<super::NoiseFloor>,
 }
 
 /// A solution's albedo: one value per texel for grey photos (a third of the memory of RGB), or

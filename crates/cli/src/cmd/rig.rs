@@ -69,6 +69,8 @@ struct RigSummary {
     condition_number: f64,
     noise_amplification: f64,
     warning: Option<String>,
+    /// What capture will correct before solving (ambient subtraction, flat fields).
+    corrections: Vec<String>,
 }
 
 pub fn run(command: Command, out: &Output) -> Result<i32> {
@@ -158,13 +160,16 @@ fn summarise(rig: &Rig, path: &std::path::Path, out: &Output) -> Result<i32> {
         condition_number: c.condition_number,
         noise_amplification: c.noise_amplification,
         warning: c.warning(),
+        corrections: session::corrections(rig, rig.ambient().is_some()),
     };
     if let Some(w) = &summary.warning {
         out.warn(w);
     }
     out.result(&summary, || {
+        let corrections =
+            if summary.corrections.is_empty() { "none".to_owned() } else { summary.corrections.join(", ") };
         format!(
-            "{}: {} lights, condition number {:.3}, noise amplification {:.3}",
+            "{}: {} lights, condition number {:.3}, noise amplification {:.3}; corrections: {corrections}",
             summary.rig, summary.lights, summary.condition_number, summary.noise_amplification
         )
     });
