@@ -494,7 +494,7 @@ fn decode(session: &Session, ambient: Option<(&Path, &str)>, options: &CaptureOp
     Ok(Inputs { photos: photos?, ambient: ambient?, mask: mask?, truth: truth? })
 }
 
-/// What [`flatten`] will do to the photos, for the report and `rig check`.
+/// What capture's flat-field step will do to the photos, for the report and `rig check`.
 pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {
     let flats = rig.lights().iter().filter(|l| l.flat().is_some()).count();
     let mut out = Vec::new();
@@ -563,7 +563,7 @@ fn samples_f32(photo: &Photo) -> &[f32] {
     }
 }
 
-/// Multiplies the albedo by the common scale [`flatten`] divided the photos by.
+/// Multiplies the albedo by the common scale `flatten` divided the photos by.
 fn unscale_albedo(albedo: &mut solve::AlbedoMap, scale: f32) {
     if scale == 1.0 {
         return;

@@ -1,5 +1,5 @@
 //! One session of a batch: captured (or skipped when up to date), judged against `--min-valid`,
-//! its review previews drawn ([`review`](super::review)), and its line of the batch report.
+//! its review previews drawn (`super::review`), and its line of the batch report.
 //!
 //! A session whose solve leaves fewer valid pixels than `--min-valid` of the map (blank or dark
 //! photos, a lens cap, a mold outside the frame) is a failed outcome with the reason, although

@@ -1,5 +1,5 @@
 //! The batch's summary, `batch-report.json` (or a shard's or an item's), with its throughput,
-//! and the review page written beside it ([`page`](super::page)).
+//! and the review page written beside it (`super::page`).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
