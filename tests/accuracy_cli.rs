@@ -8,7 +8,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-const STAGES: [&str; 5] = ["capture", "detrend", "synthesis", "stitching", "rendering"];
+const STAGES: [&str; 6] = ["capture", "detrend", "height", "synthesis", "stitching", "rendering"];
 
 /// Every number in `value` (recursively), with its JSON path; `null`s are reported as NaN (a
 /// non-finite float serialises as `null`), but for `skipped`, which is `null` when measured.
