@@ -1,8 +1,8 @@
 //! The height files artists load, each saying in its header what it holds:
 //!
 //! * `height.exr`: one float channel `Y`, heights in the report's unit (mm when the scale is
-//!   known), mean zero; header attributes `skinkit.unit`, `skinkit.mm_per_texel`,
-//!   `skinkit.integrator`, `skinkit.residual_rms` and OpenEXR's `wrapmodes` for a map that tiles.
+//!   known), mean zero; a header attribute `skinkit` of `key=value` pairs (`content`, `unit`,
+//!   `integrator`, `residual_rms`, `mm_per_texel`) and OpenEXR's `wrapmodes` for a map that tiles.
 //! * a 16-bit PNG at midlevel 0.5: `value = 0.5 + h / scale`, so Blender's Displacement node
 //!   (Midlevel 0.5, Scale = `scale`), ZBrush, Mari and Unreal get the height back as
 //!   `(value - 0.5) * scale`; the scale is written in `tEXt` entries and returned for the report.
@@ -49,11 +49,21 @@ fn attributes(height: &Height) -> Vec<(String, String)> {
     a
 }
 
-fn exr_options(height: &Height, storage: ExrStorage) -> ExrOptions {
+/// The attributes as the one `skinkit` header attribute of an EXR, `key=value` pairs joined by
+/// `"; "` (the `exr` crate keeps extra attributes in a hash map and writes them in a different
+/// order in every process, so one attribute is what keeps the file's bytes reproducible).
+fn exr_attribute(pairs: &[(String, String)]) -> (String, String) {
+    let text: Vec<String> = pairs.iter().map(|(k, v)| format!("{}={v}", k.trim_start_matches("skinkit."))).collect();
+    ("skinkit".to_string(), text.join("; "))
+}
+
+fn exr_options(height: &Height, storage: ExrStorage, extra: &[(String, String)]) -> ExrOptions {
+    let mut pairs = attributes(height);
+    pairs.extend_from_slice(extra);
     ExrOptions {
         compression: if storage.zip { ExrCompression::ZIP16 } else { ExrCompression::Uncompressed },
         half: storage.half,
-        attributes: attributes(height),
+        attributes: vec![exr_attribute(&pairs)],
         wrap_modes: (height.report.integrator == crate::Integrator::Periodic).then(|| "periodic,periodic".to_string()),
     }
 }
@@ -65,7 +75,7 @@ fn exr_options(height: &Height, storage: ExrStorage) -> ExrOptions {
 pub fn write_exr(path: &Path, height: &Height, storage: ExrStorage) -> Result<()> {
     let (w, h) = height.map.size();
     let channel = ExrChannel { name: "Y", samples: height.map.as_slice() };
-    io::write_exr_channels(path, w, h, &[channel], &exr_options(height, storage))?;
+    io::write_exr_channels(path, w, h, &[channel], &exr_options(height, storage, &[]))?;
     Ok(())
 }
 
@@ -153,14 +163,11 @@ fn lowpass(g: &ScalarMap, levels: usize, border: Border) -> ScalarMap {
 /// # Errors
 /// When writing fails.
 pub fn write_bands_exr(path: &Path, height: &Height, bands: &Bands, storage: ExrStorage) -> Result<()> {
-    let mut options = exr_options(height, storage);
     let texel = height.report.mm_per_texel.unwrap_or(1.0);
     let [a, b] = BAND_TEXELS.map(|t| t * texel);
     let unit = height.report.unit;
-    options.attributes.push((
-        "skinkit.band_limits".to_string(),
-        format!("R: wavelengths under {a} {unit}; G: {a} to {b} {unit}; B: over {b} {unit}; R + G + B = height"),
-    ));
+    let limits = format!("R under {a} {unit}, G {a} to {b} {unit}, B over {b} {unit}, R + G + B = height");
+    let options = exr_options(height, storage, &[("skinkit.band_limits".to_string(), limits)]);
     let (w, h) = height.map.size();
     let channels = [
         ExrChannel { name: "R", samples: bands.fine.as_slice() },

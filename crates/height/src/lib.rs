@@ -174,7 +174,9 @@ pub struct HeightReport {
     pub texels: TexelCounts,
     /// Conjugate-gradient iterations (masked solve only).
     pub iterations: Option<usize>,
-    /// Wall time of the integration, in seconds.
+    /// Wall time of the integration, in seconds (not serialised: reports keep their times apart,
+    /// so that two runs' reports compare equal).
+    #[serde(skip)]
     pub seconds: f64,
 }
 

@@ -114,7 +114,9 @@ pub struct ExrOptions {
     pub compression: Compression,
     /// Store 16-bit half floats (half the size; about 3 decimal digits).
     pub half: bool,
-    /// `(name, text)` attributes; readers that do not know a name keep or ignore it.
+    /// `(name, text)` attributes; readers that do not know a name keep or ignore it. The `exr`
+    /// crate writes them in hash-map order, which differs between processes: give one for
+    /// files whose bytes must not change from run to run.
     pub attributes: Vec<(String, String)>,
     /// The OpenEXR `wrapmodes` attribute (`"periodic,periodic"` for a map that tiles).
     pub wrap_modes: Option<String>,

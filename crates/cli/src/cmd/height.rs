@@ -90,6 +90,8 @@ struct Report {
     result: HeightReport,
     /// How to load the 16-bit PNG (when one was written).
     png: Option<PngScale>,
+    /// Seconds of the integration.
+    seconds: f64,
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
@@ -141,6 +143,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     }
     out.swept(&set.commit().with_context(|| written(&args.out))?);
     let (width, rows) = normals.size();
+    let seconds = height.report.seconds;
     let report = Report {
         map: args.map.display().to_string(),
         out: args.out.display().to_string(),
@@ -148,6 +151,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         height: rows,
         result: height.report,
         png,
+        seconds,
     };
     out.result(&report, || human(&report));
     Ok(0)

@@ -117,6 +117,8 @@ pub struct FaceSeconds {
     #[serde(flatten)]
     pub compose: ComposeSeconds,
     pub write: f64,
+    /// Integrating the face's height and writing its files (beside the normal maps' writing).
+    pub height: f64,
     pub total: f64,
 }
 
@@ -253,13 +255,14 @@ pub fn face_to_dir(
     );
     png?;
     exr?;
-    let height = height?;
+    let (height, height_seconds) = height?;
     write_in(&set, dir, "labels.png", |p| encode_labels(p, &face.composed.labels))?;
     for (region, ex) in face.layout.regions.iter().zip(&face.exemplars) {
         write_in(&set, dir, &format!("exemplars/{}.png", region.name), |p| encode_map(p, ex))?;
     }
     let mut report = report(options, &face, &dir.join("normal.png"), t.elapsed().as_secs_f64(), start);
     report.height_map = Some(height);
+    report.seconds.height = height_seconds;
     pipeline::write_json_in(&set, "report.json", &dir.join("report.json"), &report)?;
     out.swept(&set.commit().with_context(|| format!("cannot write {}", dir.display()))?);
     Ok(report)
@@ -271,13 +274,12 @@ pub struct FaceHeight {
     #[serde(flatten)]
     pub height: skinkit_height::HeightReport,
     pub png: skinkit_height::deliver::PngScale,
-    /// Seconds to integrate, split into bands and write the four files.
-    pub seconds: f64,
 }
 
 /// Integrates the face's normals (Neumann: a face map does not wrap) into millimetres and writes
 /// its height files ([`FACE_HEIGHT_FILES`]; the EXRs ZIP-compressed, since face maps are large).
-fn write_height(set: &OutputSet, dir: &Path, map: &NormalMap, mm_per_texel: f64) -> Result<FaceHeight> {
+/// Returns the files' report and the seconds they took (integrate, split, write).
+fn write_height(set: &OutputSet, dir: &Path, map: &NormalMap, mm_per_texel: f64) -> Result<(FaceHeight, f64)> {
     use skinkit_height::deliver::{self, ExrStorage};
     let t = Instant::now();
     let scale = skinkit_height::Scale::from_mm(Some(mm_per_texel))?;
@@ -293,7 +295,7 @@ fn write_height(set: &OutputSet, dir: &Path, map: &NormalMap, mm_per_texel: f64)
     let cavity = deliver::cavity(&bands);
     write_in(set, dir, "cavity.png", |p| deliver::write_cavity_png(p, &cavity).map_err(h))?;
     let png = png.expect("write_png16 returned its scale");
-    Ok(FaceHeight { height: height.report, png, seconds: t.elapsed().as_secs_f64() })
+    Ok((FaceHeight { height: height.report, png }, t.elapsed().as_secs_f64()))
 }
 
 /// Writes `name` of the folder set `set` (destined for `dir`), naming the final path in errors.
@@ -416,6 +418,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
             exemplars: face.seconds_exemplars,
             compose: c.seconds.clone(),
             write,
+            height: 0.0,
             total: start.elapsed().as_secs_f64(),
         },
         height_map: None,
