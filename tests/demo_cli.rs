@@ -132,12 +132,12 @@ fn demo_page_loads_every_image_without_console_errors_in_headless_chromium() {
         assert!(html.contains(stage), "the page has no {stage} section");
     }
     // Each stage's plot from the quick accuracy run, and its numbers in the report.
-    for stage in ["capture", "detrend", "synthesis", "stitching", "rendering"] {
+    for stage in ["capture", "detrend", "height", "synthesis", "stitching", "rendering"] {
         let plot = format!("accuracy/accuracy-{stage}.png");
         assert!(html.contains(&plot) && dir.join(&plot).is_file(), "no {plot}");
     }
     let stages = report["accuracy"]["stages"].as_array().unwrap();
-    assert_eq!(stages.len(), 5);
+    assert_eq!(stages.len(), 6);
     assert!(stages.iter().all(|s| s["skipped"].is_null() && !s["choices"].as_array().unwrap().is_empty()));
     let checker = match page_checker() {
         Ok(c) => c,

@@ -160,7 +160,7 @@ fn capture(html: &mut String, out: &Path, samples: &Path, report: &DemoReport) -
         super::height::figures(html, out, &dir.join("height.exr"), &format!("capture-{region}"), true, false)?;
         html.push_str("</div>\n");
     }
-    accuracy(html, report, &[Stage::Capture, Stage::Detrend]);
+    accuracy(html, report, &[Stage::Capture, Stage::Detrend, Stage::Height]);
     html.push_str("</section>\n");
     Ok(())
 }
