@@ -186,7 +186,9 @@ fn d7_too_many_lights_and_a_missing_ambient_fail_check_and_capture_alike() {
         "intensity = 1.0\nposition = [10.0, 0.0, 0.0]",
         1,
     );
-    std::fs::write(&far, format!("mm_per_pixel = 0.02\n{below}")).unwrap();
+    // The sample rig gives the pixel size (0.02 mm) that near lights need.
+    assert!(below.contains("mm_per_pixel"));
+    std::fs::write(&far, below).unwrap();
     for (rig, photos, expect) in [
         (&many, photos, "at most 128"),
         (&no_ambient, nose_photos(), "nope.png"),
