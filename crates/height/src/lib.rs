@@ -23,6 +23,7 @@
 //! deliverables ([`deliver`]) are computed from the resulting [`Height`].
 
 pub mod compare;
+mod dct;
 pub mod deliver;
 mod error;
 mod masked;

@@ -6,7 +6,7 @@
 use rayon::prelude::*;
 
 use crate::HOLE_WEIGHT;
-use crate::poisson::neumann_in_place;
+use crate::poisson::Neumann;
 use crate::slopes::{Slopes, neighbours};
 
 /// Elements per block of a deterministic dot product.
@@ -24,8 +24,9 @@ pub fn solve(slopes: &Slopes, tolerance: f64, max_iterations: usize) -> (Vec<f32
         return (x, 0);
     }
     let mut q = vec![0f32; w * h];
+    let preconditioner = Neumann::new(w, h);
     let mut z = r.clone();
-    neumann_in_place(&mut z, &mut q, w, h);
+    preconditioner.solve_in_place(&mut z, &mut q);
     let mut p = z.clone();
     let mut rz = dot(&r, &z);
     for iteration in 1..=max_iterations {
@@ -41,7 +42,7 @@ pub fn solve(slopes: &Slopes, tolerance: f64, max_iterations: usize) -> (Vec<f32
             return (x, iteration);
         }
         z.copy_from_slice(&r);
-        neumann_in_place(&mut z, &mut q, w, h);
+        preconditioner.solve_in_place(&mut z, &mut q);
         let rz_next = dot(&r, &z);
         let beta = (rz_next / rz) as f32;
         rz = rz_next;
