@@ -88,7 +88,7 @@ impl Dct {
         }
         // The DC term, and Nyquist's for an even length, are real in exact arithmetic.
         s.spectrum[0].im = 0.0;
-        if n % 2 == 0 {
+        if n.is_multiple_of(2) {
             s.spectrum[n / 2].im = 0.0;
         }
         self.inverse
