@@ -75,7 +75,8 @@ impl Neumann {
     fn columns_pass(&self, b: &[f32], t: &mut [f32]) {
         let (w, h, columns) = (self.w, self.h, &self.columns);
         // DCT-III after DCT-II scales by n/2 per axis.
-        let norm = 4.0 / (w as f64 * h as f64);
+        let norm = (4.0 / (w as f64 * h as f64)) as f32;
+        let mu_y: Vec<f32> = self.mu_y.iter().map(|&m| m as f32).collect();
         t.par_chunks_mut(h * STRIP).enumerate().for_each_init(
             || columns.scratch(),
             |s, (strip, out)| {
@@ -84,9 +85,13 @@ impl Neumann {
                 for (c, column) in out.chunks_exact_mut(h).enumerate() {
                     let kx = x0 + c;
                     columns.dct2(column, s);
-                    for (ky, v) in column.iter_mut().enumerate() {
-                        let mu = self.mu_x[kx] + self.mu_y[ky];
-                        *v *= if mu > 0.0 { (norm / mu) as f32 } else { 0.0 };
+                    let mu_x = self.mu_x[kx] as f32;
+                    for (v, &mu_y) in column.iter_mut().zip(&mu_y) {
+                        *v *= norm / (mu_x + mu_y);
+                    }
+                    if kx == 0 {
+                        // The constant mode (mu = 0: its quotient above is not finite) is zero.
+                        column[0] = 0.0;
                     }
                     columns.dct3(column, s);
                 }

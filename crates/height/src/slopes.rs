@@ -115,39 +115,17 @@ impl<'a> Slopes<'a> {
 
     /// The mean slope over the valid texels, summed in f64 per row and then in row order.
     fn mean_slope(&self) -> (f32, f32) {
-        let w = self.width();
         let rows: Vec<(f64, f64)> = (0..self.height())
             .into_par_iter()
-            .map(|y| {
-                (y * w..(y + 1) * w).fold((0.0, 0.0), |(sx, sy), i| {
-                    let (x, y) = self.at(i);
-                    (sx + f64::from(x), sy + f64::from(y))
-                })
+            .map_init(Row::default, |row, y| {
+                self.load(y, row);
+                let sum = |s: &[f32]| s.iter().map(|&v| f64::from(v)).sum::<f64>();
+                (sum(&row.px), sum(&row.py))
             })
             .collect();
         let (sx, sy) = rows.iter().fold((0.0, 0.0), |a, r| (a.0 + r.0, a.1 + r.1));
         let n = self.counts.valid.max(1) as f64;
         ((sx / n) as f32, (sy / n) as f32)
-    }
-
-    /// Row `y`'s slopes, `(0, 0)` at invalid texels.
-    fn row(&self, y: usize, out: &mut Vec<(f32, f32)>) {
-        let w = self.width();
-        out.clear();
-        out.extend((y * w..(y + 1) * w).map(|i| self.at(i)));
-    }
-
-    /// The weighted target step of the edge from texel `a` (slope `sa`) to `b` (slope `sb`),
-    /// along x or along rows: an edge with an invalid end, under `masked`, asks for
-    /// the mean slope at [`HOLE_WEIGHT`]; otherwise every edge has weight 1 and invalid texels
-    /// count as flat.
-    #[inline]
-    fn weighted_step(&self, a: usize, b: usize, sa: f32, sb: f32, horizontal: bool, masked: bool) -> f32 {
-        if masked && !(self.valid[a] && self.valid[b]) {
-            HOLE_WEIGHT * if horizontal { self.mean.0 } else { self.mean.1 }
-        } else {
-            0.5 * (sa + sb)
-        }
     }
 
     pub fn width(&self) -> usize {
@@ -158,99 +136,113 @@ impl<'a> Slopes<'a> {
         self.normals.height()
     }
 
-    /// `(dh/dcol, dh/drow)` at texel `i` in texel units, clamped; `(0, 0)` for an invalid texel.
-    pub fn at(&self, i: usize) -> (f32, f32) {
-        if !self.valid[i] {
-            return (0.0, 0.0);
+    /// Row `y`'s slopes (0 at invalid texels) and validity, into `row`.
+    fn load(&self, y: usize, row: &mut Row) {
+        let w = self.width();
+        let (normals, ok) = (&self.normals.as_slice()[y * w..][..w], &self.valid[y * w..][..w]);
+        row.ok.clear();
+        row.ok.extend_from_slice(ok);
+        row.px.resize(w, 0.0);
+        row.py.resize(w, 0.0);
+        for (((n, &ok), px), py) in normals.iter().zip(ok).zip(&mut row.px).zip(&mut row.py) {
+            // An invalid normal may be NaN or have nz <= 0: divide by 1 there and zero the result.
+            let inv = 1.0 / if ok { n.z } else { 1.0 };
+            let keep = if ok { 1.0 } else { 0.0 };
+            *px = (-n.x * inv).clamp(-MAX_SLOPE, MAX_SLOPE) * keep;
+            *py = (n.y * inv).clamp(-MAX_SLOPE, MAX_SLOPE) * keep;
         }
-        let n = self.normals.as_slice()[i];
-        ((-n.x / n.z).clamp(-MAX_SLOPE, MAX_SLOPE), (n.y / n.z).clamp(-MAX_SLOPE, MAX_SLOPE))
+    }
+
+    /// The weighted target step of an edge whose ends have slopes `sa`, `sb` and validity `oa`,
+    /// `ob`: under `masked`, an edge with an invalid end asks for the mean slope `mean` at
+    /// [`HOLE_WEIGHT`]; otherwise every edge has weight 1 and invalid texels count as flat.
+    #[inline]
+    fn step(sa: f32, sb: f32, oa: bool, ob: bool, masked: bool, mean: f32) -> f32 {
+        if masked && !(oa && ob) { HOLE_WEIGHT * mean } else { 0.5 * (sa + sb) }
+    }
+
+    /// `out[x]`: the step of the edge from texel `x` of `row` to `x + 1`; the last entry is the
+    /// edge wrapping to the row's start under `wraps`, else 0.
+    fn horizontal_steps(&self, row: &Row, wraps: bool, masked: bool, out: &mut Vec<f32>) {
+        let (w, mean) = (row.px.len(), self.mean.0);
+        out.clear();
+        out.extend((1..w).map(|x| Self::step(row.px[x - 1], row.px[x], row.ok[x - 1], row.ok[x], masked, mean)));
+        let wrap = wraps && w > 1;
+        out.push(if wrap { Self::step(row.px[w - 1], row.px[0], row.ok[w - 1], row.ok[0], masked, mean) } else { 0.0 });
+    }
+
+    /// `out[x]`: the step of the edge from texel `x` of `up` down to texel `x` of `down`.
+    fn vertical_steps(&self, up: &Row, down: &Row, masked: bool, out: &mut Vec<f32>) {
+        let mean = self.mean.1;
+        out.clear();
+        out.extend((0..up.py.len()).map(|x| Self::step(up.py[x], down.py[x], up.ok[x], down.ok[x], masked, mean)));
+    }
+
+    /// The row below `y` (or the first row under `wraps`), if an edge goes there.
+    fn below(&self, y: usize, wraps: bool) -> Option<usize> {
+        let h = self.height();
+        if y + 1 < h {
+            Some(y + 1)
+        } else if wraps && h > 1 {
+            Some(0)
+        } else {
+            None
+        }
+    }
+
+    /// The row above `y` (or the last row under `wraps`), if an edge comes from there.
+    fn above(&self, y: usize, wraps: bool) -> Option<usize> {
+        let h = self.height();
+        if y > 0 {
+            Some(y - 1)
+        } else if wraps && h > 1 {
+            Some(h - 1)
+        } else {
+            None
+        }
     }
 
     /// The right-hand side `D^T W g` of the normal equations: per texel, the weighted steps of
-    /// the edges arriving minus those leaving. With `wraps`, edges cross the borders. Rows in
-    /// parallel, each from its own and its neighbours' slopes.
+    /// the edges arriving minus those leaving. With `wraps`, edges cross the borders. Blocks of
+    /// rows in parallel, each carrying its rows' slopes and its last vertical steps down the block.
     pub fn rhs(&self, wraps: bool, masked: bool) -> Vec<f32> {
-        let (w, h) = (self.width(), self.height());
-        let mut b = vec![0f32; w * h];
+        let w = self.width();
+        let mut b = vec![0f32; w * self.height()];
         b.par_chunks_mut(w * ROWS).enumerate().for_each(|(chunk, rows)| {
             let first = chunk * ROWS;
-            let (mut up, mut cur, mut down) = (Vec::new(), Vec::new(), Vec::new());
-            let above = |y: usize| {
-                if y > 0 {
-                    Some(y - 1)
-                } else if wraps && h > 1 {
-                    Some(h - 1)
-                } else {
-                    None
+            let (mut cur, mut next) = (Row::default(), Row::default());
+            let (mut hs, mut v_above, mut v_below) = (Vec::new(), Vec::new(), Vec::new());
+            self.load(first, &mut cur);
+            match self.above(first, wraps) {
+                Some(a) => {
+                    self.load(a, &mut next);
+                    self.vertical_steps(&next, &cur, masked, &mut v_above);
                 }
-            };
-            let below = |y: usize| {
-                if y + 1 < h {
-                    Some(y + 1)
-                } else if wraps && h > 1 {
-                    Some(0)
-                } else {
-                    None
-                }
-            };
-            above(first).inspect(|&a| self.row(a, &mut up));
-            self.row(first, &mut cur);
-            for (k, row) in rows.chunks_exact_mut(w).enumerate() {
+                None => v_above.resize(w, 0.0),
+            }
+            for (k, out) in rows.chunks_exact_mut(w).enumerate() {
                 let y = first + k;
-                below(y).inspect(|&d| self.row(d, &mut down));
-                self.rhs_row(y, row, (above(y), &up), &cur, (below(y), &down), wraps, masked);
-                std::mem::swap(&mut up, &mut cur);
-                std::mem::swap(&mut cur, &mut down);
+                match self.below(y, wraps) {
+                    Some(d) => {
+                        self.load(d, &mut next);
+                        self.vertical_steps(&cur, &next, masked, &mut v_below);
+                    }
+                    None => {
+                        v_below.clear();
+                        v_below.resize(w, 0.0);
+                    }
+                }
+                self.horizontal_steps(&cur, wraps, masked, &mut hs);
+                let arriving_first = if wraps { hs[w - 1] } else { 0.0 };
+                for (x, o) in out.iter_mut().enumerate() {
+                    let arriving = if x > 0 { hs[x - 1] } else { arriving_first };
+                    *o = (arriving - hs[x]) + (v_above[x] - v_below[x]);
+                }
+                std::mem::swap(&mut cur, &mut next);
+                std::mem::swap(&mut v_above, &mut v_below);
             }
         });
         b
-    }
-
-    /// One row of [`Self::rhs`], from the slopes of the row (`cur`) and its neighbours.
-    #[allow(clippy::too_many_arguments)] // the row's three slope rows and the edge rules, passed once
-    fn rhs_row(
-        &self,
-        y: usize,
-        row: &mut [f32],
-        (above, up): (Option<usize>, &[(f32, f32)]),
-        cur: &[(f32, f32)],
-        (below, down): (Option<usize>, &[(f32, f32)]),
-        wraps: bool,
-        masked: bool,
-    ) {
-        let w = row.len();
-        for (x, out) in row.iter_mut().enumerate() {
-            let i = y * w + x;
-            let mut sum = 0.0;
-            let left = if x > 0 {
-                Some(x - 1)
-            } else if wraps && w > 1 {
-                Some(w - 1)
-            } else {
-                None
-            };
-            let right = if x + 1 < w {
-                Some(x + 1)
-            } else if wraps && w > 1 {
-                Some(0)
-            } else {
-                None
-            };
-            if let Some(l) = left {
-                sum += self.weighted_step(y * w + l, i, cur[l].0, cur[x].0, true, masked);
-            }
-            if let Some(r) = right {
-                sum -= self.weighted_step(i, y * w + r, cur[x].0, cur[r].0, true, masked);
-            }
-            if let Some(a) = above {
-                sum += self.weighted_step(a * w + x, i, up[x].1, cur[x].1, false, masked);
-            }
-            if let Some(d) = below {
-                sum -= self.weighted_step(i, d * w + x, cur[x].1, down[x].1, false, masked);
-            }
-            *out = sum;
-        }
     }
 
     /// The RMS residual `(h_b - h_a) - step` over the edges whose two texels are valid, and the
@@ -258,58 +250,86 @@ impl<'a> Slopes<'a> {
     /// of rows in f64, then in block order.
     pub fn residual(&self, h: &[f32], wraps: bool) -> (f64, f64) {
         let (w, hh) = (self.width(), self.height());
-        let chunks = hh.div_ceil(ROWS);
-        let rows: Vec<(f64, f64, usize)> = (0..chunks)
+        let blocks: Vec<Residual> = (0..hh.div_ceil(ROWS))
             .into_par_iter()
             .map(|chunk| {
-                let (mut cur, mut down) = (Vec::new(), Vec::new());
-                let (mut res, mut sq, mut n) = (0f64, 0f64, 0usize);
-                let first = chunk * ROWS;
-                self.row(first, &mut cur);
-                for y in first..(first + ROWS).min(hh) {
-                    let below = if y + 1 < hh {
-                        Some(y + 1)
-                    } else if wraps && hh > 1 {
-                        Some(0)
-                    } else {
-                        None
-                    };
-                    below.inspect(|&d| self.row(d, &mut down));
-                    let mut add = |a: usize, b: usize, step: f32| {
-                        if self.valid[a] && self.valid[b] {
-                            let r = f64::from(h[b] - h[a] - step);
-                            res += r * r;
-                            sq += f64::from(step) * f64::from(step);
-                            n += 1;
-                        }
-                    };
-                    for x in 0..w {
-                        let i = y * w + x;
-                        let right = if x + 1 < w {
-                            Some(x + 1)
-                        } else if wraps && w > 1 {
-                            Some(0)
-                        } else {
-                            None
-                        };
-                        if let Some(r) = right {
-                            add(i, y * w + r, 0.5 * (cur[x].0 + cur[r].0));
-                        }
-                        if let Some(d) = below {
-                            add(i, d * w + x, 0.5 * (cur[x].1 + down[x].1));
-                        }
+                let (mut cur, mut next) = (Row::default(), Row::default());
+                let (mut steps, mut rises) = (Vec::new(), Vec::new());
+                let mut sum = Residual::default();
+                self.load(chunk * ROWS, &mut cur);
+                for y in chunk * ROWS..((chunk + 1) * ROWS).min(hh) {
+                    let row = &h[y * w..][..w];
+                    self.horizontal_steps(&cur, wraps, false, &mut steps);
+                    rises.clear();
+                    rises.extend(row.windows(2).map(|p| p[1] - p[0]));
+                    rises.push(row[0] - row[w - 1]);
+                    let edges = if wraps && w > 1 { w } else { w - 1 };
+                    let right = |x: usize| if x + 1 < w { x + 1 } else { 0 };
+                    sum.add_row(&rises[..edges], &steps[..edges], |x| cur.ok[x] && cur.ok[right(x)]);
+                    if let Some(d) = self.below(y, wraps) {
+                        self.load(d, &mut next);
+                        self.vertical_steps(&cur, &next, false, &mut steps);
+                        rises.clear();
+                        rises.extend(h[d * w..][..w].iter().zip(row).map(|(b, a)| b - a));
+                        sum.add_row(&rises, &steps, |x| cur.ok[x] && next.ok[x]);
+                        std::mem::swap(&mut cur, &mut next);
                     }
-                    std::mem::swap(&mut cur, &mut down);
                 }
-                (res, sq, n)
+                sum
             })
             .collect();
-        let (res, sq, n) = rows.iter().fold((0.0, 0.0, 0), |t, r| (t.0 + r.0, t.1 + r.1, t.2 + r.2));
-        if n == 0 {
+        let total = blocks.iter().fold(Residual::default(), |a, b| Residual {
+            squares: a.squares + b.squares,
+            steps: a.steps + b.steps,
+            n: a.n + b.n,
+        });
+        total.rms()
+    }
+}
+
+/// One row's slopes and validity (reused from row to row).
+#[derive(Default)]
+struct Row {
+    px: Vec<f32>,
+    py: Vec<f32>,
+    ok: Vec<bool>,
+}
+
+/// Sums of squared residuals and steps over some edges.
+#[derive(Clone, Copy, Default)]
+struct Residual {
+    squares: f64,
+    steps: f64,
+    n: usize,
+}
+
+impl Residual {
+    /// Adds the edges `x` of one row for which `counts(x)`: rise `rises[x]`, step `steps[x]`.
+    /// Eight running sums, added in a fixed order, so the compiler can vectorise them and the
+    /// result is the same bits at any thread count.
+    fn add_row(&mut self, rises: &[f32], steps: &[f32], counts: impl Fn(usize) -> bool) {
+        const LANES: usize = 8;
+        let (mut sq, mut st) = ([0f64; LANES], [0f64; LANES]);
+        let mut n = 0;
+        for (x, (&rise, &step)) in rises.iter().zip(steps).enumerate() {
+            let keep = counts(x);
+            let (r, s) = if keep { (f64::from(rise - step), f64::from(step)) } else { (0.0, 0.0) };
+            sq[x % LANES] += r * r;
+            st[x % LANES] += s * s;
+            n += usize::from(keep);
+        }
+        self.squares += sq.iter().sum::<f64>();
+        self.steps += st.iter().sum::<f64>();
+        self.n += n;
+    }
+
+    /// The RMS residual, and the same against the RMS step.
+    fn rms(self) -> (f64, f64) {
+        if self.n == 0 {
             return (0.0, 0.0);
         }
-        let rms = (res / n as f64).sqrt();
-        let step = (sq / n as f64).sqrt();
+        let rms = (self.squares / self.n as f64).sqrt();
+        let step = (self.steps / self.n as f64).sqrt();
         (rms, if step > 0.0 { rms / step } else { 0.0 })
     }
 }
