@@ -28,6 +28,7 @@ pub mod deliver;
 mod error;
 mod masked;
 mod poisson;
+pub mod round_trip;
 mod slopes;
 mod transform;
 

@@ -27,6 +27,7 @@ use skinkit_render::mesh::Mesh;
 
 use super::figure7::{Figure7, figure7};
 use super::render::{Job, RenderReport, render};
+use super::round_trip::{RoundTripFigure, round_trip};
 use crate::output::Output;
 
 /// Side of each figure panel, pixels.
@@ -44,6 +45,8 @@ pub struct FiguresReport {
     pub figure7: Figure7,
     pub figure8: String,
     pub skin: SkinFigure,
+    /// Figure 7's close-up lit from the face height's own normals (when the face has a height).
+    pub height_round_trip: Option<RoundTripFigure>,
     pub renders: Vec<RenderReport>,
 }
 
@@ -178,8 +181,9 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
     .with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// Renders both figures of `normal_map` (the stitched face) into `dir`.
-pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresReport> {
+/// Renders the figures of `normal_map` (the stitched face) into `dir`; with the face's texel size
+/// in mm, also the round trip of its `height.exr` (beside `normal_map`).
+pub fn figures(normal_map: &Path, mm_per_texel: Option<f64>, dir: &Path, out: &Output) -> Result<FiguresReport> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let map = std::path::absolute(normal_map).unwrap_or_else(|_| normal_map.to_owned());
     let map = map.to_string_lossy().replace('\\', "/");
@@ -203,6 +207,13 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
         AZIMUTHS_DEG.iter().map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a))).collect::<Result<_>>()?;
 
     let figure7 = figure7(&map, dir, &gpu, out, &mut renders)?;
+    let height_round_trip = match mm_per_texel {
+        Some(mm) => {
+            let (exr, skin) = (normal_map.with_file_name("height.exr"), dir.join("head-skin.png"));
+            Some(round_trip(normal_map, &exr, mm, &skin, (dir, &gpu, out), &mut renders)?)
+        }
+        None => None,
+    };
     let figure8 = dir.join("figure8.png");
     let lit: Vec<(PathBuf, String)> =
         lit.into_iter().zip(AZIMUTHS_DEG).map(|(p, a)| (p, format!("light azimuth {a} deg"))).collect();
@@ -226,17 +237,19 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
         panels.push((name, image, seconds));
     }
     let skin = skin_figure(&panels, &dir.join("figure-skin.png"))?;
-    Ok(FiguresReport { figure7, figure8: figure8.display().to_string(), skin, renders })
+    Ok(FiguresReport { figure7, figure8: figure8.display().to_string(), skin, height_round_trip, renders })
 }
 
 /// The skin figure: the six panels in a 3 x 2 grid, each method's FLIP mean against the last.
+/// An 8-bit RGB render as RGBA bytes (what FLIP takes) with its size.
+pub fn rgba(path: &Path) -> Result<(u32, u32, Vec<u8>)> {
+    let photo = io::read_photo(path, &Limits::default())?;
+    let Samples::U8(s) = photo.samples() else { bail!("{}: expected an 8-bit render", path.display()) };
+    let bytes = s.chunks_exact(3).flat_map(|px| [px[0], px[1], px[2], 255]).collect();
+    Ok((photo.width() as u32, photo.height() as u32, bytes))
+}
+
 fn skin_figure(panels: &[(&str, PathBuf, f64)], path: &Path) -> Result<SkinFigure> {
-    let rgba = |p: &Path| -> Result<(u32, u32, Vec<u8>)> {
-        let photo = io::read_photo(p, &Limits::default())?;
-        let Samples::U8(s) = photo.samples() else { bail!("{}: expected an 8-bit render", p.display()) };
-        let bytes = s.chunks_exact(3).flat_map(|px| [px[0], px[1], px[2], 255]).collect();
-        Ok((photo.width() as u32, photo.height() as u32, bytes))
-    };
     let (_, reference, _) = panels.last().expect("the reference is the last panel");
     let (w, h, reference) = rgba(reference)?;
     let methods = panels

@@ -11,6 +11,7 @@ pub mod height;
 pub mod lut;
 pub mod render;
 pub mod rig;
+pub mod round_trip;
 pub mod samples;
 pub mod stitch;
 pub mod synth;

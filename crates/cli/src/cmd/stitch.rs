@@ -251,7 +251,7 @@ pub fn face_to_dir(
                 || write_in(&set, dir, "normal.exr", |p| encode_map(p, map)),
             )
         },
-        || write_height(&set, dir, map, face.layout.mm_per_texel),
+        || write_height(&set, dir, map, face.layout.mm_per_texel, &face.composed.labels),
     );
     png?;
     exr?;
@@ -274,12 +274,21 @@ pub struct FaceHeight {
     #[serde(flatten)]
     pub height: skinkit_height::HeightReport,
     pub png: skinkit_height::deliver::PngScale,
+    /// The height's own normals against the face's normal map (through the same central
+    /// differences), overall and on the regions' seams against off them.
+    pub round_trip: skinkit_height::round_trip::Agreement,
 }
 
 /// Integrates the face's normals (Neumann: a face map does not wrap) into millimetres and writes
 /// its height files ([`FACE_HEIGHT_FILES`]; the EXRs ZIP-compressed, since face maps are large).
 /// Returns the files' report and the seconds they took (integrate, split, write).
-fn write_height(set: &OutputSet, dir: &Path, map: &NormalMap, mm_per_texel: f64) -> Result<(FaceHeight, f64)> {
+fn write_height(
+    set: &OutputSet,
+    dir: &Path,
+    map: &NormalMap,
+    mm_per_texel: f64,
+    labels: &Grid<u16>,
+) -> Result<(FaceHeight, f64)> {
     use skinkit_height::deliver::{self, ExrStorage};
     let t = Instant::now();
     let scale = skinkit_height::Scale::from_mm(Some(mm_per_texel))?;
@@ -295,7 +304,8 @@ fn write_height(set: &OutputSet, dir: &Path, map: &NormalMap, mm_per_texel: f64)
     let cavity = deliver::cavity(&bands);
     write_in(set, dir, "cavity.png", |p| deliver::write_cavity_png(p, &cavity).map_err(h))?;
     let png = png.expect("write_png16 returned its scale");
-    Ok((FaceHeight { height: height.report, png }, t.elapsed().as_secs_f64()))
+    let round_trip = skinkit_height::round_trip::height_agreement(map, &height, false, Some(labels));
+    Ok((FaceHeight { height: height.report, png, round_trip }, t.elapsed().as_secs_f64()))
 }
 
 /// Writes `name` of the folder set `set` (destined for `dir`), naming the final path in errors.

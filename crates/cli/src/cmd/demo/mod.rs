@@ -124,7 +124,8 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let face = stitch_face(&args, &samples, &mut cache, out)?;
     seconds.face = face.as_ref().map(|_| t.elapsed().as_secs_f64());
     let t = Instant::now();
-    let renders = if face.is_some() && !args.no_render { render_figures(&args, out)? } else { None };
+    let mm_per_texel = face.as_ref().map(|f| f.mm_per_texel);
+    let renders = if face.is_some() && !args.no_render { render_figures(&args, mm_per_texel, out)? } else { None };
     seconds.renders = renders.as_ref().map(|_| t.elapsed().as_secs_f64());
     let t = Instant::now();
     let accuracy = if args.no_accuracy { None } else { Some(quick_accuracy(&args, &samples, out)?) };
@@ -201,6 +202,12 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
                 skin.local_contrast,
                 smooth.local_contrast
             );
+            if let Some(t) = &r.height_round_trip {
+                s += &format!(
+                    "figure 7 lit from the face height's own normals: FLIP {:.3} against the normal map ({:.3} of it from the differencing, {:.3} against the differenced map)\n",
+                    t.flip_height_vs_map, t.flip_differenced_vs_map, t.flip_height_vs_differenced_map
+                );
+            }
         }
         s += &format!("outputs and demo-report.json in {}\n", args.out.display());
         s += &format!("report page: {}\n", report.page.as_deref().unwrap_or("-"));
@@ -316,9 +323,9 @@ fn quick_accuracy(args: &Args, molds: &Path, out: &Output) -> Result<skinkit_acc
 
 /// Figures 7, 8 and the skin figure of the face map; `None` (with a warning saying why) on a
 /// machine without a GPU adapter, since the maps are still worth having.
-fn render_figures(args: &Args, out: &Output) -> Result<Option<FiguresReport>> {
+fn render_figures(args: &Args, mm_per_texel: Option<f64>, out: &Output) -> Result<Option<FiguresReport>> {
     out.note("rendering the sample head and a patch of the face map (figures 7 and 8)");
-    match figures(&args.out.join("face").join("normal.png"), &args.out.join("render"), out) {
+    match figures(&args.out.join("face").join("normal.png"), mm_per_texel, &args.out.join("render"), out) {
         Ok(r) => Ok(Some(r)),
         Err(e)
             if e.downcast_ref::<skinkit_render::gpu::GpuError>()

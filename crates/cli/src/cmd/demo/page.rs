@@ -254,9 +254,31 @@ fn face(html: &mut String, out: &Path, report: &DemoReport) -> Result<()> {
             format!("{:.2}", s.max_jump_degrees),
         ]],
     );
+    if let Some(h) = &f.height_map {
+        round_trip_table(html, &h.round_trip);
+    }
     accuracy(html, report, &[Stage::Stitching]);
     html.push_str("</section>\n");
     Ok(())
+}
+
+/// How the face height's own normals agree with the face's normal map, and where they part.
+fn round_trip_table(html: &mut String, a: &skinkit_height::round_trip::Agreement) {
+    let row = |name: &str, s: &skinkit_maps::normal::AngularStats| {
+        vec![
+            name.to_owned(),
+            s.count.to_string(),
+            format!("{:.2}", s.median),
+            format!("{:.2}", s.p95),
+            format!("{:.1}", s.max),
+        ]
+    };
+    let mut rows = vec![row("every texel", &a.all)];
+    if let Some(seams) = &a.seams {
+        rows.push(row("on region seams", &seams.on_seams));
+        rows.push(row("off seams", &seams.off_seams));
+    }
+    table(html, &["the height's normals against the map (deg)", "texels", "median", "p95", "max"], &rows);
 }
 
 /// The figures and every render, each with its caption, and the skin methods' errors.
@@ -274,6 +296,13 @@ fn renders(html: &mut String, out: &Path, report: &DemoReport) {
     figure(html, &p(&r.figure7.image), "Figure 7: the head without (left) and with (right) the face map", "wide");
     figure(html, &p(&r.figure8), "Figure 8: a patch of the face map under four light directions", "wide");
     figure(html, &p(&r.skin.image), "Skin scattering methods against the texture-space reference", "wide");
+    if let Some(t) = &r.height_round_trip {
+        let caption = format!(
+            "Figure 7's close-up lit from the face's normal map (left) and from its height's own normals (right): FLIP {:.3}",
+            t.flip_height_vs_map
+        );
+        figure(html, &p(&t.image), &caption, "wide");
+    }
     let rows: Vec<Vec<String>> = r
         .skin
         .methods
