@@ -6,7 +6,7 @@
 use rayon::prelude::*;
 
 use crate::HOLE_WEIGHT;
-use crate::poisson::Neumann;
+use crate::neumann::Neumann;
 use crate::slopes::{Slopes, neighbours};
 
 /// Elements per block of a deterministic dot product.

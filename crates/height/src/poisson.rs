@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex32;
 
-use crate::dct::Dct;
+use crate::neumann::Neumann;
 use crate::slopes::Slopes;
 use crate::transform::{fft_rows, transpose};
 
@@ -27,111 +27,6 @@ pub fn solve_neumann(slopes: &Slopes) -> Vec<f32> {
     let mut scratch = vec![0f32; w * h];
     solver.solve_in_place(&mut b, &mut scratch);
     b
-}
-
-/// Columns gathered by one task of the column pass (16 floats: one cache line of a row).
-const STRIP: usize = 16;
-/// Rows gathered by one task of the last row pass (one cache line of a transposed column).
-const BAND: usize = 16;
-/// Side of the tiles of [`transpose_strip`] (equal to [`STRIP`] and [`BAND`]).
-const TILE: usize = 16;
-/// Rows per task of the first row pass.
-const ROWS_PER_TASK: usize = 16;
-
-/// `L^-1` for the Neumann Laplacian of a `w x h` grid, planned once (the masked solve applies it
-/// every iteration). Three passes over memory: DCT-II along rows in place; columns gathered a
-/// strip at a time into a transposed scratch, each column's DCT-II, division by the eigenvalues
-/// and DCT-III done while it sits in cache; rows gathered back a band at a time, each row's
-/// DCT-III. The transposes ride inside the passes that need them.
-pub struct Neumann {
-    w: usize,
-    h: usize,
-    rows: Dct,
-    columns: Dct,
-    mu_x: Vec<f64>,
-    mu_y: Vec<f64>,
-}
-
-impl Neumann {
-    pub fn new(w: usize, h: usize) -> Neumann {
-        let (mu_x, mu_y) = (eigenvalues(w, PI), eigenvalues(h, PI));
-        Neumann { w, h, rows: Dct::new(w), columns: Dct::new(h), mu_x, mu_y }
-    }
-
-    /// `b <- L^-1 b` with the constant mode set to zero; `scratch` (of the grid's size) is
-    /// overwritten.
-    pub fn solve_in_place(&self, b: &mut [f32], scratch: &mut [f32]) {
-        let (w, h) = (self.w, self.h);
-        assert_eq!(b.len(), w * h, "Neumann solve: right-hand side size");
-        assert_eq!(scratch.len(), w * h, "Neumann solve: scratch size");
-        let rows = &self.rows;
-        b.par_chunks_mut(w * ROWS_PER_TASK)
-            .for_each_init(|| rows.scratch(), |s, chunk| chunk.chunks_exact_mut(w).for_each(|row| rows.dct2(row, s)));
-        self.columns_pass(b, scratch);
-        self.rows_back(scratch, b);
-    }
-
-    /// Transposes `b` into `t` a strip of columns at a time, solving each column's modes.
-    fn columns_pass(&self, b: &[f32], t: &mut [f32]) {
-        let (w, h, columns) = (self.w, self.h, &self.columns);
-        // DCT-III after DCT-II scales by n/2 per axis.
-        let norm = (4.0 / (w as f64 * h as f64)) as f32;
-        let mu_y: Vec<f32> = self.mu_y.iter().map(|&m| m as f32).collect();
-        t.par_chunks_mut(h * STRIP).enumerate().for_each_init(
-            || columns.scratch(),
-            |s, (strip, out)| {
-                let x0 = strip * STRIP;
-                transpose_strip(&b[x0..], w, out, h);
-                for (c, column) in out.chunks_exact_mut(h).enumerate() {
-                    let kx = x0 + c;
-                    columns.dct2(column, s);
-                    let mu_x = self.mu_x[kx] as f32;
-                    for (v, &mu_y) in column.iter_mut().zip(&mu_y) {
-                        *v *= norm / (mu_x + mu_y);
-                    }
-                    if kx == 0 {
-                        // The constant mode (mu = 0: its quotient above is not finite) is zero.
-                        column[0] = 0.0;
-                    }
-                    columns.dct3(column, s);
-                }
-            },
-        );
-    }
-
-    /// Transposes `t` back into `b` a band of rows at a time, each row's DCT-III.
-    fn rows_back(&self, t: &[f32], b: &mut [f32]) {
-        let (w, h, rows) = (self.w, self.h, &self.rows);
-        b.par_chunks_mut(w * BAND).enumerate().for_each_init(
-            || rows.scratch(),
-            |s, (band, out)| {
-                transpose_strip(&t[band * BAND..], h, out, w);
-                out.chunks_exact_mut(w).for_each(|row| rows.dct3(row, s));
-            },
-        );
-    }
-}
-
-/// Writes the transpose of a strip of `src` into `dst`: `dst` holds `k` rows of `n` (`k` at most
-/// [`TILE`]), and row `j` of it receives column `j` of the first `n` rows of `src` (rows `stride`
-/// apart). Square tiles go through a small buffer so that each destination cache line is written
-/// once: writing the `k` destination rows a value at a time would touch `k` lines a power-of-two
-/// stride apart, which share a cache set and evict each other.
-fn transpose_strip(src: &[f32], stride: usize, dst: &mut [f32], n: usize) {
-    let k = dst.len() / n;
-    let mut tile = [0f32; TILE * TILE];
-    for i0 in (0..n).step_by(TILE) {
-        let m = TILE.min(n - i0);
-        for i in 0..m {
-            let row = &src[(i0 + i) * stride..][..k];
-            for (j, &v) in row.iter().enumerate() {
-                tile[j * TILE + i] = v;
-            }
-        }
-        for j in 0..k {
-            dst[j * n + i0..][..m].copy_from_slice(&tile[j * TILE..][..m]);
-        }
-    }
 }
 
 fn solve_periodic_rhs(b: Vec<f32>, w: usize, h: usize) -> Vec<f32> {
@@ -154,7 +49,7 @@ fn solve_periodic_rhs(b: Vec<f32>, w: usize, h: usize) -> Vec<f32> {
 
 /// `2 - 2 cos(step k / n)` for `k` in `0..n`: the 1-D Laplacian's eigenvalues in the DCT-II
 /// (`step = pi`) or DFT (`step = 2 pi`) basis.
-fn eigenvalues(n: usize, step: f64) -> Vec<f64> {
+pub(crate) fn eigenvalues(n: usize, step: f64) -> Vec<f64> {
     (0..n).map(|k| 2.0 - 2.0 * (step * k as f64 / n as f64).cos()).collect()
 }
 

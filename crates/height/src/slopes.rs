@@ -30,6 +30,20 @@ pub struct TexelCounts {
     pub clamped: usize,
 }
 
+impl std::ops::Add for TexelCounts {
+    type Output = TexelCounts;
+
+    fn add(self, o: TexelCounts) -> TexelCounts {
+        TexelCounts {
+            valid: self.valid + o.valid,
+            zero: self.zero + o.zero,
+            non_finite: self.non_finite + o.non_finite,
+            back_facing: self.back_facing + o.back_facing,
+            clamped: self.clamped + o.clamped,
+        }
+    }
+}
+
 impl TexelCounts {
     /// Texels not integrated as data.
     pub fn invalid(&self) -> usize {
@@ -73,6 +87,44 @@ fn classify(n: Vec3) -> Kind {
     }
 }
 
+/// `(dh/dcol, dh/drow)` of a usable normal, clamped; 0 for an unusable one (which may be NaN or
+/// have `nz <= 0`: it is divided by 1 and the result dropped, without a branch).
+#[inline]
+fn slope_or_flat(n: Vec3, ok: bool) -> (f32, f32) {
+    let inv = 1.0 / if ok { n.z } else { 1.0 };
+    let (x, y) = ((-n.x * inv).clamp(-MAX_SLOPE, MAX_SLOPE), (n.y * inv).clamp(-MAX_SLOPE, MAX_SLOPE));
+    if ok { (x, y) } else { (0.0, 0.0) }
+}
+
+/// Classifies one row of `normals` into `ok` and writes its slopes (clamped; 0 at invalid
+/// texels) into `px` and `py`; returns the row's counts.
+pub(crate) fn classify_row(normals: &[Vec3], px: &mut [f32], py: &mut [f32], ok: &mut [bool]) -> TexelCounts {
+    let mut c = TexelCounts::default();
+    for (((n, px), py), ok) in normals.iter().zip(px.iter_mut()).zip(py.iter_mut()).zip(ok.iter_mut()) {
+        *ok = match classify(*n) {
+            Kind::Valid { clamped } => {
+                c.valid += 1;
+                c.clamped += usize::from(clamped);
+                true
+            }
+            Kind::Zero => {
+                c.zero += 1;
+                false
+            }
+            Kind::NonFinite => {
+                c.non_finite += 1;
+                false
+            }
+            Kind::BackFacing => {
+                c.back_facing += 1;
+                false
+            }
+        };
+        (*px, *py) = slope_or_flat(*n, *ok);
+    }
+    c
+}
+
 impl<'a> Slopes<'a> {
     /// Classifies every texel of `normals` (in parallel; counts are integers, so the same at any
     /// thread count).
@@ -98,13 +150,7 @@ impl<'a> Slopes<'a> {
                 }
                 c
             })
-            .reduce(TexelCounts::default, |a, b| TexelCounts {
-                valid: a.valid + b.valid,
-                zero: a.zero + b.zero,
-                non_finite: a.non_finite + b.non_finite,
-                back_facing: a.back_facing + b.back_facing,
-                clamped: a.clamped + b.clamped,
-            });
+            .reduce(TexelCounts::default, |a, b| a + b);
         let mut slopes = Slopes { normals, valid, counts, mean: (0.0, 0.0) };
         // Only a masked solve's hole fill asks for the mean slope.
         if counts.invalid() > 0 {
@@ -145,11 +191,7 @@ impl<'a> Slopes<'a> {
         row.px.resize(w, 0.0);
         row.py.resize(w, 0.0);
         for (((n, &ok), px), py) in normals.iter().zip(ok).zip(&mut row.px).zip(&mut row.py) {
-            // An invalid normal may be NaN or have nz <= 0: divide by 1 there and zero the result.
-            let inv = 1.0 / if ok { n.z } else { 1.0 };
-            let keep = if ok { 1.0 } else { 0.0 };
-            *px = (-n.x * inv).clamp(-MAX_SLOPE, MAX_SLOPE) * keep;
-            *py = (n.y * inv).clamp(-MAX_SLOPE, MAX_SLOPE) * keep;
+            (*px, *py) = slope_or_flat(*n, ok);
         }
     }
 
@@ -246,9 +288,9 @@ impl<'a> Slopes<'a> {
     }
 
     /// The RMS residual `(h_b - h_a) - step` over the edges whose two texels are valid, and the
-    /// same against the RMS step (0 for an integrable map); `h` in texel units. Summed per block
-    /// of rows in f64, then in block order.
-    pub fn residual(&self, h: &[f32], wraps: bool) -> (f64, f64) {
+    /// same against the RMS step (0 for an integrable map); `h` in units of `texel` texel widths.
+    /// Summed per block of rows in f64, then in block order.
+    pub fn residual(&self, h: &[f32], texel: f32, wraps: bool) -> (f64, f64) {
         let (w, hh) = (self.width(), self.height());
         let blocks: Vec<Residual> = (0..hh.div_ceil(ROWS))
             .into_par_iter()
@@ -261,8 +303,8 @@ impl<'a> Slopes<'a> {
                     let row = &h[y * w..][..w];
                     self.horizontal_steps(&cur, wraps, false, &mut steps);
                     rises.clear();
-                    rises.extend(row.windows(2).map(|p| p[1] - p[0]));
-                    rises.push(row[0] - row[w - 1]);
+                    rises.extend(row.windows(2).map(|p| (p[1] - p[0]) / texel));
+                    rises.push((row[0] - row[w - 1]) / texel);
                     let edges = if wraps && w > 1 { w } else { w - 1 };
                     let right = |x: usize| if x + 1 < w { x + 1 } else { 0 };
                     sum.add_row(&rises[..edges], &steps[..edges], |x| cur.ok[x] && cur.ok[right(x)]);
@@ -270,7 +312,7 @@ impl<'a> Slopes<'a> {
                         self.load(d, &mut next);
                         self.vertical_steps(&cur, &next, false, &mut steps);
                         rises.clear();
-                        rises.extend(h[d * w..][..w].iter().zip(row).map(|(b, a)| b - a));
+                        rises.extend(h[d * w..][..w].iter().zip(row).map(|(b, a)| (b - a) / texel));
                         sum.add_row(&rises, &steps, |x| cur.ok[x] && next.ok[x]);
                         std::mem::swap(&mut cur, &mut next);
                     }
