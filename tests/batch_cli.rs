@@ -283,3 +283,23 @@ fn a_session_named_like_the_batchs_own_folders_is_refused() {
         assert!(!out.exists());
     }
 }
+
+/// Issue 42, D3: two session folders whose names are not UTF-8 (Latin-1 `Patient-Müller` and
+/// `Patient-Möller`) used to become one lossy output folder, both "ok", one session's maps gone.
+/// Such a name is refused before any work, naming the folder.
+#[cfg(unix)]
+#[test]
+fn d3_session_names_that_are_not_utf8_are_refused_before_any_work() {
+    use std::os::unix::ffi::OsStrExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    let dir = tmp.path().join("sessions");
+    for (i, name) in [&b"Patient-M\xfcller"[..], &b"Patient-M\xf6ller"[..]].into_iter().enumerate() {
+        sessions::copy_dir(&molds.join(["cheek", "nose"][i]), &dir.join(std::ffi::OsStr::from_bytes(name)));
+    }
+    let out = tmp.path().join("out");
+    let o = skinkit(&["batch", s(&dir), "--out", s(&out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("is not valid UTF-8") && stderr(&o).contains("Patient-M"), "{}", stderr(&o));
+    assert!(!out.exists(), "the batch wrote before refusing");
+}

@@ -176,3 +176,26 @@ fn scanline_regions_stitch_into_a_unit_map_unlike_the_default() {
     assert!(map.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-3));
     assert!(std::fs::read(&up).unwrap() != std::fs::read(&default).unwrap(), "--scanline changed nothing");
 }
+
+/// Issue 42, D1: a region's name becomes the file name of its exemplar in the face folder, so a
+/// name with a path in it (`../../../cheek`, `../normal`) used to overwrite the layout's own
+/// exemplar or the face's normal map. It is refused when the layout loads, naming the field, and
+/// nothing is written.
+#[test]
+fn d1_region_names_that_are_paths_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = molds().join("cheek/truth.png");
+    let before = std::fs::read(&exemplar).unwrap();
+    for name in ["../../../cheek", "../normal", "sub/dir", ".hidden"] {
+        let layout = small_layout(tmp.path(), "");
+        let text =
+            std::fs::read_to_string(&layout).unwrap().replacen("name = \"nose\"", &format!("name = \"{name}\""), 1);
+        std::fs::write(&layout, text).unwrap();
+        let out = tmp.path().join("face");
+        let o = skinkit(&["face", "--layout", s(&layout), "--out", s(&out)]);
+        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
+        assert!(stderr(&o).contains("name"), "{name}: {}", stderr(&o));
+        assert!(!out.exists(), "{name}: the face wrote before refusing");
+    }
+    assert_eq!(std::fs::read(&exemplar).unwrap(), before, "an input changed");
+}

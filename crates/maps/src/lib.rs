@@ -23,6 +23,7 @@ mod exr_write;
 pub mod grid;
 pub mod io;
 pub mod limits;
+pub mod names;
 pub mod normal;
 pub mod output_set;
 pub mod photo;

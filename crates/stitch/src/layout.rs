@@ -336,6 +336,8 @@ impl Ctx<'_> {
         if raw.name.trim().is_empty() {
             return Err(self.err(&field("name"), "must not be empty".into()));
         }
+        // The name becomes the file name of the region's exemplar in a face folder.
+        skinkit_maps::names::check(&raw.name).map_err(|e| self.err(&field("name"), e.to_string()))?;
         self.positive(&field("exemplar_mm_per_texel"), raw.exemplar_mm_per_texel)?;
         let exemplar = match (raw.exemplar, raw.session) {
             (Some(p), None) => ExemplarSource::NormalMap(self.base.join(p)),

@@ -90,6 +90,7 @@ pub struct FaceOutcome {
 pub fn units(root: &Path, out: &Path) -> Result<Vec<Unit>> {
     if root.join(LAYOUT).is_file() {
         let name = root.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        // The subject's own folder is the root: its name is only a label, not an output path.
         return Ok(vec![Unit::Subject(subject(root, name, out, "")?)]);
     }
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(root)
@@ -100,7 +101,7 @@ pub fn units(root: &Path, out: &Path) -> Result<Vec<Unit>> {
     dirs.sort();
     dirs.into_iter()
         .map(|dir| {
-            let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let name = output_name(&dir)?;
             let target = out.join(&name);
             if dir.join(LAYOUT).is_file() {
                 Ok(Unit::Subject(subject(&dir, name.clone(), &target, &format!("{name}/"))?))
@@ -109,6 +110,16 @@ pub fn units(root: &Path, out: &Path) -> Result<Vec<Unit>> {
             }
         })
         .collect()
+}
+
+/// The name of the output folder of the input folder `dir`: its own name, through the output gate
+/// (a name that is not UTF-8, or not a plain file name, is refused before any work: written
+/// lossily, two sessions could share one output folder).
+fn output_name(dir: &Path) -> Result<String> {
+    let name = dir.file_name().unwrap_or(dir.as_os_str());
+    let name = skinkit_maps::names::file_component(name)
+        .with_context(|| format!("{}: the folder's name cannot name an output folder", dir.display()))?;
+    Ok(name.to_owned())
 }
 
 /// The subject of `dir/layout.toml`: the distinct sessions its regions name, in region order,
@@ -122,7 +133,8 @@ fn subject(dir: &Path, name: String, out: &Path, prefix: &str) -> Result<Subject
         if jobs.iter().any(|j| same_folder(&j.dir, session)) {
             continue;
         }
-        let folder = session.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let folder =
+            output_name(session).with_context(|| format!("{}: region `{}`", layout_path.display(), region.name))?;
         if let Some(other) = jobs.iter().find(|j| j.out.ends_with(&folder)) {
             bail!(
                 "{}: region `{}`: sessions {} and {} would share the output folder {}",
