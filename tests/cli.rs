@@ -287,11 +287,22 @@ fn a_rerun_skips_up_to_date_sessions_and_force_redoes_them() {
     let first = made("a");
     assert_eq!(batch(&[]), (2, vec![true, true]));
     assert_eq!(made("a"), first, "a skipped session's outputs are left as they were");
-    // A photo newer than the outputs: that session alone runs again.
+    // A photo touched but not changed: times decide nothing, both are still up to date.
     let photo = std::fs::File::options().write(true).open(sessions.join("b/03.png")).unwrap();
     let report = std::fs::metadata(out.join("b/report.json")).unwrap().modified().unwrap();
     photo.set_modified(report + std::time::Duration::from_millis(1)).unwrap();
+    assert_eq!(batch(&[]), (2, vec![true, true]));
+    // Issue 42, D8: a photo replaced by another with an older time stamp (`cp -p`, `rsync -t`):
+    // that session alone runs again.
+    let old = std::fs::metadata(sessions.join("b/03.png")).unwrap().modified().unwrap();
+    std::fs::copy(sessions.join("b/05.png"), sessions.join("b/03.png")).unwrap();
+    let photo = std::fs::File::options().write(true).open(sessions.join("b/03.png")).unwrap();
+    photo.set_modified(old - std::time::Duration::from_secs(3600)).unwrap();
     assert_eq!(batch(&[]), (1, vec![true, false]));
+    // Issue 42, D4: any option that changes the outputs runs both again (not only the solver).
+    assert_eq!(batch(&["--green", "down"]), (0, vec![false, false]));
+    assert_eq!(batch(&["--green", "down"]), (2, vec![true, true]));
+    assert_eq!(batch(&["--green", "down", "--max-condition", "40"]), (0, vec![false, false]));
     // Other options: run again.
     assert_eq!(batch(&["--solver", "ls"]), (0, vec![false, false]));
     assert_eq!(batch(&["--solver", "ls"]), (2, vec![true, true]));

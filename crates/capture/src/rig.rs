@@ -273,6 +273,12 @@ impl Rig {
         self.ambient.as_deref()
     }
 
+    /// Every file the rig names besides itself (its ambient frame, its lights' flat frames): what
+    /// a capture with it reads.
+    pub fn input_files(&self) -> Vec<&Path> {
+        self.ambient().into_iter().chain(self.lights.iter().filter_map(Light::flat)).collect()
+    }
+
     /// Size of a photo pixel on the mold in millimetres (finite, `> 0`), when known.
     pub fn mm_per_pixel(&self) -> Option<f32> {
         self.mm_per_pixel

@@ -63,7 +63,7 @@ struct SessionRun {
 
 /// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
 /// session that could never fit fails at once with its estimate and the limit. Without `force`,
-/// a session whose outputs are up to date ([`resume::up_to_date`]) is skipped.
+/// a session whose outputs were made from what it holds now ([`resume::up_to_date`]) is skipped.
 fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let (dir, out_dir, options) = (&job.dir, &job.out, settings.options);
     let files = Session::from_dir(dir)?;
@@ -71,9 +71,10 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
     let ambient = files.ambient.clone().or(rig_ambient);
     let previews = settings.review_dir.join(&job.name);
-    if let Some(done) =
-        resume::up_to_date(dir, &files, ambient.as_deref(), out_dir, options).filter(|_| !settings.force)
-    {
+    // Hashed before the capture reads them: a file changed meanwhile is captured again next time.
+    let previous = resume::recorded(out_dir);
+    let made = resume::made_from(&resume::inputs(dir, &files, ambient.as_deref()), options, previous.as_ref())?;
+    if let Some(done) = resume::up_to_date(out_dir, previous.as_ref(), &made).filter(|_| !settings.force) {
         let swept = skinkit_maps::output_set::sweep_folder(out_dir);
         let signs = review::signs_of_skipped(out_dir, &previews, &done)?;
         let (invalid_pixels, pixels, seconds) = (done.invalid_pixels, done.pixels, done.seconds);
@@ -84,6 +85,7 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let _admitted = settings.gate.acquire(estimate);
     // Staged from the start, so an interrupt during the solve removes this session's folder too.
     let set = pipeline::capture_set(out_dir)?;
+    pipeline::write_json_in(&set, resume::MADE_FROM, &out_dir.join(resume::MADE_FROM), &made)?;
     let mut captured = session::capture(&files, options, &|_| {})?;
     let signs = review::signs(&captured);
     review::write_previews(&previews, &captured.solution, &signs)?;
