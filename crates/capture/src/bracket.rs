@@ -22,7 +22,52 @@
 
 use skinkit_maps::{Photo, Samples};
 
-use crate::{Error, Result};
+use crate::{Error, Result, Rig};
+
+/// Readings under this fraction of full scale are taken as in the sensor's noise floor when a
+/// session's rig brackets a light (see the module docs; [`merge`] takes it as a parameter).
+pub const FLOOR: f32 = 0.02;
+
+/// A session's photos, in rig order with each bracketed light's brackets consecutive, as one
+/// reading per light: bracketed lights merged ([`merge`] at [`FLOOR`]), the others unchanged;
+/// with the readings' names (a merged light's is its first bracket's, with the count).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the rig brackets a light and the session has an ambient frame
+/// (its exposure is not known), or as [`merge`] naming the light.
+pub fn merge_rig(
+    rig: &Rig,
+    photos: Vec<Photo>,
+    names: &[String],
+    ambient: bool,
+    saturation: f32,
+) -> Result<(Vec<Photo>, Vec<String>)> {
+    if rig.lights().iter().all(|l| l.exposures().is_empty()) {
+        return Ok((photos, names.to_vec()));
+    }
+    if ambient {
+        return Err(Error::InvalidInput(
+            "exposure brackets with an ambient frame are not supported yet (the frame's exposure is unknown)".into(),
+        ));
+    }
+    let mut photos = photos.into_iter();
+    let (mut merged, mut readings) = (Vec::new(), Vec::new());
+    let mut at = 0;
+    for (i, light) in rig.lights().iter().enumerate() {
+        let n = light.photo_count();
+        let group: Vec<Photo> = photos.by_ref().take(n).collect();
+        let name = &names[at];
+        at += n;
+        if light.exposures().is_empty() {
+            merged.extend(group);
+            readings.push(name.clone());
+        } else {
+            merged.push(merge(&group, light.exposures(), saturation, FLOOR, &format!("light {}", i + 1))?);
+            readings.push(format!("{name} (+{} brackets)", n - 1));
+        }
+    }
+    Ok((merged, readings))
+}
 
 /// Merges the brackets of one light: `photos[j]` taken with exposure time `times[j]` (any unit,
 /// only ratios matter), readings at or above `saturation` of full scale clipped, under `floor`
@@ -68,13 +113,24 @@ fn usable(photos: &[Photo], times: &[f32], p: usize, saturation: f32, floor: f32
     }
 }
 
+/// Checks a light's exposure times: each finite and positive.
+///
+/// # Errors
+/// The message names the time by its place (`exposure time 2 is 0 (must be positive)`).
+pub fn check_times(times: &[f32]) -> std::result::Result<(), String> {
+    match times.iter().enumerate().find(|(_, t)| !(t.is_finite() && **t > 0.0)) {
+        Some((j, t)) => Err(format!("exposure time {} is {t} (must be positive)", j + 1)),
+        None => Ok(()),
+    }
+}
+
 fn check(photos: &[Photo], times: &[f32], light: &str) -> Result<()> {
     let bad = |why: String| Err(Error::InvalidInput(format!("{light}: {why}")));
     if photos.is_empty() || photos.len() != times.len() {
         return bad(format!("{} bracket photos for {} exposure times", photos.len(), times.len()));
     }
-    if let Some((j, t)) = times.iter().enumerate().find(|(_, t)| !(t.is_finite() && **t > 0.0)) {
-        return bad(format!("exposure time {} is {t} (must be positive)", j + 1));
+    if let Err(why) = check_times(times) {
+        return bad(why);
     }
     let shape = |p: &Photo| (p.width(), p.height(), p.channels());
     if let Some((j, p)) = photos.iter().enumerate().find(|(_, p)| shape(p) != shape(&photos[0])) {

@@ -115,7 +115,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
 
 /// The rig's lights as near lights, after checking them against the stack.
 fn near_lights(stack: &PhotoStack, rig: &Rig) -> Result<Vec<NearLight>> {
-    rig.expect_photos(stack.len())?;
+    rig.expect_readings(stack.len())?;
     rig.lights()
         .iter()
         .enumerate()

@@ -20,6 +20,7 @@
 //! intensity = 1.0                      # optional (default 1.0), or [r, g, b], linear
 //! position = [150.0, 0.0, 150.0]       # optional, mm, a near point light
 //! flat = "flat-01.png"                 # optional flat frame (white target, this light), relative
+//! exposures = [0.5, 1.0, 2.0]          # optional exposure brackets: this light's photos, in order
 //! ```
 //! Unknown keys are errors. Errors name the file and the light, numbered from 1 in file order
 //! (`rig.toml: light 5: direction has zero length`); TOML syntax errors keep toml's line and
@@ -69,6 +70,8 @@ pub struct Light {
     position: Option<Vec3>,
     /// A flat frame of a white target under this light ([`crate::flat`]), when the rig names one.
     flat: Option<PathBuf>,
+    /// Exposure times of this light's brackets ([`crate::bracket`]); empty: one photo.
+    exposures: Vec<f32>,
 }
 
 /// A light rig: the lights in photo order, plus optional metadata. Valid by construction (see
@@ -132,7 +135,7 @@ impl Light {
                 return Err(format!("position {} is not above the mold plane (z > 0)", show(p)));
             }
         }
-        Ok(Light { direction, intensity, position, flat: None })
+        Ok(Light { direction, intensity, position, flat: None, exposures: Vec::new() })
     }
 
     /// Unit vector from the surface toward the light.
@@ -160,6 +163,26 @@ impl Light {
     /// The flat frame of this light, when the rig names one.
     pub fn flat(&self) -> Option<&Path> {
         self.flat.as_deref()
+    }
+
+    /// The light photographed in exposure brackets of these times (empty: one photo).
+    ///
+    /// # Errors
+    /// When a time is not finite and positive ([`crate::bracket::check_times`]).
+    pub fn with_exposures(mut self, times: Vec<f32>) -> Result<Light, String> {
+        crate::bracket::check_times(&times)?;
+        self.exposures = times;
+        Ok(self)
+    }
+
+    /// Exposure times of this light's brackets; empty when it has one photo.
+    pub fn exposures(&self) -> &[f32] {
+        &self.exposures
+    }
+
+    /// Photos this light takes: one per bracket, at least one.
+    pub fn photo_count(&self) -> usize {
+        self.exposures.len().max(1)
     }
 
     /// Mean of the RGB intensity, for grey solves.
@@ -278,11 +301,29 @@ impl Rig {
         self.mm_per_pixel
     }
 
-    /// Checks that `photos` photos were given for this rig: one per light.
+    /// Checks that `photos` photos were given for this rig: one per light, or one per bracket of
+    /// a light with exposure brackets.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] when the counts differ.
     pub fn expect_photos(&self, photos: usize) -> Result<()> {
+        let want: usize = self.lights.iter().map(Light::photo_count).sum();
+        if photos != want {
+            let brackets =
+                if want == self.lights.len() { String::new() } else { format!(" ({want} photos with their brackets)") };
+            return Err(Error::InvalidInput(format!(
+                "rig has {} lights{brackets} but {photos} photos were given",
+                self.lights.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Checks that a stack of `photos` solved readings has one per light (brackets merged).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the counts differ.
+    pub fn expect_readings(&self, photos: usize) -> Result<()> {
         if photos != self.lights.len() {
             return Err(Error::InvalidInput(format!(
                 "rig has {} lights but {photos} photos were given",
@@ -477,6 +518,7 @@ struct LightFile {
     intensity: Option<toml::Value>,
     position: Option<[f64; 3]>,
     flat: Option<String>,
+    exposures: Option<Vec<f64>>,
 }
 
 impl RigFile {
@@ -501,8 +543,9 @@ impl LightFile {
             None => Vec3::ONE,
             Some(v) => intensity_value(v)?,
         };
-        Ok(Light::new(vec3(self.direction), intensity, self.position.map(vec3))?
-            .with_flat(self.flat.map(PathBuf::from)))
+        Light::new(vec3(self.direction), intensity, self.position.map(vec3))?
+            .with_flat(self.flat.map(PathBuf::from))
+            .with_exposures(self.exposures.unwrap_or_default().into_iter().map(|t| t as f32).collect())
     }
 }
 
@@ -553,6 +596,8 @@ struct LightOut {
     position: Option<[f64; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     flat: Option<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    exposures: Vec<f64>,
 }
 
 #[derive(Serialize)]
@@ -574,7 +619,8 @@ impl LightOut {
             let rel = folder.and_then(|d| f.strip_prefix(d).ok()).unwrap_or(f);
             rel.to_string_lossy().into_owned()
         });
-        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out), flat }
+        let exposures = l.exposures.iter().map(|&t| f32_to_f64(t)).collect();
+        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out), flat, exposures }
     }
 }
 

@@ -24,7 +24,7 @@ use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 use skinkit_height::{Height, HeightOptions, HeightReport, Scale};
 
 use crate::solve::{self, PhotoStack, SolveConfig};
-use crate::{Error, Result, Rig, detrend, flat, near};
+use crate::{Error, Result, Rig, bracket, detrend, flat, near};
 
 /// Photo file extensions a session folder's photos may have.
 /// Camera RAW files ([`skinkit_maps::raw::RAW_EXTENSIONS`]) are photos too.
@@ -294,8 +294,11 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     if session.photos.iter().any(|p| skinkit_maps::raw::is_raw(p)) {
         corrections.insert(0, raw_reading(options.raw));
     }
-    let (photos, ambient_frame, scale) = flatten(&rig, inputs.photos, inputs.ambient, &names, options)?;
-    let mut stack = PhotoStack::new(photos, names.clone())?;
+    let saturation = options.solve.saturation;
+    let (merged, readings) =
+        bracket::merge_rig(&rig, inputs.photos, &names, inputs.ambient.is_some(), saturation).map_err(in_rig)?;
+    let (photos, ambient_frame, scale) = flatten(&rig, merged, inputs.ambient, &readings, options)?;
+    let mut stack = PhotoStack::new(photos, readings)?;
     if let (Some(frame), Some((path, _))) = (ambient_frame, &ambient) {
         stack = stack.with_ambient(frame, &path.display().to_string())?;
     }
@@ -510,7 +513,11 @@ fn decode(session: &Session, ambient: Option<(&Path, &str)>, options: &CaptureOp
 /// What capture's flat-field step will do to the photos, for the report and `rig check`.
 pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {
     let flats = rig.lights().iter().filter(|l| l.flat().is_some()).count();
+    let bracketed = rig.lights().iter().filter(|l| !l.exposures().is_empty()).count();
     let mut out = Vec::new();
+    if bracketed > 0 {
+        out.push(format!("exposure brackets merged ({bracketed} of {} lights)", rig.light_count()));
+    }
     if ambient {
         out.push("ambient subtraction".to_owned());
     }

@@ -2,12 +2,16 @@
 //! and buries the furrows in sensor noise, against three brackets of it merged
 //! ([`skinkit_capture::bracket::merge`]): the merge has a lower mean error than any one exposure.
 
+use std::path::Path;
+
 use glam::Vec3;
 use skinkit_capture::bracket;
+use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::{self, PhotoStack, SolveConfig};
 use skinkit_capture::{Light, Rig};
 use skinkit_heightfield::{Heightfield, Quantise, RenderConfig, RenderLight, SkinParams};
-use skinkit_maps::Photo;
+use skinkit_maps::io::{self, PngLayout};
+use skinkit_maps::{NormalEncoding, Photo, Samples};
 
 const SIDE: usize = 128;
 const K: usize = 8;
@@ -92,4 +96,54 @@ fn three_brackets_beat_every_single_exposure() {
         assert!(with.0 < *s, "brackets {with:?} against the single exposure t = {t}: {s}");
         assert!(with.1 <= *invalid, "brackets leave {} pixels unsolved, t = {t} {invalid}", with.1);
     }
+}
+
+/// The same brackets as a session folder whose rig gives each light `exposures`: capture merges
+/// them, says so, and beats the folder of the single exposure.
+#[test]
+fn a_rig_with_exposures_merges_the_session_brackets() {
+    let field = SkinParams::cheek(SIDE, SIDE, 21).generate().unwrap();
+    let lights = RenderLight::ring(K, 45.0, Vec3::splat(intensity_clipping(&field)));
+    let brackets: Vec<Vec<Photo>> =
+        TIMES.iter().enumerate().map(|(j, &t)| exposure(&field, &lights, t, 100 + j as u64)).collect();
+    let write = |dir: &Path, frames: &[(usize, &Photo)]| {
+        for (n, (_, photo)) in frames.iter().enumerate() {
+            let Samples::U16(v) = photo.samples() else { panic!("16-bit render") };
+            io::write_png(&dir.join(format!("{:02}.png", n + 1)), SIDE, SIDE, PngLayout::Gray16, v).unwrap();
+        }
+        io::write_normal_map(&dir.join("truth.png"), &field.normals, NormalEncoding::default(), 16).unwrap();
+    };
+    let rig = |times: Option<&[f32]>| -> String {
+        let extra = times.map_or(String::new(), |t| format!("exposures = {t:?}\n"));
+        lights
+            .iter()
+            .map(|l| {
+                let d = l.direction;
+                format!("[[light]]\ndirection = [{}, {}, {}]\n{extra}", d.x, d.y, d.z)
+            })
+            .collect()
+    };
+    let bracketed = tempfile::tempdir().unwrap();
+    let frames: Vec<(usize, &Photo)> = (0..K).flat_map(|i| brackets.iter().map(move |b| (i, &b[i]))).collect();
+    write(bracketed.path(), &frames);
+    std::fs::write(bracketed.path().join("rig.toml"), rig(Some(&TIMES))).unwrap();
+    let single = tempfile::tempdir().unwrap();
+    let frames: Vec<(usize, &Photo)> = brackets[1].iter().enumerate().collect();
+    write(single.path(), &frames);
+    std::fs::write(single.path().join("rig.toml"), rig(None)).unwrap();
+    let capture = |dir: &Path| {
+        let files = Session::from_dir(dir).unwrap();
+        session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap().report
+    };
+    let (with, without) = (capture(bracketed.path()), capture(single.path()));
+    assert_eq!(with.corrections, vec![format!("exposure brackets merged ({K} of {K} lights)")]);
+    let mean = |r: &session::CaptureReport| r.error_vs_truth_degrees.as_ref().unwrap().mean;
+    eprintln!("session (detrended): single exposure {:.3} deg, three brackets {:.3}", mean(&without), mean(&with));
+    assert!(mean(&with) < mean(&without), "brackets {} against {}", mean(&with), mean(&without));
+    // Brackets missing from the folder: the count names the brackets.
+    std::fs::remove_file(bracketed.path().join("24.png")).unwrap();
+    let e = session::capture(&Session::from_dir(bracketed.path()).unwrap(), &CaptureOptions::default(), &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("rig has 8 lights (24 photos with their brackets) but 23 photos were given"), "{e}");
 }
