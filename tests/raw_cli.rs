@@ -8,7 +8,7 @@ use std::path::Path;
 mod support;
 use support::{s, skinkit, stderr};
 
-use skinkit_testkit::dng::{Dng, dng_bytes, mosaic_of_rgb};
+use skinkit_heightfield::dng::{Dng, dng_bytes, mosaic_of_rgb};
 
 const SIDE: usize = 24;
 

@@ -6,10 +6,10 @@ use std::path::Path;
 
 use glam::Vec3;
 use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
+use skinkit_heightfield::dng::{Dng, dng_bytes, mosaic_of_rgb};
 use skinkit_heightfield::{Heightfield, Quantise, RenderConfig, RenderLight, SkinParams};
 use skinkit_maps::raw::RawMode;
 use skinkit_maps::{Channels, NormalEncoding, Samples, io};
-use skinkit_testkit::dng::{Dng, dng_bytes, mosaic_of_rgb};
 
 const SIDE: usize = 96;
 const K: usize = 8;

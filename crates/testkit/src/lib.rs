@@ -1,9 +1,8 @@
 //! What skinkit's test suites share, in one place: crafted image headers for the resource
 //! limits' tests, a counting allocator that measures a call's peak heap, and the property tests'
-//! configuration, and a minimal DNG writer for the camera RAW tests. Only `[dev-dependencies]` name this crate.
+//! configuration. Only `[dev-dependencies]` name this crate.
 
 pub mod alloc;
-pub mod dng;
 
 use std::path::Path;
 

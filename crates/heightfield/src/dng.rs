@@ -1,4 +1,4 @@
-//! A minimal DNG writer for tests (issue 39): one little-endian TIFF directory holding an
+//! A minimal DNG writer for synthetic camera files (issue 39; tests and the accuracy stage): one little-endian TIFF directory holding an
 //! uncompressed 16-bit Bayer mosaic with the tags a DNG reader needs to make it linear
 //! (DNGVersion, CFARepeatPatternDim, CFAPattern, BlackLevel, WhiteLevel, Make and Model). No
 //! preview, no colour matrices: what a lab camera's RAW holds beyond this, skinkit ignores.
