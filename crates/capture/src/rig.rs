@@ -14,6 +14,8 @@
 //! description = "one lamp, 8 positions" # optional
 //! mm_per_pixel = 0.02                  # optional, size of a photo pixel on the mold
 //! ambient = "ambient.png"              # optional all-lights-off frame, relative to this file
+//! vignetting = [-0.3, 0.05]            # optional radial gain 1 + k1 r^2 + k2 r^4 (r = 1 in the
+//!                                      # corners), divided out of lights without a flat
 //!
 //! [[light]]                            # one table per light, in photo order
 //! direction = [0.7071, 0.0, 0.7071]    # camera frame; normalised on load
@@ -85,6 +87,8 @@ pub struct Rig {
     ambient: Option<PathBuf>,
     /// Size of a photo pixel on the mold, in millimetres, when known.
     mm_per_pixel: Option<f32>,
+    /// Radial vignetting coefficients `k1, k2, ...` ([`crate::flat::FlatField::vignetting`]).
+    vignetting: Vec<f32>,
     /// Of the lights' directions, computed when the rig is made.
     conditioning: Conditioning,
 }
@@ -238,7 +242,15 @@ impl Rig {
                 conditioning.condition_number
             )));
         }
-        Ok(Rig { name: None, description: None, lights, ambient: None, mm_per_pixel: None, conditioning })
+        Ok(Rig {
+            name: None,
+            description: None,
+            lights,
+            ambient: None,
+            mm_per_pixel: None,
+            vignetting: Vec::new(),
+            conditioning,
+        })
     }
 
     /// The rig with a name.
@@ -289,6 +301,24 @@ impl Rig {
     /// Number of lights (at least 3), which is the number of photos a capture needs.
     pub fn light_count(&self) -> usize {
         self.lights.len()
+    }
+
+    /// The rig with a radial vignetting model (`k1, k2, ...`; empty: none), applied to the photos
+    /// of lights without a flat frame.
+    ///
+    /// # Errors
+    /// [`Error::BadFile`] naming `origin` when a coefficient is not finite.
+    pub fn with_vignetting(mut self, k: Vec<f32>, origin: &str) -> Result<Rig> {
+        if let Some(c) = k.iter().find(|c| !c.is_finite()) {
+            return Err(bad(origin, format!("vignetting coefficient {c} must be finite")));
+        }
+        self.vignetting = k;
+        Ok(self)
+    }
+
+    /// The radial vignetting coefficients (empty when the rig has no model).
+    pub fn vignetting(&self) -> &[f32] {
+        &self.vignetting
     }
 
     /// The ambient frame (all lights off) to subtract, when the rig names one.
@@ -374,6 +404,7 @@ impl Rig {
             description: self.description.clone(),
             mm_per_pixel: self.mm_per_pixel.map(f32_to_f64),
             ambient,
+            vignetting: self.vignetting.iter().map(|&k| f32_to_f64(k)).collect(),
             light: self.lights.iter().map(|l| LightOut::from_light(l, folder)).collect(),
         };
         toml::to_string(&out).expect("a rig always serialises to TOML")
@@ -507,6 +538,7 @@ struct RigFile {
     description: Option<String>,
     mm_per_pixel: Option<f64>,
     ambient: Option<String>,
+    vignetting: Option<Vec<f64>>,
     #[serde(default)]
     light: Vec<LightFile>,
 }
@@ -531,7 +563,8 @@ impl RigFile {
             .collect::<Result<Vec<_>>>()?;
         let mut rig = Rig::new(lights, origin)?
             .with_ambient(self.ambient.map(PathBuf::from))
-            .with_mm_per_pixel(self.mm_per_pixel.map(|v| v as f32), origin)?;
+            .with_mm_per_pixel(self.mm_per_pixel.map(|v| v as f32), origin)?
+            .with_vignetting(self.vignetting.unwrap_or_default().into_iter().map(|k| k as f32).collect(), origin)?;
         (rig.name, rig.description) = (self.name, self.description);
         Ok(rig)
     }
@@ -585,6 +618,8 @@ struct RigOut {
     mm_per_pixel: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     ambient: Option<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    vignetting: Vec<f64>,
     light: Vec<LightOut>,
 }
 

@@ -524,6 +524,13 @@ pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {
     if flats > 0 {
         out.push(format!("flat fields ({flats} of {} lights)", rig.light_count()));
     }
+    if !rig.vignetting().is_empty() && flats < rig.light_count() {
+        out.push(format!(
+            "vignetting model ({} of {} lights, those without flats)",
+            rig.light_count() - flats,
+            rig.light_count()
+        ));
+    }
     out
 }
 
@@ -536,8 +543,9 @@ fn raw_reading(mode: RawMode) -> String {
     format!("camera raw ({size}; black level subtracted, white level normalised, no white balance)")
 }
 
-/// With flat frames in the rig: every photo minus the ambient frame, divided by its light's
-/// flat field ([`crate::flat`]), as linear f32 readings, and no ambient frame left to subtract.
+/// With flat frames or a vignetting model in the rig: every photo minus the ambient frame,
+/// divided by its light's flat field ([`crate::flat`]) or else the rig's vignetting gain, as
+/// linear f32 readings, and no ambient frame left to subtract.
 /// Without: the photos and the ambient frame unchanged. Division by a gain under 1 can lift a
 /// reading over the solver's saturation level, so when it does, every corrected photo is
 /// divided by one common `scale` (returned; normals do not change, the albedo is multiplied back).
@@ -548,9 +556,15 @@ fn flatten(
     names: &[String],
     options: &CaptureOptions,
 ) -> Result<(Vec<Photo>, Option<Photo>, f32)> {
-    if rig.lights().iter().all(|l| l.flat().is_none()) {
+    if rig.lights().iter().all(|l| l.flat().is_none()) && rig.vignetting().is_empty() {
         return Ok((photos, ambient, 1.0));
     }
+    let vignetting = match (rig.vignetting(), photos.first()) {
+        ([], _) | (_, None) => None,
+        (k, Some(p)) => {
+            Some(flat::FlatField::vignetting(p.width(), p.height(), k).map_err(|e| context("rig".into(), e))?)
+        }
+    };
     let saturation = options.solve.saturation;
     let corrected = photos
         .par_iter()
@@ -566,7 +580,7 @@ fn flatten(
                     flat::FlatField::from_photo(&frame, ambient.as_ref(), &path.display().to_string())
                 })
                 .transpose()?;
-            flat::correct(photo, ambient.as_ref(), flat.as_ref(), saturation, name)
+            flat::correct(photo, ambient.as_ref(), flat.as_ref().or(vignetting.as_ref()), saturation, name)
         })
         .collect::<Result<Vec<_>>>()?;
     let top = corrected.iter().flat_map(|p| samples_f32(p).iter().copied()).fold(0.0f32, f32::max);
