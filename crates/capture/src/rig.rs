@@ -23,6 +23,8 @@
 //! position = [150.0, 0.0, 150.0]       # optional, mm, a near point light
 //! flat = "flat-01.png"                 # optional flat frame (white target, this light), relative
 //! exposures = [0.5, 1.0, 2.0]          # optional exposure brackets: this light's photos, in order
+//! beam_axis = [-0.5, 0.0, -1.0]        # optional, near lights: the LED's axis (where it points)
+//! beam_mu = 1.5                        # and its radiance falloff cos^mu about that axis
 //! ```
 //! Unknown keys are errors. Errors name the file and the light, numbered from 1 in file order
 //! (`rig.toml: light 5: direction has zero length`); TOML syntax errors keep toml's line and
@@ -74,6 +76,8 @@ pub struct Light {
     flat: Option<PathBuf>,
     /// Exposure times of this light's brackets ([`crate::bracket`]); empty: one photo.
     exposures: Vec<f32>,
+    /// A near LED's beam: its unit axis and the exponent `mu` of its `cos^mu` falloff.
+    beam: Option<(Vec3, f32)>,
 }
 
 /// A light rig: the lights in photo order, plus optional metadata. Valid by construction (see
@@ -139,7 +143,7 @@ impl Light {
                 return Err(format!("position {} is not above the mold plane (z > 0)", show(p)));
             }
         }
-        Ok(Light { direction, intensity, position, flat: None, exposures: Vec::new() })
+        Ok(Light { direction, intensity, position, flat: None, exposures: Vec::new(), beam: None })
     }
 
     /// Unit vector from the surface toward the light.
@@ -182,6 +186,27 @@ impl Light {
     /// Exposure times of this light's brackets; empty when it has one photo.
     pub fn exposures(&self) -> &[f32] {
         &self.exposures
+    }
+
+    /// The light as an LED whose radiance falls off as `cos^mu` of the angle from `axis` (the
+    /// direction it points; normalised here), used by the near-light solve ([`crate::near`]).
+    ///
+    /// # Errors
+    /// When the axis is not finite or has zero length, or `mu` is not finite and `>= 0`.
+    pub fn with_beam(mut self, axis: Vec3, mu: f32) -> Result<Light, String> {
+        if !(axis.is_finite() && axis.length() > 0.0) {
+            return Err(format!("beam_axis {} must be finite and non-zero", show(axis)));
+        }
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(format!("beam_mu {mu} must be finite and >= 0"));
+        }
+        self.beam = Some((axis.normalize(), mu));
+        Ok(self)
+    }
+
+    /// The LED beam's unit axis and exponent, when the rig gives them.
+    pub fn beam(&self) -> Option<(Vec3, f32)> {
+        self.beam
     }
 
     /// Photos this light takes: one per bracket, at least one.
@@ -551,6 +576,8 @@ struct LightFile {
     position: Option<[f64; 3]>,
     flat: Option<String>,
     exposures: Option<Vec<f64>>,
+    beam_axis: Option<[f64; 3]>,
+    beam_mu: Option<f64>,
 }
 
 impl RigFile {
@@ -576,9 +603,14 @@ impl LightFile {
             None => Vec3::ONE,
             Some(v) => intensity_value(v)?,
         };
-        Light::new(vec3(self.direction), intensity, self.position.map(vec3))?
+        let light = Light::new(vec3(self.direction), intensity, self.position.map(vec3))?
             .with_flat(self.flat.map(PathBuf::from))
-            .with_exposures(self.exposures.unwrap_or_default().into_iter().map(|t| t as f32).collect())
+            .with_exposures(self.exposures.unwrap_or_default().into_iter().map(|t| t as f32).collect())?;
+        match (self.beam_axis, self.beam_mu) {
+            (None, None) => Ok(light),
+            (Some(axis), Some(mu)) => light.with_beam(vec3(axis), mu as f32),
+            _ => Err("beam_axis and beam_mu go together: give both or neither".into()),
+        }
     }
 }
 
@@ -633,6 +665,10 @@ struct LightOut {
     flat: Option<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     exposures: Vec<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    beam_axis: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    beam_mu: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -655,7 +691,15 @@ impl LightOut {
             rel.to_string_lossy().into_owned()
         });
         let exposures = l.exposures.iter().map(|&t| f32_to_f64(t)).collect();
-        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out), flat, exposures }
+        LightOut {
+            direction: vec_out(l.direction),
+            intensity,
+            position: l.position.map(vec_out),
+            flat,
+            exposures,
+            beam_axis: l.beam.map(|(a, _)| vec_out(a)),
+            beam_mu: l.beam.map(|(_, mu)| f32_to_f64(mu)),
+        }
     }
 }
 

@@ -524,6 +524,10 @@ pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {
     if flats > 0 {
         out.push(format!("flat fields ({flats} of {} lights)", rig.light_count()));
     }
+    let beams = rig.lights().iter().filter(|l| l.beam().is_some()).count();
+    if beams > 0 && near::applies(rig) {
+        out.push(format!("LED beam falloff, cos^mu ({beams} of {} lights)", rig.light_count()));
+    }
     if !rig.vignetting().is_empty() && flats < rig.light_count() {
         out.push(format!(
             "vignetting model ({} of {} lights, those without flats)",
