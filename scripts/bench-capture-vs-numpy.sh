@@ -8,6 +8,8 @@
 #   bash scripts/bench-capture-vs-numpy.sh [WORK_DIR] [RUNS]    (SKINKIT_BIN=path: use that build)
 # Needs python3 with numpy and OpenCV's EXR codec; installs them with pip when missing (OpenCV
 # below 5: the 5.0 wheels have no EXR writer; Debian's python3-numpy python3-opencv also do).
+# After the runs, the cost of camera RAW decoding beside them: one 8192x8192-sensor DNG decoded
+# at half size (4096x4096, the photos' size) and full size (the example raw_decode_timing).
 # Not for CI. The machine is shared: read the load printed before and after.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -55,3 +57,5 @@ for name in ("skinkit-ls", "skinkit-robust"):
           f"({med['numpy'][2] / med[name][2]:.2f}x less CPU) and uses {med[name][1] / med['numpy'][1]:.2f} "
           f"of its peak memory")
 PY
+echo "camera RAW decoding, beside the runs above (8 such photos would add 8x the half-size time):"
+cargo run --release -q -p skinkit-capture --example raw_decode_timing 8192 3

@@ -10,6 +10,11 @@
 //! of the field (the far corner an eighth of the hotspot), solved as photographed and after
 //! dividing by each light's flat field (a white target under the same light), beside the
 //! uniform-light case; the flats' cost is their fit and the correction, timed with the solve.
+//!
+//! Photos as the lab takes them ([`photos`]): exposure brackets against a single exposure, and
+//! half-size DNG against the same photos as 16-bit TIFF.
+
+mod photos;
 
 use glam::Vec3;
 use skinkit_capture::flat::{self, FlatField};
@@ -23,7 +28,7 @@ use crate::timing::median_of;
 use crate::{Config, Result};
 
 /// Polar angle of the ring of lights from the camera axis, degrees.
-const POLAR_DEG: f32 = 45.0;
+pub(crate) const POLAR_DEG: f32 = 45.0;
 
 /// The solvers, by their `--solver` name.
 const SOLVERS: [(&str, Method); 3] =
@@ -60,7 +65,7 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
         plan.side, config.seed
     );
     let mut report = StageReport::new(Stage::Capture, setup, "mean angular error (deg)", "seconds");
-    let total = plan.lights.len() * plan.noise.len() * SOLVERS.len() + FLAT_CASES.len();
+    let total = plan.lights.len() * plan.noise.len() * SOLVERS.len() + FLAT_CASES.len() + photos::CASES.len();
     progress(0, total);
     for &noise in &plan.noise {
         for &k in &plan.lights {
@@ -74,6 +79,10 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     }
     for case in FLAT_CASES {
         report.choices.push(flat_choice(&field, case, config)?);
+        progress(report.choices.len(), total);
+    }
+    for case in photos::CASES {
+        report.choices.push(photos::choice(&field, case, config)?);
         progress(report.choices.len(), total);
     }
     Ok(report)

@@ -81,20 +81,48 @@ impl FlatField {
 
     /// The fitted polynomial at every pixel, normalised to mean 1.
     fn evaluate(coefficients: &DVector<f64>, w: usize, h: usize, name: &str) -> Result<Self> {
-        let mut gain: Vec<f64> = (0..w * h)
+        let gain: Vec<f64> = (0..w * h)
             .map(|p| {
                 let (u, v) = scaled(p % w, p / w, w, h);
                 monomials(u, v).iter().zip(coefficients.iter()).map(|(m, c)| m * c).sum::<f64>().exp()
             })
             .collect();
+        Self::normalised(gain, w, h, &format!("flat {name}"))
+    }
+
+    /// A radial vignetting model for lights without flat frames (issue 39): the gain
+    /// `1 + k1 r^2 + k2 r^4 + ...` with `r` the distance from the image centre over the half
+    /// diagonal (1 in the corners), normalised to mean 1 like a fitted flat.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when a coefficient is not finite or the gain falls under 2 % of its
+    /// mean somewhere (or is not positive).
+    pub fn vignetting(w: usize, h: usize, k: &[f32]) -> Result<Self> {
+        if let Some(c) = k.iter().find(|c| !c.is_finite()) {
+            return Err(Error::InvalidInput(format!("vignetting coefficient {c} is not finite")));
+        }
+        let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+        let half_diagonal_sq = (cx * cx + cy * cy).max(1e-12);
+        let gain: Vec<f64> = (0..w * h)
+            .map(|p| {
+                let (dx, dy) = ((p % w) as f64 - cx, (p / w) as f64 - cy);
+                let r2 = (dx * dx + dy * dy) / half_diagonal_sq;
+                1.0 + k.iter().rev().fold(0.0, |acc, &c| (acc + c as f64) * r2)
+            })
+            .collect();
+        Self::normalised(gain, w, h, "vignetting")
+    }
+
+    /// `gain` divided by its mean, refused (naming `what`) where it falls under [`MIN_GAIN`].
+    fn normalised(mut gain: Vec<f64>, w: usize, h: usize, what: &str) -> Result<Self> {
         let mean = gain.iter().sum::<f64>() / gain.len().max(1) as f64;
         if !(mean > 0.0 && mean.is_finite()) {
-            return Err(Error::InvalidInput(format!("flat {name}: the fitted flat field has mean {mean}")));
+            return Err(Error::InvalidInput(format!("{what}: the gain has mean {mean}")));
         }
         gain.iter_mut().for_each(|g| *g /= mean);
         if let Some(p) = gain.iter().position(|&g| !(g >= MIN_GAIN as f64)) {
             return Err(Error::InvalidInput(format!(
-                "flat {name}: the fitted flat field is {:.3} of its mean at pixel ({}, {}), under {MIN_GAIN}: \
+                "{what}: the gain is {:.3} of its mean at pixel ({}, {}), under {MIN_GAIN}: \
                  the light does not reach that part of the field",
                 gain[p],
                 p % w,

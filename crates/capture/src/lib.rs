@@ -8,8 +8,10 @@
 //!   point lights; [`readings`]: the rules on readings both share.
 //! * [`session`]: a whole capture session as one call (decode, solve, detrend, statistics).
 //! * [`robust`]: the robust per-pixel fit (rank-trimmed start, reweighting, inlier refit).
+//! * [`bracket`]: exposure brackets merged into one linear reading per pixel.
 //! * [`detrend`]: removal of the mold's low-frequency tilt (mean normal of a block rotated to +Z).
 
+pub mod bracket;
 pub mod detrend;
 pub mod error;
 pub mod flat;

@@ -10,7 +10,10 @@
 //! Geometry: the mold is the plane z = 0, pixel `(col, row)` sits at
 //! `x = (col - (W-1)/2, (H-1)/2 - row, 0) * mm_per_pixel` (origin at the photo's centre, y up), and
 //! light i at `P_i` gives the unit direction `L_i(x) = (P_i - x) / |P_i - x|` and the irradiance
-//! `E_i * |P_i|^2 / |P_i - x|^2` (the rig's intensity is the irradiance at the centre). Each pixel
+//! `E_i * |P_i|^2 / |P_i - x|^2` (the rig's intensity is the irradiance at the centre), times
+//! `(cos t(x) / cos t(0))^mu` for an LED whose radiance falls off as `cos^mu t` about its axis
+//! (`beam_axis`, `beam_mu` in the rig; issue 39), `t` the angle between the axis and the ray
+//! from the LED to the point. Each pixel
 //! then has its own light matrix, so instead of a cached pseudo-inverse it solves the 3x3 normal
 //! equations `(sum L_i L_i^T) g = sum r_i L_i` over its usable lights, in f64. Readings are used
 //! as [`crate::solve`] uses them for each method: [`Method::Threshold`] drops those under the
@@ -36,20 +39,46 @@ pub fn applies(rig: &Rig) -> bool {
     rig.mm_per_pixel().is_some() && rig.lights().iter().all(|l| l.position().is_some())
 }
 
-/// One light's position and per-channel intensity, in f64.
+/// One light's position and per-channel intensity, in f64, and its LED beam when it has one.
 struct NearLight {
     position: DVec3,
     intensity: DVec3,
     centre_dist_sq: f64,
+    beam: Option<Beam>,
+}
+
+/// An LED's `cos^mu` beam: its unit axis, `mu`, and the beam's cosine at the field's centre.
+struct Beam {
+    axis: DVec3,
+    mu: f64,
+    centre_cos: f64,
 }
 
 impl NearLight {
-    /// Unit direction toward the light from `x` and the irradiance factor relative to the centre.
+    /// Unit direction toward the light from `x` and the irradiance factor relative to the centre:
+    /// `|P|^2 / |P - x|^2`, times `(cos_x / cos_0)^mu` for an LED beam, `cos` the angle between
+    /// the beam's axis and the ray from the LED to the point (0 outside the beam).
     fn at(&self, x: DVec3) -> (DVec3, f64) {
         let d = self.position - x;
         let dist_sq = d.length_squared().max(1e-12);
-        (d / dist_sq.sqrt(), self.centre_dist_sq / dist_sq)
+        let dir = d / dist_sq.sqrt();
+        let beam = self.beam.as_ref().map_or(1.0, |b| ((-dir).dot(b.axis).max(0.0) / b.centre_cos).powf(b.mu));
+        (dir, beam * self.centre_dist_sq / dist_sq)
     }
+}
+
+/// Light `i`'s beam, refused when its axis points away from the field's centre.
+fn beam(i: usize, position: DVec3, beam: Option<(Vec3, f32)>) -> Result<Option<Beam>> {
+    let Some((axis, mu)) = beam else { return Ok(None) };
+    let axis = axis.as_dvec3();
+    let centre_cos = (-position.normalize()).dot(axis);
+    if !(centre_cos > 1e-3) {
+        return Err(Error::InvalidInput(format!(
+            "near-light solve: light {}: beam_axis points away from the field's centre (cosine {centre_cos:.3})",
+            i + 1
+        )));
+    }
+    Ok(Some(Beam { axis, mu: mu as f64, centre_cos }))
 }
 
 /// Solves `stack` under a rig of near point lights (see the module docs).
@@ -115,7 +144,7 @@ pub fn solve(stack: &PhotoStack, rig: &Rig, config: &SolveConfig) -> Result<Solu
 
 /// The rig's lights as near lights, after checking them against the stack.
 fn near_lights(stack: &PhotoStack, rig: &Rig) -> Result<Vec<NearLight>> {
-    rig.expect_photos(stack.len())?;
+    rig.expect_readings(stack.len())?;
     rig.lights()
         .iter()
         .enumerate()
@@ -125,7 +154,12 @@ fn near_lights(stack: &PhotoStack, rig: &Rig) -> Result<Vec<NearLight>> {
                 .position()
                 .map(|p| p.as_dvec3())
                 .ok_or_else(|| Error::InvalidInput(format!("near-light solve: light {} needs a position", i + 1)))?;
-            Ok(NearLight { position: p, intensity: l.intensity().as_dvec3(), centre_dist_sq: p.length_squared() })
+            Ok(NearLight {
+                position: p,
+                intensity: l.intensity().as_dvec3(),
+                centre_dist_sq: p.length_squared(),
+                beam: beam(i, p, l.beam())?,
+            })
         })
         .collect()
 }
@@ -295,7 +329,8 @@ mod tests {
 
     #[test]
     fn near_light_geometry_matches_the_renderer_convention() {
-        let light = NearLight { position: DVec3::new(0.0, 0.0, 100.0), intensity: DVec3::ONE, centre_dist_sq: 1e4 };
+        let light =
+            NearLight { position: DVec3::new(0.0, 0.0, 100.0), intensity: DVec3::ONE, centre_dist_sq: 1e4, beam: None };
         let (dir, falloff) = light.at(DVec3::ZERO);
         assert_eq!((dir, falloff), (DVec3::Z, 1.0));
         let (dir, falloff) = light.at(DVec3::new(100.0, 0.0, 0.0));

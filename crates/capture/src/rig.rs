@@ -14,12 +14,17 @@
 //! description = "one lamp, 8 positions" # optional
 //! mm_per_pixel = 0.02                  # optional, size of a photo pixel on the mold
 //! ambient = "ambient.png"              # optional all-lights-off frame, relative to this file
+//! vignetting = [-0.3, 0.05]            # optional radial gain 1 + k1 r^2 + k2 r^4 (r = 1 in the
+//!                                      # corners), divided out of lights without a flat
 //!
 //! [[light]]                            # one table per light, in photo order
 //! direction = [0.7071, 0.0, 0.7071]    # camera frame; normalised on load
 //! intensity = 1.0                      # optional (default 1.0), or [r, g, b], linear
 //! position = [150.0, 0.0, 150.0]       # optional, mm, a near point light
 //! flat = "flat-01.png"                 # optional flat frame (white target, this light), relative
+//! exposures = [0.5, 1.0, 2.0]          # optional exposure brackets: this light's photos, in order
+//! beam_axis = [-0.5, 0.0, -1.0]        # optional, near lights: the LED's axis (where it points)
+//! beam_mu = 1.5                        # and its radiance falloff cos^mu about that axis
 //! ```
 //! Unknown keys are errors. Errors name the file and the light, numbered from 1 in file order
 //! (`rig.toml: light 5: direction has zero length`); TOML syntax errors keep toml's line and
@@ -47,7 +52,6 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use nalgebra::{DMatrix, Matrix3};
-use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
@@ -69,6 +73,10 @@ pub struct Light {
     position: Option<Vec3>,
     /// A flat frame of a white target under this light ([`crate::flat`]), when the rig names one.
     flat: Option<PathBuf>,
+    /// Exposure times of this light's brackets ([`crate::bracket`]); empty: one photo.
+    exposures: Vec<f32>,
+    /// A near LED's beam: its unit axis and the exponent `mu` of its `cos^mu` falloff.
+    beam: Option<(Vec3, f32)>,
 }
 
 /// A light rig: the lights in photo order, plus optional metadata. Valid by construction (see
@@ -82,6 +90,8 @@ pub struct Rig {
     ambient: Option<PathBuf>,
     /// Size of a photo pixel on the mold, in millimetres, when known.
     mm_per_pixel: Option<f32>,
+    /// Radial vignetting coefficients `k1, k2, ...` ([`crate::flat::FlatField::vignetting`]).
+    vignetting: Vec<f32>,
     /// Of the lights' directions, computed when the rig is made.
     conditioning: Conditioning,
 }
@@ -132,7 +142,7 @@ impl Light {
                 return Err(format!("position {} is not above the mold plane (z > 0)", show(p)));
             }
         }
-        Ok(Light { direction, intensity, position, flat: None })
+        Ok(Light { direction, intensity, position, flat: None, exposures: Vec::new(), beam: None })
     }
 
     /// Unit vector from the surface toward the light.
@@ -160,6 +170,47 @@ impl Light {
     /// The flat frame of this light, when the rig names one.
     pub fn flat(&self) -> Option<&Path> {
         self.flat.as_deref()
+    }
+
+    /// The light photographed in exposure brackets of these times (empty: one photo).
+    ///
+    /// # Errors
+    /// When a time is not finite and positive ([`crate::bracket::check_times`]).
+    pub fn with_exposures(mut self, times: Vec<f32>) -> Result<Light, String> {
+        crate::bracket::check_times(&times)?;
+        self.exposures = times;
+        Ok(self)
+    }
+
+    /// Exposure times of this light's brackets; empty when it has one photo.
+    pub fn exposures(&self) -> &[f32] {
+        &self.exposures
+    }
+
+    /// The light as an LED whose radiance falls off as `cos^mu` of the angle from `axis` (the
+    /// direction it points; normalised here), used by the near-light solve ([`crate::near`]).
+    ///
+    /// # Errors
+    /// When the axis is not finite or has zero length, or `mu` is not finite and `>= 0`.
+    pub fn with_beam(mut self, axis: Vec3, mu: f32) -> Result<Light, String> {
+        if !(axis.is_finite() && axis.length() > 0.0) {
+            return Err(format!("beam_axis {} must be finite and non-zero", show(axis)));
+        }
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(format!("beam_mu {mu} must be finite and >= 0"));
+        }
+        self.beam = Some((axis.normalize(), mu));
+        Ok(self)
+    }
+
+    /// The LED beam's unit axis and exponent, when the rig gives them.
+    pub fn beam(&self) -> Option<(Vec3, f32)> {
+        self.beam
+    }
+
+    /// Photos this light takes: one per bracket, at least one.
+    pub fn photo_count(&self) -> usize {
+        self.exposures.len().max(1)
     }
 
     /// Mean of the RGB intensity, for grey solves.
@@ -215,7 +266,15 @@ impl Rig {
                 conditioning.condition_number
             )));
         }
-        Ok(Rig { name: None, description: None, lights, ambient: None, mm_per_pixel: None, conditioning })
+        Ok(Rig {
+            name: None,
+            description: None,
+            lights,
+            ambient: None,
+            mm_per_pixel: None,
+            vignetting: Vec::new(),
+            conditioning,
+        })
     }
 
     /// The rig with a name.
@@ -268,6 +327,24 @@ impl Rig {
         self.lights.len()
     }
 
+    /// The rig with a radial vignetting model (`k1, k2, ...`; empty: none), applied to the photos
+    /// of lights without a flat frame.
+    ///
+    /// # Errors
+    /// [`Error::BadFile`] naming `origin` when a coefficient is not finite.
+    pub fn with_vignetting(mut self, k: Vec<f32>, origin: &str) -> Result<Rig> {
+        if let Some(c) = k.iter().find(|c| !c.is_finite()) {
+            return Err(bad(origin, format!("vignetting coefficient {c} must be finite")));
+        }
+        self.vignetting = k;
+        Ok(self)
+    }
+
+    /// The radial vignetting coefficients (empty when the rig has no model).
+    pub fn vignetting(&self) -> &[f32] {
+        &self.vignetting
+    }
+
     /// The ambient frame (all lights off) to subtract, when the rig names one.
     pub fn ambient(&self) -> Option<&Path> {
         self.ambient.as_deref()
@@ -284,11 +361,29 @@ impl Rig {
         self.mm_per_pixel
     }
 
-    /// Checks that `photos` photos were given for this rig: one per light.
+    /// Checks that `photos` photos were given for this rig: one per light, or one per bracket of
+    /// a light with exposure brackets.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] when the counts differ.
     pub fn expect_photos(&self, photos: usize) -> Result<()> {
+        let want: usize = self.lights.iter().map(Light::photo_count).sum();
+        if photos != want {
+            let brackets =
+                if want == self.lights.len() { String::new() } else { format!(" ({want} photos with their brackets)") };
+            return Err(Error::InvalidInput(format!(
+                "rig has {} lights{brackets} but {photos} photos were given",
+                self.lights.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Checks that a stack of `photos` solved readings has one per light (brackets merged).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the counts differ.
+    pub fn expect_readings(&self, photos: usize) -> Result<()> {
         if photos != self.lights.len() {
             return Err(Error::InvalidInput(format!(
                 "rig has {} lights but {photos} photos were given",
@@ -339,6 +434,7 @@ impl Rig {
             description: self.description.clone(),
             mm_per_pixel: self.mm_per_pixel.map(f32_to_f64),
             ambient,
+            vignetting: self.vignetting.iter().map(|&k| f32_to_f64(k)).collect(),
             light: self.lights.iter().map(|l| LightOut::from_light(l, folder)).collect(),
         };
         toml::to_string(&out).expect("a rig always serialises to TOML")
@@ -455,134 +551,8 @@ fn bad(location: &str, reason: String) -> Error {
     Error::BadFile { location: location.to_owned(), reason }
 }
 
-/// Shortest decimal of an f32, as f64, so saved files read `0.70710677`, not `0.7071067690849304`.
-fn f32_to_f64(v: f32) -> f64 {
-    v.to_string().parse().unwrap_or(v as f64)
-}
-
-fn vec_out(v: Vec3) -> [f64; 3] {
-    [f32_to_f64(v.x), f32_to_f64(v.y), f32_to_f64(v.z)]
-}
-
-/// The file layout as read.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RigFile {
-    name: Option<String>,
-    description: Option<String>,
-    mm_per_pixel: Option<f64>,
-    ambient: Option<String>,
-    #[serde(default)]
-    light: Vec<LightFile>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LightFile {
-    direction: [f64; 3],
-    intensity: Option<toml::Value>,
-    position: Option<[f64; 3]>,
-    flat: Option<String>,
-}
-
-impl RigFile {
-    fn into_rig(self, origin: &str) -> Result<Rig> {
-        let lights = self
-            .light
-            .into_iter()
-            .enumerate()
-            .map(|(i, l)| l.into_light().map_err(|reason| bad(&format!("{origin}: light {}", i + 1), reason)))
-            .collect::<Result<Vec<_>>>()?;
-        let mut rig = Rig::new(lights, origin)?
-            .with_ambient(self.ambient.map(PathBuf::from))
-            .with_mm_per_pixel(self.mm_per_pixel.map(|v| v as f32), origin)?;
-        (rig.name, rig.description) = (self.name, self.description);
-        Ok(rig)
-    }
-}
-
-impl LightFile {
-    fn into_light(self) -> Result<Light, String> {
-        let intensity = match &self.intensity {
-            None => Vec3::ONE,
-            Some(v) => intensity_value(v)?,
-        };
-        Ok(Light::new(vec3(self.direction), intensity, self.position.map(vec3))?
-            .with_flat(self.flat.map(PathBuf::from)))
-    }
-}
-
-fn vec3(v: [f64; 3]) -> Vec3 {
-    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
-}
-
-fn number(v: &toml::Value) -> Option<f64> {
-    match v {
-        toml::Value::Float(f) => Some(*f),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
-    }
-}
-
-fn intensity_value(v: &toml::Value) -> Result<Vec3, String> {
-    let wrong = || format!("intensity must be a number or [r, g, b], got {v}");
-    if let Some(s) = number(v) {
-        return Ok(Vec3::splat(s as f32));
-    }
-    let arr = v.as_array().ok_or_else(wrong)?;
-    let rgb: Vec<f64> = arr.iter().map(number).collect::<Option<_>>().ok_or_else(wrong)?;
-    match rgb.as_slice() {
-        [r, g, b] => Ok(Vec3::new(*r as f32, *g as f32, *b as f32)),
-        _ => Err(wrong()),
-    }
-}
-
-/// The file layout as written.
-#[derive(Serialize)]
-struct RigOut {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    name: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    description: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    mm_per_pixel: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    ambient: Option<String>,
-    light: Vec<LightOut>,
-}
-
-#[derive(Serialize)]
-struct LightOut {
-    direction: [f64; 3],
-    intensity: IntensityOut,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    position: Option<[f64; 3]>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    flat: Option<String>,
-}
-
-#[derive(Serialize)]
-#[serde(untagged)]
-enum IntensityOut {
-    Scalar(f64),
-    Rgb([f64; 3]),
-}
-
-impl LightOut {
-    fn from_light(l: &Light, folder: Option<&Path>) -> LightOut {
-        let e = l.intensity;
-        let intensity = if e.x == e.y && e.y == e.z {
-            IntensityOut::Scalar(f32_to_f64(e.x))
-        } else {
-            IntensityOut::Rgb(vec_out(e))
-        };
-        let flat = l.flat.as_ref().map(|f| {
-            let rel = folder.and_then(|d| f.strip_prefix(d).ok()).unwrap_or(f);
-            rel.to_string_lossy().into_owned()
-        });
-        LightOut { direction: vec_out(l.direction), intensity, position: l.position.map(vec_out), flat }
-    }
-}
+mod file;
+use file::{LightOut, RigFile, RigOut, f32_to_f64};
 
 #[cfg(test)]
 mod tests {

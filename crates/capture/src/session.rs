@@ -7,8 +7,8 @@
 //! A session folder holds `rig.toml`, the photos, and optionally `mask.png` (nonzero pixels are
 //! the object), `ambient.png` (all lights off) and `truth.png` (a ground-truth normal map). The
 //! photos are the files `filenames.txt` lists, one per line, when the folder has one (the DiLiGenT
-//! layout), else every `.png`, `.tif`, `.tiff` and `.exr` file sorted by name except those whose
-//! stem is `mask`, `ambient` or `truth` ([`photos_in`]).
+//! layout), else every `.png`, `.tif`, `.tiff`, `.exr` and camera RAW (`.dng`, `.cr2`, `.nef`,
+//! `.arw`, ...) file sorted by name except those whose stem is `mask`, `ambient` or `truth` ([`photos_in`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,14 +18,20 @@ use serde::Serialize;
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::limits;
 use skinkit_maps::normal::AngularStats;
+use skinkit_maps::raw::RawMode;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 
 use skinkit_height::{Height, HeightOptions, HeightReport, Scale};
 
 use crate::solve::{self, PhotoStack, SolveConfig};
-use crate::{Error, Result, Rig, detrend, flat, near};
+use crate::{Error, Result, Rig, bracket, detrend, near};
+
+mod prepare;
+pub use prepare::corrections;
+use prepare::{flatten, raw_reading, unscale_albedo};
 
 /// Photo file extensions a session folder's photos may have.
+/// Camera RAW files ([`skinkit_maps::raw::RAW_EXTENSIONS`]) are photos too.
 pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
 /// File stems a session folder reserves for other inputs: never taken as photos.
 pub const RESERVED_STEMS: &[&str] = &["mask", "ambient", "truth"];
@@ -82,7 +88,10 @@ pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
         entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_photo(p)).collect();
     photos.sort();
     if photos.is_empty() {
-        return Err(Error::InvalidInput(format!("{}: no photos (.png, .tif, .tiff, .exr) found", dir.display())));
+        return Err(Error::InvalidInput(format!(
+            "{}: no photos (.png, .tif, .tiff, .exr, camera RAW) found",
+            dir.display()
+        )));
     }
     Ok(photos)
 }
@@ -113,7 +122,8 @@ fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
 fn is_photo(path: &Path) -> bool {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let stem = path.file_stem().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    PHOTO_EXTENSIONS.contains(&ext.as_str()) && !RESERVED_STEMS.contains(&stem.as_str())
+    let photo = PHOTO_EXTENSIONS.contains(&ext.as_str()) || skinkit_maps::raw::is_raw(path);
+    photo && !RESERVED_STEMS.contains(&stem.as_str())
 }
 
 /// Everything that shapes a capture besides its files.
@@ -124,6 +134,8 @@ pub struct CaptureOptions {
     pub detrend_block: usize,
     /// How 8- and 16-bit photo values relate to light (float photos are always linear).
     pub transfer: Transfer,
+    /// How camera RAW photos become RGB: 2x2 Bayer binning (half size) or demosaiced.
+    pub raw: RawMode,
     /// Green convention of the truth map.
     pub encoding: NormalEncoding,
     pub limits: Limits,
@@ -147,6 +159,7 @@ impl Default for CaptureOptions {
             solve: SolveConfig::default(),
             detrend_block: 50,
             transfer: Transfer::Linear,
+            raw: RawMode::Half,
             encoding: NormalEncoding::default(),
             limits: Limits::default(),
             memory_limit: limits::default_memory_limit(),
@@ -281,9 +294,15 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     timings.decode = t.elapsed().as_secs_f64();
 
     let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
-    let corrections = corrections(&rig, inputs.ambient.is_some());
-    let (photos, ambient_frame, scale) = flatten(&rig, inputs.photos, inputs.ambient, &names, options)?;
-    let mut stack = PhotoStack::new(photos, names.clone())?;
+    let mut corrections = corrections(&rig, inputs.ambient.is_some());
+    if session.photos.iter().any(|p| skinkit_maps::raw::is_raw(p)) {
+        corrections.insert(0, raw_reading(options.raw));
+    }
+    let saturation = options.solve.saturation;
+    let (merged, readings) =
+        bracket::merge_rig(&rig, inputs.photos, &names, inputs.ambient.is_some(), saturation).map_err(in_rig)?;
+    let (photos, ambient_frame, scale) = flatten(&rig, merged, inputs.ambient, &readings, options)?;
+    let mut stack = PhotoStack::new(photos, readings)?;
     if let (Some(frame), Some((path, _))) = (ambient_frame, &ambient) {
         stack = stack.with_ambient(frame, &path.display().to_string())?;
     }
@@ -401,7 +420,8 @@ pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &Capt
         .first()
         .ok_or_else(|| Error::InvalidInput(format!("rig {}: no photos were given", session.rig.display())))?;
     let header = |path: &Path, what: &str| {
-        limits::image_header(path, options.limits.max_pixels).map_err(|e| context(what.to_owned(), e.into()))
+        limits::image_header_as(path, options.limits.max_pixels, options.raw)
+            .map_err(|e| context(what.to_owned(), e.into()))
     };
     let head = header(first, "photo")?;
     let same_size = |path: &Path, what: &str| -> Result<limits::ImageHeader> {
@@ -494,89 +514,10 @@ fn decode(session: &Session, ambient: Option<(&Path, &str)>, options: &CaptureOp
     Ok(Inputs { photos: photos?, ambient: ambient?, mask: mask?, truth: truth? })
 }
 
-/// What capture's flat-field step will do to the photos, for the report and `rig check`.
-pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {
-    let flats = rig.lights().iter().filter(|l| l.flat().is_some()).count();
-    let mut out = Vec::new();
-    if ambient {
-        out.push("ambient subtraction".to_owned());
-    }
-    if flats > 0 {
-        out.push(format!("flat fields ({flats} of {} lights)", rig.light_count()));
-    }
-    out
-}
-
-/// With flat frames in the rig: every photo minus the ambient frame, divided by its light's
-/// flat field ([`crate::flat`]), as linear f32 readings, and no ambient frame left to subtract.
-/// Without: the photos and the ambient frame unchanged. Division by a gain under 1 can lift a
-/// reading over the solver's saturation level, so when it does, every corrected photo is
-/// divided by one common `scale` (returned; normals do not change, the albedo is multiplied back).
-fn flatten(
-    rig: &Rig,
-    photos: Vec<Photo>,
-    ambient: Option<Photo>,
-    names: &[String],
-    options: &CaptureOptions,
-) -> Result<(Vec<Photo>, Option<Photo>, f32)> {
-    if rig.lights().iter().all(|l| l.flat().is_none()) {
-        return Ok((photos, ambient, 1.0));
-    }
-    let saturation = options.solve.saturation;
-    let corrected = photos
-        .par_iter()
-        .zip(rig.lights())
-        .zip(names)
-        .enumerate()
-        .map(|(i, ((photo, light), name))| {
-            let flat = light
-                .flat()
-                .map(|path| {
-                    let role = format!("rig light {}: flat", i + 1);
-                    let frame = read_photo(path, &role, options)?;
-                    flat::FlatField::from_photo(&frame, ambient.as_ref(), &path.display().to_string())
-                })
-                .transpose()?;
-            flat::correct(photo, ambient.as_ref(), flat.as_ref(), saturation, name)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let top = corrected.iter().flat_map(|p| samples_f32(p).iter().copied()).fold(0.0f32, f32::max);
-    let scale = if top >= 0.9 * saturation { top / (0.9 * saturation) } else { 1.0 };
-    if scale == 1.0 {
-        return Ok((corrected, None, 1.0));
-    }
-    let rescaled = corrected
-        .into_iter()
-        .map(|p| {
-            let v = samples_f32(&p).iter().map(|x| x / scale).collect();
-            Photo::new(p.width(), p.height(), p.channels(), skinkit_maps::Samples::F32(v)).map_err(Error::Maps)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok((rescaled, None, scale))
-}
-
-/// The f32 samples of a corrected photo.
-fn samples_f32(photo: &Photo) -> &[f32] {
-    match photo.samples() {
-        skinkit_maps::Samples::F32(v) => v,
-        _ => &[],
-    }
-}
-
-/// Multiplies the albedo by the common scale `flatten` divided the photos by.
-fn unscale_albedo(albedo: &mut solve::AlbedoMap, scale: f32) {
-    if scale == 1.0 {
-        return;
-    }
-    match albedo {
-        solve::AlbedoMap::Gray(m) => m.as_mut_slice().iter_mut().for_each(|a| *a *= scale),
-        solve::AlbedoMap::Rgb(m) => m.as_mut_slice().iter_mut().for_each(|a| *a *= scale),
-    }
-}
-
 /// Reads a photo; `role` (`photo 3`, `ambient frame`) prefixes its errors, which name the file.
 fn read_photo(path: &Path, role: &str, options: &CaptureOptions) -> Result<Photo> {
-    let photo = io::read_photo(path, &options.limits).map_err(|e| context(role.to_owned(), e.into()))?;
+    let photo =
+        io::read_photo_as(path, &options.limits, options.raw).map_err(|e| context(role.to_owned(), e.into()))?;
     // The transfer applies to integer photos only: float photos are linear by definition.
     Ok(if photo.bit_depth() == 32 { photo } else { photo.with_transfer(options.transfer) })
 }

@@ -134,3 +134,68 @@ fn flats_remove_a_strong_falloff() {
     assert!(3.0 * with <= without, "flats: {with} against {without} without");
     assert!(with <= 1.1 * even, "flats: {with} against {even} under uniform lights");
 }
+
+/// The rig's radial vignetting model (issue 39): its gain against the polynomial evaluated here,
+/// and a cheek photographed through a vignetting lens solved with and without the model.
+#[test]
+fn a_vignetting_model_removes_lens_falloff() {
+    let k = [-0.45f32, 0.08];
+    let radial = |p: usize| {
+        let c = (SIDE as f64 - 1.0) / 2.0;
+        let (dx, dy) = ((p % SIDE) as f64 - c, (p / SIDE) as f64 - c);
+        let r2 = (dx * dx + dy * dy) / (2.0 * c * c);
+        1.0 + k[0] as f64 * r2 + k[1] as f64 * r2 * r2
+    };
+    let model = FlatField::vignetting(SIDE, SIDE, &k).unwrap();
+    let (centre, corner) = (SIDE / 2 * SIDE + SIDE / 2, 0);
+    let want = radial(corner) / radial(centre);
+    let got = (model.gain()[corner] / model.gain()[centre]) as f64;
+    assert!((got - want).abs() < 1e-4 * want, "corner/centre gain {got} vs {want}");
+    let mean = model.gain().iter().map(|&g| g as f64).sum::<f64>() / (SIDE * SIDE) as f64;
+    assert!((mean - 1.0).abs() < 1e-5, "mean gain {mean}");
+
+    let field = SkinParams::cheek(SIDE, SIDE, 4).generate().unwrap();
+    let lights = RenderLight::ring(K, 45.0, Vec3::splat(0.5));
+    let render =
+        RenderConfig { shadows: true, noise_sigma: 0.002, format: Quantise::Float, seed: 8, ..RenderConfig::default() };
+    let uniform = skinkit_heightfield::render(&field, &lights, &render).unwrap();
+    let rig_lights: Vec<Light> = lights.iter().map(|l| Light::new(l.direction, l.intensity, None).unwrap()).collect();
+    let rig = Rig::new(rig_lights, "ring").unwrap();
+    let vignetted: Vec<Photo> =
+        uniform.iter().map(|p| u16_photo(linear(p).into_iter().enumerate().map(|(i, v)| v * radial(i)))).collect();
+    let corrected: Vec<Photo> = vignetted
+        .iter()
+        .enumerate()
+        .map(|(i, p)| correct(p, None, Some(&model), 0.995, &format!("{i:02}.png")).unwrap())
+        .collect();
+    let uniform16: Vec<Photo> = uniform.iter().map(|p| u16_photo(linear(p).into_iter())).collect();
+    // A gain shared by every light scales each pixel's readings alike: the normals do not see it,
+    // the albedo does. The gain is normalised to mean 1, so the albedo keeps a common scale:
+    // measured is how far it strays from its own mean (the render's is a constant 0.7).
+    let albedo_error = |photos: Vec<Photo>| {
+        let stack = PhotoStack::new(photos, (1..=K).map(|i| format!("{i:02}.png")).collect()).unwrap();
+        let solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::no_progress).unwrap();
+        let solve::AlbedoMap::Gray(a) = solution.albedo else { panic!("grey photos give grey albedo") };
+        let valid: Vec<f64> = a.as_slice().iter().filter(|v| **v > 0.0).map(|&v| v as f64).collect();
+        let mean = valid.iter().sum::<f64>() / valid.len() as f64;
+        valid.iter().map(|v| (v / mean - 1.0).abs()).sum::<f64>() / valid.len() as f64
+    };
+    let (without, with, even) = (albedo_error(vignetted), albedo_error(corrected), albedo_error(uniform16));
+    eprintln!(
+        "vignetting (corner at {want:.2} of the centre), albedo mean relative deviation: without the model {without:.4}, \
+         with {with:.4}, none {even:.4}"
+    );
+    assert!(
+        3.0 * with <= without && with <= 1.1 * even + 1e-3,
+        "vignetting: {with} with, {without} without, {even} none"
+    );
+    // The rig file: parsed, listed among the corrections, round-tripped.
+    let text = format!("vignetting = [{}, {}]\n{}", k[0], k[1], rig.to_toml_string());
+    let parsed = Rig::parse(&text, "rig.toml").unwrap();
+    assert_eq!(parsed.vignetting(), &k);
+    assert_eq!(Rig::parse(&parsed.to_toml_string(), "again").unwrap(), parsed);
+    assert_eq!(
+        session::corrections(&parsed, false),
+        vec![format!("vignetting model ({K} of {K} lights, those without flats)")]
+    );
+}

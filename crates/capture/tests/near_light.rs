@@ -63,3 +63,65 @@ fn near_solve_needs_positions_and_pixel_size() {
     let e = near::solve(&stack, &rig, &SolveConfig::default()).unwrap_err().to_string();
     assert!(e.contains("mm_per_pixel"), "{e}");
 }
+
+/// LED beams (issue 39): a flat plane under 8 LEDs 20 mm away, each aimed off the field's centre
+/// with a `cos^3` beam, photographed by the formula computed here (Lambert, inverse square, the
+/// beam); the near solve told the beams gives the plane's normal, told none it is biased.
+#[test]
+fn near_solve_with_led_beams_removes_their_falloff() {
+    const SIDE: usize = 64;
+    const MM: f64 = 0.1;
+    let (mu, albedo) = (3.0f64, 0.6f64);
+    let leds: Vec<(glam::DVec3, glam::DVec3)> = (0..8)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / 8.0;
+            let p = glam::DVec3::new(a.cos(), a.sin(), 1.2).normalize() * 20.0;
+            // Aimed 1.5 mm past the centre, so the beam sweeps the field.
+            let target = glam::DVec3::new(-1.5 * a.cos(), -1.5 * a.sin(), 0.0);
+            (p, (target - p).normalize())
+        })
+        .collect();
+    let photos: Vec<skinkit_maps::Photo> = leds
+        .iter()
+        .map(|&(p, axis)| {
+            let centre_cos = (-p.normalize()).dot(axis);
+            let v = (0..SIDE * SIDE)
+                .map(|i| {
+                    let x = glam::DVec3::new(
+                        ((i % SIDE) as f64 - (SIDE as f64 - 1.0) / 2.0) * MM,
+                        ((SIDE as f64 - 1.0) / 2.0 - (i / SIDE) as f64) * MM,
+                        0.0,
+                    );
+                    let d = p - x;
+                    let l = d.normalize();
+                    let beam = ((-l).dot(axis) / centre_cos).powf(mu);
+                    (albedo * 0.5 * beam * p.length_squared() / d.length_squared() * l.z) as f32
+                })
+                .collect();
+            skinkit_maps::Photo::new(SIDE, SIDE, skinkit_maps::Channels::Gray, skinkit_maps::Samples::F32(v)).unwrap()
+        })
+        .collect();
+    let stack = PhotoStack::new(photos, (1..=8).map(|i| format!("{i:02}.exr")).collect()).unwrap();
+    let rig = |beams: bool| {
+        let lights = leds
+            .iter()
+            .map(|&(p, axis)| {
+                let light = Light::new(p.as_vec3(), Vec3::splat(0.5), Some(p.as_vec3())).unwrap();
+                if beams { light.with_beam(axis.as_vec3(), mu as f32).unwrap() } else { light }
+            })
+            .collect();
+        Rig::new(lights, "leds").unwrap().with_mm_per_pixel(Some(MM as f32), "leds").unwrap()
+    };
+    let flat = skinkit_maps::NormalMap::flat(SIDE, SIDE);
+    let config = SolveConfig { method: Method::LeastSquares, ..SolveConfig::default() };
+    let error = |rig: &Rig| near::solve(&stack, rig, &config).unwrap().normals.angular_error(&flat, None).unwrap();
+    let (with, without) = (error(&rig(true)), error(&rig(false)));
+    eprintln!(
+        "LED beams cos^{mu}: mean error {:.5} deg told the beams, {:.3} deg without (max {:.3})",
+        with.mean, without.mean, without.max
+    );
+    assert!(with.max < 0.01, "told the beams: {with:?}");
+    assert!(without.mean > 20.0 * with.mean.max(1e-3), "without the beams {without:?}");
+    let text = rig(true).to_toml_string();
+    assert_eq!(Rig::parse(&text, "again").unwrap(), rig(true), "beams round-trip:\n{text}");
+}

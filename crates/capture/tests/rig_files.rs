@@ -147,3 +147,20 @@ fn load_of_a_missing_file_names_it() {
     assert!(matches!(err, Error::Io { .. }));
     assert!(err.to_string().contains("/nonexistent/rig.toml"));
 }
+
+/// Exposure brackets (issue 39): parsed, counted in the photos a session needs, round-tripped,
+/// and a time that is not positive is refused naming the light and the time.
+#[test]
+fn exposure_brackets_parse_count_and_round_trip() {
+    let text = "[[light]]\ndirection = [1, 0, 1]\nexposures = [0.5, 1, 2]\n\
+                [[light]]\ndirection = [0, 1, 1]\n[[light]]\ndirection = [-1, -1, 1]\n";
+    let rig = Rig::parse(text, "rig.toml").unwrap();
+    assert_eq!(rig.lights()[0].exposures(), &[0.5, 1.0, 2.0]);
+    assert_eq!(rig.lights()[1].photo_count(), 1);
+    rig.expect_photos(5).unwrap();
+    let e = rig.expect_photos(3).unwrap_err().to_string();
+    assert!(e.contains("rig has 3 lights (5 photos with their brackets) but 3 photos were given"), "{e}");
+    assert_eq!(Rig::parse(&rig.to_toml_string(), "text").unwrap(), rig);
+    let e = parse_err(&text.replace("[0.5, 1, 2]", "[0.5, 0, 2]"));
+    assert!(e.contains("rig.toml: light 1") && e.contains("exposure time 2 is 0"), "{e}");
+}

@@ -7,6 +7,7 @@
 //! * [`skin`]: [`generate`] rasterises a surface into a [`Heightfield`].
 //! * [`mod@render`]: Lambertian photos with cast shadows, specular contamination, ambient light, sensor
 //!   noise and quantisation, the input photometric stereo expects.
+//! * [`dng`]: those photos as a camera would write them: a Bayer mosaic in a minimal DNG file.
 //!
 //! Everything is seeded by the caller and bit-for-bit reproducible whatever the thread count.
 //!
@@ -18,6 +19,7 @@
 //! assert_eq!(photos.len(), 4);
 //! ```
 
+pub mod dng;
 pub mod error;
 pub mod params;
 pub mod periodic;

@@ -1,4 +1,4 @@
-//! Reading photos and maps (PNG, TIFF, EXR) under size limits, and writing them atomically.
+//! Reading photos (PNG, TIFF, EXR, camera RAW) and maps (PNG, TIFF, EXR) under size limits, and writing them atomically.
 //!
 //! Readers come in pairs: `read_*(path)` opens the file and calls `decode_*(bytes)`-style
 //! functions, so tests can feed bytes. Every writer goes through [`write_atomic`]: the data lands in
@@ -13,6 +13,7 @@ use glam::Vec3;
 use image::{DynamicImage, ImageDecoder, ImageReader};
 
 use crate::encoding::{NormalEncoding, linear_to_srgb};
+use crate::raw::RawMode;
 use crate::{Channels, ColorMap, Error, Grid, NormalMap, Photo, Result, Samples, ScalarMap};
 
 /// Upper bounds checked before any large allocation.
@@ -46,12 +47,24 @@ fn open_buffered(path: &Path) -> Result<std::io::BufReader<File>> {
     File::open(path).map(|f| std::io::BufReader::with_capacity(1 << 16, f)).map_err(|e| Error::io(path, e))
 }
 
-/// Reads a PNG, TIFF or EXR photo, grey or RGB (alpha dropped), 8/16-bit or float, kept in its
+/// Reads a PNG, TIFF, EXR or camera RAW ([`crate::raw`], half size) photo, grey or RGB (alpha dropped), 8/16-bit or float, kept in its
 /// native sample type with a linear transfer (see [`Photo::with_transfer`] for sRGB photos).
 ///
 /// # Errors
 /// When the file cannot be read, is not a supported image, or exceeds `limits`.
 pub fn read_photo(path: &Path, limits: &Limits) -> Result<Photo> {
+    read_photo_as(path, limits, RawMode::default())
+}
+
+/// As [`read_photo`], with camera RAW files ([`crate::raw::is_raw`]) read in `raw` mode as
+/// linear float camera RGB.
+///
+/// # Errors
+/// As [`read_photo`].
+pub fn read_photo_as(path: &Path, limits: &Limits, raw: RawMode) -> Result<Photo> {
+    if crate::raw::is_raw(path) {
+        return crate::raw::read(path, limits, raw);
+    }
     if extension(path) == "exr" {
         let (w, h, data) = read_exr_rgb(path, limits)?;
         let samples = data.into_iter().flatten().collect();

@@ -7,7 +7,7 @@
 //!   ([`encoding`]).
 //! * [`Photo`] is a decoded photograph kept in its native sample type (8-bit, 16-bit or float), so
 //!   a stack of large 16-bit photos costs two bytes a sample, not four.
-//! * [`io`] reads PNG, TIFF and EXR under [`Limits`] and writes every output atomically;
+//! * [`io`] reads PNG, TIFF and EXR (and camera RAW through [`raw`]) under [`Limits`] and writes every output atomically;
 //!   [`OutputSet`] makes a command's several outputs appear all together or not at all.
 //! * [`limits`] states every resource limit (image sizes, lights, frames, threads, memory) and
 //!   checks them from headers and arithmetic before anything is allocated.
@@ -29,6 +29,7 @@ pub mod output_set;
 pub mod photo;
 pub mod preview;
 pub mod pyramid;
+pub mod raw;
 pub mod resample;
 mod signature;
 

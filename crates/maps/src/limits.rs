@@ -178,6 +178,18 @@ impl ImageHeader {
 /// When the file cannot be opened, is not a supported image, or is empty or over the limit
 /// ([`Error::TooLarge`] naming the file).
 pub fn image_header(path: &Path, max_pixels: u64) -> Result<ImageHeader> {
+    image_header_as(path, max_pixels, crate::raw::RawMode::default())
+}
+
+/// As [`image_header`], with camera RAW files described as [`crate::io::read_photo_as`] reads
+/// them in `raw` mode (the sensor's size is what is checked against `max_pixels`).
+///
+/// # Errors
+/// As [`image_header`].
+pub fn image_header_as(path: &Path, max_pixels: u64, raw: crate::raw::RawMode) -> Result<ImageHeader> {
+    if crate::raw::is_raw(path) {
+        return crate::raw::header(path, max_pixels, raw);
+    }
     // The same signature rules as the decoders (JPEG refused with its reason, a name that says
     // another format), so a header read first gives the error the decode would have given.
     crate::signature::check_file(path)?;

@@ -161,7 +161,7 @@ pub fn solve_into(
 /// Unit light directions of `rig`, after checking it against the stack (a [`Rig`] is valid by
 /// construction, so only the photo count and the solver's own light limit are left to check).
 fn check_rig(stack: &PhotoStack, rig: &Rig) -> Result<Vec<Vec3>> {
-    rig.expect_photos(stack.len())?;
+    rig.expect_readings(stack.len())?;
     check_light_count(rig.light_count())?;
     Ok(solver_directions(rig))
 }

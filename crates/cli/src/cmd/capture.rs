@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::{Method, SolveConfig};
+use skinkit_maps::raw::RawMode;
 use skinkit_maps::{GreenAxis, Limits, NormalEncoding, Transfer};
 
 use crate::output::Output;
@@ -18,7 +19,7 @@ pub struct Args {
     /// Output folder: normal.exr, normal.png, albedo.png, confidence.png, report.json.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Photos in rig order (PNG or TIFF, 8 or 16-bit, grey or RGB; or float EXR).
+    /// Photos in rig order (PNG or TIFF, 8 or 16-bit, grey or RGB; float EXR; or camera RAW).
     #[arg(value_name = "PHOTO", required_unless_present = "photos_from", conflicts_with = "photos_from")]
     pub photos: Vec<PathBuf>,
     /// Take the photos from a folder instead: in the order of its filenames.txt if it has one
@@ -71,6 +72,11 @@ pub struct SolveArgs {
     /// Green channel convention of the written normal.png / normal.exr.
     #[arg(long, default_value = "up", value_parser = ["up", "down"])]
     pub green: String,
+    /// Camera RAW photos (DNG, CR2, NEF, ARW, ...): `half` bins each 2x2 Bayer cell into one
+    /// pixel (no interpolation), `full` demosaics to the sensor's size. Either way the values are
+    /// linear: black level subtracted, white level normalised, no white balance or tone curve.
+    #[arg(long, default_value = "half", value_parser = ["half", "full"])]
+    pub raw: String,
 }
 
 impl SolveArgs {
@@ -85,6 +91,7 @@ impl SolveArgs {
             max_condition: None,
             transfer: "linear".into(),
             green: "up".into(),
+            raw: "half".into(),
         }
     }
 
@@ -110,6 +117,7 @@ impl SolveArgs {
             detrend_block: self.detrend_block,
             transfer: if self.transfer == "srgb" { Transfer::Srgb } else { Transfer::Linear },
             encoding: NormalEncoding { green },
+            raw: if self.raw == "full" { RawMode::Full } else { RawMode::Half },
             limits: Limits::default(),
             memory_limit: out.memory_limit(),
         })
