@@ -25,6 +25,7 @@ pub mod mesh;
 mod mesh_source;
 pub mod pass;
 pub mod passes;
+pub mod renderer;
 pub mod scene;
 pub mod shading;
 pub mod skin;

@@ -301,7 +301,7 @@ pub struct Pass {
 }
 
 /// The passes and GPU resources a scene needs, in execution order.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Plan {
     /// Passes in order.
     pub passes: Vec<Pass>,

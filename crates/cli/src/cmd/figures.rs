@@ -20,10 +20,10 @@ use glam::{Vec2, Vec3};
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, Samples};
-use skinkit_render::gpu::Gpu;
 use skinkit_render::head;
 use skinkit_render::label::{RgbImage, draw_label};
 use skinkit_render::mesh::Mesh;
+use skinkit_render::renderer::Renderer;
 
 use super::figure7::{Figure7, figure7};
 use super::render::{Job, RenderReport, render};
@@ -189,20 +189,20 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
     head::write_obj(&patch(20.0, [0.47, 0.53], [0.12, 0.24]), &dir.join("patch.obj"))?;
 
     // One device for every render of the figures: shaders and pipelines are built once.
-    let gpu = Gpu::new()?;
+    let renderer = Renderer::new()?;
     let mut renders = Vec::new();
     let mut job = |name: &str, text: String| -> Result<PathBuf> {
         let scene = dir.join(format!("{name}.toml"));
         write_text(&scene, &text)?;
         let image = dir.join(format!("{name}.png"));
         let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
-        renders.push(render(&job, &gpu, out)?);
+        renders.push(render(&job, &renderer, out)?);
         Ok(image)
     };
     let lit: Vec<PathBuf> =
         AZIMUTHS_DEG.iter().map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a))).collect::<Result<_>>()?;
 
-    let figure7 = figure7(&map, dir, &gpu, out, &mut renders)?;
+    let figure7 = figure7(&map, dir, &renderer, out, &mut renders)?;
     let figure8 = dir.join("figure8.png");
     let lit: Vec<(PathBuf, String)> =
         lit.into_iter().zip(AZIMUTHS_DEG).map(|(p, a)| (p, format!("light azimuth {a} deg"))).collect();
@@ -220,7 +220,7 @@ pub fn figures(normal_map: &Path, dir: &Path, out: &Output) -> Result<FiguresRep
             frames: None,
             reference: reference.then_some(REFERENCE_TEXELS),
         };
-        let report = render(&job, &gpu, out)?;
+        let report = render(&job, &renderer, out)?;
         let seconds = report.skin_seconds + report.images.iter().map(|i| i.render_seconds).sum::<f64>();
         renders.push(report);
         panels.push((name, image, seconds));

@@ -54,6 +54,11 @@ impl PreparedScene {
         self.globals.scene.eye = camera.eye.to_array();
     }
 
+    /// Sets the tone curve of the next [`Gpu::draw`] (the target's format may still impose one).
+    pub(crate) fn set_tone(&mut self, tone: ToneCurve) {
+        self.globals.base.tone = tone_code(tone);
+    }
+
     /// Replaces light `index` (below the scene's light count) for the next [`Gpu::draw`].
     pub fn set_light(&mut self, index: usize, light: &crate::shading::Light) {
         if index < self.globals.scene.light_count as usize {
