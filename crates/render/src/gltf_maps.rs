@@ -24,7 +24,7 @@ use skinkit_maps::{Channels, Grid, NormalEncoding, NormalMap, Photo, Samples, Tr
 use crate::shading::Texture;
 
 /// Whether `path` names a glTF file (`.gltf` or `.glb`, any case).
-pub fn is_gltf(path: &Path) -> bool {
+pub(crate) fn is_gltf(path: &Path) -> bool {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     matches!(ext.as_deref(), Some("gltf" | "glb"))
 }

@@ -5,7 +5,7 @@
 //! shadow map (the first with `shadows = true`, and only when `shadows` is listed) and at which
 //! size, which tables are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
 //! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse), and
-//! the ordered list of passes. The order itself is written once, in [`ordered_passes`]: the
+//! the ordered list of passes. The order itself is written once, in `ordered_passes`: the
 //! graph, the GPU encoder ([`crate::gpu::Gpu::draw`]), its timestamps and `--explain`
 //! ([`crate::load::plan`]) all walk that list. What was asked and cannot be built (a `shadows`
 //! effect with no shadow-casting light) is a note, never a silent omission.
@@ -15,7 +15,7 @@ use crate::passes::{DiffuseMode, Features};
 use crate::scene::Scene;
 use crate::skin::options::{Analytic, CurvatureSource};
 
-/// One pass of a frame, in the order [`ordered_passes`] gives.
+/// One pass of a frame, in the order `ordered_passes` gives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PassKind {
@@ -48,7 +48,7 @@ impl PassKind {
 
     /// Whether the pass belongs to texture-space diffusion (which frustum and distance culling
     /// may skip as a whole).
-    pub fn is_tsd(self) -> bool {
+    pub(crate) fn is_tsd(self) -> bool {
         matches!(self, PassKind::TsdPrepass | PassKind::TsdLightMap | PassKind::TsdBlur(_))
     }
 }
@@ -56,7 +56,7 @@ impl PassKind {
 /// The passes of a frame, in execution order: the shadow map (and its translucent casters),
 /// texture-space diffusion's pre-pass, light map and `tsd_blurs` blurs, then the base pass. The
 /// one place the order is written.
-pub fn ordered_passes(shadow_map: bool, translucent: bool, tsd_blurs: Option<u32>) -> Vec<PassKind> {
+pub(crate) fn ordered_passes(shadow_map: bool, translucent: bool, tsd_blurs: Option<u32>) -> Vec<PassKind> {
     let mut passes = Vec::new();
     if shadow_map {
         passes.push(PassKind::ShadowMap);
@@ -111,7 +111,7 @@ pub struct PassGraph {
     pub vertex_curvature: bool,
     /// Texture-space diffusion, if it runs.
     pub tsd: Option<TsdPlan>,
-    /// The passes, in execution order ([`ordered_passes`]).
+    /// The passes, in execution order (`ordered_passes`).
     pub passes: Vec<PassKind>,
     /// Why something asked for is not built (no shadow-casting light, extra shadow lights).
     pub notes: Vec<String>,

@@ -110,7 +110,7 @@ impl Loaded {
 }
 
 /// The shading camera of a scene camera for a `width x height` image.
-pub fn gpu_camera(camera: &scene::Camera, width: u32, height: u32) -> shading::Camera {
+pub(crate) fn gpu_camera(camera: &scene::Camera, width: u32, height: u32) -> shading::Camera {
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     shading::Camera::look_at(camera.position, camera.target, camera.up, camera.fov_deg, aspect)
 }

@@ -40,7 +40,7 @@ impl DiffuseMode {
     }
 
     /// Whether the mode reads 1/r.
-    pub fn reads_curvature(self) -> bool {
+    pub(crate) fn reads_curvature(self) -> bool {
         matches!(self, Self::Lut | Self::Blog | Self::OwnFit)
     }
 }
@@ -96,7 +96,7 @@ pub struct Table {
 
 impl Table {
     /// The affine map putting `lo` on the centre of the first texel and `hi` on the last of `n`.
-    pub fn centred_map(lo: f32, hi: f32, n: u32) -> (f32, f32) {
+    pub(crate) fn centred_map(lo: f32, hi: f32, n: u32) -> (f32, f32) {
         if n <= 1 || hi <= lo {
             return (0.0, 0.5);
         }
@@ -147,7 +147,7 @@ pub struct TsdSetup {
     pub size: u32,
     /// How the light map is blurred.
     pub kernel: crate::skin::options::TsdKernel,
-    /// Blur passes (with the Gaussians, per Gaussian: [`crate::skin::tsd::blur_count`]).
+    /// Blur passes (with the Gaussians, per Gaussian: `crate::skin::tsd::blur_count`).
     pub passes: u32,
     /// An artist's kernel map (red channel in [0, 1)), if any.
     pub kernel_map: Option<Texture>,
@@ -215,14 +215,14 @@ pub fn poisson_axis_variance() -> [f32; 2] {
 
 /// The 13 taps' coordinates along `axis` (0: u, 1: v), centre first, moved by minus their mean
 /// ([`poisson_mean`]) as the blur places them, in radii.
-pub fn centred_taps(axis: usize) -> impl Iterator<Item = f32> {
+pub(crate) fn centred_taps(axis: usize) -> impl Iterator<Item = f32> {
     let mean = poisson_mean()[axis];
     std::iter::once(0.0).chain(POISSON.iter().map(move |p| p[axis])).map(move |p| p - mean)
 }
 
 /// The derived kernel radius (mm) for `passes` blur passes so that their combined variance per
 /// axis equals `variance_mm2` (the profile's luminance-weighted variance).
-pub fn kernel_mm_for(variance_mm2: f32, passes: u32) -> f32 {
+pub(crate) fn kernel_mm_for(variance_mm2: f32, passes: u32) -> f32 {
     let per_pass = poisson_second_moment() / 2.0;
     (variance_mm2 / (passes.max(1) as f32 * per_pass)).sqrt()
 }
@@ -261,7 +261,7 @@ pub struct SkinSetup {
 
 impl SkinSetup {
     /// The passes the GPU runs for this setup, in order (the one order,
-    /// [`crate::graph::ordered_passes`]; for a scene's setup the same list as its graph's).
+    /// `crate::graph::ordered_passes`; for a scene's setup the same list as its graph's).
     pub fn passes(&self) -> Vec<crate::graph::PassKind> {
         let translucent = self.shadow.as_ref().is_some_and(|s| !s.translucent.is_empty());
         crate::graph::ordered_passes(self.shadow.is_some(), translucent, self.tsd.as_ref().map(TsdSetup::blurs))
@@ -335,7 +335,7 @@ fn any_up(dir: Vec3) -> Vec3 {
 
 /// Whether a sphere is at least partly inside the frustum of `view_proj` (the TSD frustum
 /// culling test; planes from the matrix's rows, Gribb-Hartmann, wgpu depth 0..1).
-pub fn sphere_in_frustum(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
+pub(crate) fn sphere_in_frustum(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
     let m = view_proj.transpose();
     let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
     let planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
@@ -348,7 +348,7 @@ pub fn sphere_in_frustum(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
 
 /// The sphere's projected diameter in pixels for an image `height` pixels tall (the TSD distance
 /// culling measure); infinite when the camera is inside it.
-pub fn projected_diameter(view_proj: Mat4, eye: Vec3, centre: Vec3, radius: f32, height: u32) -> f32 {
+pub(crate) fn projected_diameter(view_proj: Mat4, eye: Vec3, centre: Vec3, radius: f32, height: u32) -> f32 {
     let distance = eye.distance(centre);
     if distance <= radius {
         return f32::INFINITY;
@@ -358,7 +358,7 @@ pub fn projected_diameter(view_proj: Mat4, eye: Vec3, centre: Vec3, radius: f32,
 
 /// The vertical focal scale of a perspective view-projection (cot(fov/2)): the length of the
 /// matrix's second row in its spatial part.
-pub fn focal_from(view_proj: Mat4) -> f32 {
+pub(crate) fn focal_from(view_proj: Mat4) -> f32 {
     view_proj.row(1).truncate().length()
 }
 

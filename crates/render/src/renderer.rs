@@ -107,7 +107,7 @@ pub struct FrameOptions {
     pub encoding: Encoding,
     /// What draws the diffuse light.
     pub shading: Shading,
-    /// Bytes a frame may take on the device and the host ([`OutputFormat::frame_bytes`]).
+    /// Bytes a frame may take on the device and the host (`OutputFormat::frame_bytes`).
     pub memory_limit: u64,
 }
 

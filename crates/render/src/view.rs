@@ -105,7 +105,7 @@ impl ViewSession {
     }
 
     /// The scene's first light, as loaded.
-    pub fn first_light(&self) -> Option<Light> {
+    pub(crate) fn first_light(&self) -> Option<Light> {
         self.loaded.inputs.lights.first().copied()
     }
 

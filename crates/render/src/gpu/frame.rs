@@ -49,7 +49,7 @@ impl PreparedScene {
 impl PreparedScene {
     /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the
     /// uniform block, which every draw writes anyway).
-    pub fn set_camera(&mut self, camera: &crate::shading::Camera) {
+    pub(crate) fn set_camera(&mut self, camera: &crate::shading::Camera) {
         self.globals.scene.view_proj = camera.view_proj.to_cols_array_2d();
         self.globals.scene.eye = camera.eye.to_array();
     }

@@ -59,7 +59,7 @@ pub const MAX_SIDE: u32 = 4096;
 
 /// Bumped whenever a change to the builders changes texel values, so caches keyed on
 /// [`DiffuseLut::cache_key`] or [`super::shadow::ShadowLut::cache_key`] are invalidated.
-pub const BUILDER_VERSION: u32 = 2;
+pub(crate) const BUILDER_VERSION: u32 = 2;
 
 /// A table specification a caller got wrong.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -134,7 +134,7 @@ impl DiffuseLutSpec {
 
     /// The texture u a shader samples for `n_dot_l`: `saturate(N.L * 0.5 + 0.5)` (NaN gives 0,
     /// as `saturate` does on GPUs).
-    pub fn u_for(&self, n_dot_l: f32) -> f32 {
+    pub(crate) fn u_for(&self, n_dot_l: f32) -> f32 {
         saturate(n_dot_l * 0.5 + 0.5)
     }
 

@@ -29,7 +29,7 @@ pub const WEIGHTS: [[f64; 3]; 6] = [
 ];
 
 /// The listing's variance scale for [`Normalisation::OneD`].
-pub const ONE_D_VARIANCE_SCALE: f64 = 1.414;
+pub(crate) const ONE_D_VARIANCE_SCALE: f64 = 1.414;
 
 /// How each Gaussian of the profile is normalised.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]

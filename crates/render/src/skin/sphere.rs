@@ -21,7 +21,7 @@ use super::profile::{Profile, VARIANCES_MM2, WEIGHTS};
 const CELLS: usize = 96;
 
 /// The chord quadrature of one sphere radius, reused for every N.L.
-pub struct SphereFalloff {
+pub(crate) struct SphereFalloff {
     /// Per Gaussian: the nodes `(cos phi, sin phi, G(d) d dd)` and `2 pi int G(d) d dd`.
     gaussians: Vec<(Vec<[f64; 3]>, f64)>,
 }
