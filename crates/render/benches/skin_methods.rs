@@ -155,21 +155,20 @@ fn measure(
     let with = |ext: &str| PathBuf::from(format!("{}.{ext}", stem.display()));
     write(&with("md"), &table);
     write(&with("json"), &serde_json::to_string_pretty(&rows).unwrap());
-    for (method, (ldr, _), ..) in &renders {
-        let path = PathBuf::from(format!("{}-{}.png", stem.display(), method.name()));
-        let samples: Vec<u16> =
-            ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
-        skinkit_maps::io::write_png(
-            &path,
-            width as usize,
-            height as usize,
-            skinkit_maps::io::PngLayout::Rgb8,
-            &samples,
-        )
-        .unwrap();
-    }
+    write_pngs(stem, renders.iter().map(|(method, (ldr, _), ..)| (method.name(), ldr)), (width, height));
     eprintln!("wrote {}", with("{md,json}").display());
     table
+}
+
+/// Each method's display-encoded render as `stem-<method>.png`.
+fn write_pngs<'a>(stem: &Path, renders: impl Iterator<Item = (String, &'a Rendered)>, (width, height): (u32, u32)) {
+    for (name, ldr) in renders {
+        let path = PathBuf::from(format!("{}-{name}.png", stem.display()));
+        let samples: Vec<u16> =
+            ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
+        let layout = skinkit_maps::io::PngLayout::Rgb8;
+        skinkit_maps::io::write_png(&path, width as usize, height as usize, layout, &samples).unwrap();
+    }
 }
 
 /// Replaces the README's text between `<!-- skin-methods:start -->` and `<!-- skin-methods:end -->`.

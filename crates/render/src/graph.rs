@@ -11,7 +11,6 @@
 //! effect with no shadow-casting light) is a note, never a silent omission.
 
 use crate::effect::Effect;
-use crate::passes::{DiffuseMode, Features};
 use crate::scene::Scene;
 use crate::skin::options::{Analytic, CurvatureSource};
 
@@ -212,5 +211,71 @@ fn key_light(scene: &Scene, notes: &mut Vec<String>) -> Option<usize> {
             }
             None
         }
+    }
+}
+/// Where the base pass takes its diffuse term from (the `DIFFUSE_MODE` override).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DiffuseMode {
+    /// `max(0, N.L)`.
+    #[default]
+    Lambert,
+    /// The pre-integrated LUT D(N.L, 1/r) with per-channel normals.
+    Lut,
+    /// The blog's closed-form curves.
+    Blog,
+    /// Our fit to the LUT.
+    OwnFit,
+    /// A light map in texture space (TSD's blurred one, or the CPU reference).
+    LightMap,
+}
+
+impl DiffuseMode {
+    fn code(self) -> f64 {
+        match self {
+            Self::Lambert => 0.0,
+            Self::Lut => 1.0,
+            Self::Blog => 2.0,
+            Self::OwnFit => 3.0,
+            Self::LightMap => 4.0,
+        }
+    }
+
+    /// Whether the mode reads 1/r.
+    pub(crate) fn reads_curvature(self) -> bool {
+        matches!(self, Self::Lut | Self::Blog | Self::OwnFit)
+    }
+}
+
+/// The shader features of one base-pass pipeline: every combination compiles its own pipeline,
+/// with what it does not use folded away.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
+pub struct Features {
+    /// The diffuse term.
+    pub diffuse: DiffuseMode,
+    /// 1/r from screen-space derivatives instead of the vertex attribute.
+    pub derivative_curvature: bool,
+    /// Order-2 SH ambient light.
+    pub sh_ambient: bool,
+    /// The key light through its shadow map.
+    pub shadows: bool,
+    /// The shadow-scattering LUT on the key light's penumbra.
+    pub shadow_scattering: bool,
+    /// Translucent casters tint the key light (the shadow map's opacity channels).
+    pub translucent_shadows: bool,
+}
+
+impl Features {
+    /// The pipeline-overridable constants of the mesh passes' WGSL (`pass/common.wgsl`).
+    pub fn constants(&self) -> [(&'static str, f64); 6] {
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        [
+            ("DIFFUSE_MODE", self.diffuse.code()),
+            ("CURVATURE_MODE", flag(self.derivative_curvature)),
+            ("SH_AMBIENT", flag(self.sh_ambient)),
+            ("SHADOWS", flag(self.shadows)),
+            ("SHADOW_SCATTERING", flag(self.shadow_scattering)),
+            ("TRANSLUCENT_SHADOWS", flag(self.translucent_shadows)),
+        ]
     }
 }

@@ -123,15 +123,6 @@ pub fn orbit(camera: &scene::Camera, index: usize, count: usize) -> scene::Camer
     scene::Camera { position: camera.target + turn * (camera.position - camera.target), ..*camera }
 }
 
-/// The target format and tone curve for an output file format: PNG is tone mapped (Reinhard, so
-/// highlights roll off instead of clipping) and sRGB encoded; EXR stays linear.
-pub fn target_for(format: scene::OutputFormat) -> (TargetFormat, ToneCurve) {
-    match format {
-        scene::OutputFormat::Png => (TargetFormat::Srgb8, ToneCurve::Reinhard),
-        scene::OutputFormat::Exr => (TargetFormat::Hdr32, ToneCurve::None),
-    }
-}
-
 /// Loads the mesh and maps of `scene`, builds the frames and the inputs of its first camera.
 /// `max_texture_side` is the device limit (maps above it are halved until they fit).
 ///
@@ -186,7 +177,7 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         albedo,
         specular: scene.specular,
         exposure: 1.0,
-        // The output decides the curve (`target_for`); callers set it.
+        // The frame's encoding decides the curve (`crate::renderer::Encoding`), at upload.
         tone: ToneCurve::None,
         background: [0.0, 0.0, 0.0, 1.0],
     };
@@ -524,7 +515,7 @@ fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Re
         out.push(table("diffuse LUT", w, h, &what));
     }
     if graph.zonal_table {
-        let n = crate::skin::setup::ZONAL_SAMPLES as u32;
+        let n = crate::skin::sh::ZONAL_SAMPLES as u32;
         out.push(table("zonal table", n, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
     }
     if let Some(shadow) = graph.shadow {
@@ -538,7 +529,7 @@ fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Re
         }
     }
     if graph.shadow_lut {
-        let n = crate::skin::setup::SHADOW_LUT_SIDE;
+        let n = crate::skin::shadow::SHADOW_LUT_SIDE;
         out.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), penumbra of a disc of taps"));
     }
     if let Some(tsd) = graph.tsd {

@@ -105,7 +105,7 @@ impl ViewSession {
     }
 
     /// The scene's first light, as loaded.
-    pub(crate) fn first_light(&self) -> Option<Light> {
+    pub fn first_light(&self) -> Option<Light> {
         self.loaded.inputs.lights.first().copied()
     }
 

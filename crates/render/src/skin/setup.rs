@@ -25,12 +25,8 @@ use crate::shading::Texture;
 /// 1/r range of the diffuse LUT and the zonal table, 1/mm (r >= 1 mm: ears and nostrils).
 pub(crate) const INV_R_RANGE: (f32, f32) = (0.0, 1.0);
 
-/// Samples of 1/r in the zonal table (linear interpolation between them is within 0.11% of the
-/// exact factors; see [`super::sh::ZonalTable`]).
-pub(crate) const ZONAL_SAMPLES: usize = 33;
-
-/// Side of the shadow-scattering LUT.
-pub(crate) const SHADOW_LUT_SIDE: u32 = 64;
+use super::sh::ZONAL_SAMPLES;
+use super::shadow::SHADOW_LUT_SIDE;
 
 /// The luminance weights the TSD kernel is matched with (Gosselin et al.'s specular luminance).
 const LUMINANCE: [f64; 3] = [0.2125, 0.7154, 0.0721];
@@ -257,7 +253,7 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
         kernel_map,
         kernel_scale,
         kernel_mm: match options.kernel {
-            TsdKernel::Single => passes::kernel_mm_for(luminance_variance(), options.passes),
+            TsdKernel::Single => super::poisson::kernel_mm_for(luminance_variance(), options.passes),
             TsdKernel::Gaussians => super::tsd::GAUSSIANS_KERNEL_MM,
         },
         curvature_gain: options.curvature_gain,

@@ -14,8 +14,7 @@
 //! `A = 2 (a psi0 + b sin(psi0))` (`2 pi a` when `a >= b`, 0 when `a <= -b`). `A` is C1, so
 //! 4-point Gauss-Legendre cells need no breakpoints at its kinks.
 
-use super::lut::{KERNEL_CUT_SIGMAS, gauss_legendre_nodes};
-use super::profile::{Profile, VARIANCES_MM2, WEIGHTS};
+use super::profile::{KERNEL_CUT_SIGMAS, Profile, VARIANCES_MM2, WEIGHTS, gauss_legendre_nodes};
 
 /// Gauss-Legendre cells per Gaussian over its reach in the chord.
 const CELLS: usize = 96;

@@ -13,12 +13,12 @@
 //!   the blurs does not change the sum.
 
 use super::options::TsdKernel;
+use super::poisson::{centred_taps, poisson_axis_variance, poisson_second_moment};
 use super::profile::{VARIANCES_MM2, WEIGHTS};
-use crate::passes::{centred_taps, poisson_axis_variance, poisson_second_moment};
 
 /// The radius the light map's alpha stores for [`TsdKernel::Gaussians`], mm: each pass scales it
 /// by [`BlurStage::scale`] (with the single kernel, alpha stores that kernel's own radius).
-/// Alpha holds it over [`crate::passes::MAX_KERNEL_TEXELS`] and is clamped below 1, so it must fit
+/// Alpha holds it over [`super::poisson::MAX_KERNEL_TEXELS`] and is clamped below 1, so it must fit
 /// in 64 texels of the finest light map: 0.1 mm does down to 1.6 micrometres a texel. At 1 mm it
 /// clamped on the 6 mm sphere, whose texels are 0.01-0.02 mm at 2048, and the error doubled there.
 pub const GAUSSIANS_KERNEL_MM: f32 = 0.1;
