@@ -14,11 +14,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use skinkit_render::gpu::{Gpu, OutputFormat, Rendered};
-use skinkit_render::load::{self, Loaded};
-use skinkit_render::passes::SkinSetup;
+use skinkit_render::renderer::{Encoding, Frame, FrameOptions, Prepared, Renderer, Shading};
 use skinkit_render::scene::Scene;
-use skinkit_render::shading::{RenderInputs, ToneCurve};
 use skinkit_render::skin::compare::{self, Method};
 use skinkit_render::skin::options::TsdKernel;
 
@@ -96,14 +93,14 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
         r = plan.reference
     );
     let mut report = StageReport::new(Stage::Rendering, setup, "FLIP mean", "frame time / base pass");
-    let gpu = match Gpu::new() {
-        Ok(gpu) => gpu,
+    let renderer = match Renderer::new() {
+        Ok(renderer) => renderer,
         Err(e) => {
             report.skipped = Some(format!("no GPU adapter: {e}"));
             return Ok(report);
         }
     };
-    report.setup.push_str(&format!("; adapter {}", gpu.adapter_name()));
+    report.setup.push_str(&format!("; adapter {}", renderer.adapter_name()));
     let total = plan.scenes.len() * (plan.methods.len() + 1);
     progress(0, total);
     let mut done = 0;
@@ -114,28 +111,37 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
             done += 1;
             progress(done, total);
         };
-        report.choices.extend(measure_scene(&gpu, &scene_path, &plan, &prefix, step)?);
+        report.choices.extend(measure_scene(&renderer, &scene_path, &plan, &prefix, step)?);
     }
     Ok(report)
 }
 
 /// One scene: the reference, then every method's error and frame time.
-fn measure_scene(gpu: &Gpu, path: &Path, plan: &Plan, prefix: &str, mut step: impl FnMut()) -> Result<Vec<Choice>> {
+fn measure_scene(
+    renderer: &Renderer,
+    path: &Path,
+    plan: &Plan,
+    prefix: &str,
+    mut step: impl FnMut(),
+) -> Result<Vec<Choice>> {
     let render_err = |e: &dyn std::fmt::Display| Error::Render(format!("{}: {e}", path.display()));
     let scene = Scene::load(path).map_err(|e| render_err(&e))?;
-    let (w, h) = plan.size.unwrap_or((scene.output.size[0], scene.output.size[1]));
-    let loaded = load::load(&scene, w, h, gpu.max_texture_side()).map_err(|e| render_err(&e))?;
-    let base =
-        frame_seconds(gpu, &loaded.inputs, &SkinSetup::default(), (w, h), plan.frames).map_err(|e| render_err(&e))?;
+    let size = plan.size.unwrap_or((scene.output.size[0], scene.output.size[1]));
+    let plain = FrameOptions { shading: Shading::Plain, ..FrameOptions::new(size.0, size.1, Encoding::Display) };
+    let mut base = renderer.prepare(&scene, &plain).map_err(|e| render_err(&e))?;
+    let base = frame_seconds(renderer, &mut base, &scene, plan.frames).map_err(|e| render_err(&e))?;
     let reference = Method::Reference { size: plan.reference };
-    let (ref_ldr, ref_hdr) = draw_method(gpu, &scene, &loaded, &reference, (w, h)).map_err(|e| render_err(&e))?.0;
+    let (mut prepared, ref_ldr) = prepare_and_draw(renderer, &scene, reference, size).map_err(|e| render_err(&e))?;
+    let ref_hdr = draw_linear(renderer, &scene, &mut prepared, size).map_err(|e| render_err(&e))?;
     step();
     let mut choices = Vec::new();
     for method in &plan.methods {
         let t = Instant::now();
-        let ((ldr, hdr), setup) = draw_method(gpu, &scene, &loaded, method, (w, h)).map_err(|e| render_err(&e))?;
+        let (mut prepared, ldr) = prepare_and_draw(renderer, &scene, *method, size).map_err(|e| render_err(&e))?;
+        let hdr = draw_linear(renderer, &scene, &mut prepared, size).map_err(|e| render_err(&e))?;
         let cpu = t.elapsed().as_secs_f64();
-        let frame = frame_seconds(gpu, &loaded.inputs, &setup, (w, h), plan.frames).map_err(|e| render_err(&e))?;
+        let (w, h) = size;
+        let frame = frame_seconds(renderer, &mut prepared, &scene, plan.frames).map_err(|e| render_err(&e))?;
         let flip = compare::flip_mean(&ref_ldr.srgb_bytes, &ldr.srgb_bytes, w, h) as f64;
         let rmse = compare::rmse(&ref_hdr.pixels, &hdr.pixels) as f64;
         let mut choice = Choice::timed(
@@ -153,44 +159,46 @@ fn measure_scene(gpu: &Gpu, path: &Path, plan: &Plan, prefix: &str, mut step: im
     Ok(choices)
 }
 
-type Draw = ((Rendered, Rendered), SkinSetup);
-
-/// The method's setup and its LDR (Reinhard, sRGB) and HDR (linear) renders.
-fn draw_method(
-    gpu: &Gpu,
+/// The method's scene prepared once and its display-encoded (Reinhard, sRGB) frame from the
+/// scene's first camera.
+fn prepare_and_draw(
+    renderer: &Renderer,
     scene: &Scene,
-    loaded: &Loaded,
-    method: &Method,
+    method: Method,
     (w, h): (u32, u32),
-) -> std::result::Result<Draw, String> {
-    let setup = method.setup(scene, loaded).map_err(|e| format!("{}: {e}", method.name()))?;
-    let once = |format: OutputFormat, tone: ToneCurve| -> std::result::Result<Rendered, String> {
-        let inputs = RenderInputs { tone, ..loaded.inputs.clone() };
-        let target = gpu.create_target(w, h, format).map_err(|e| e.to_string())?;
-        let prepared = gpu.prepare_with(&inputs, &setup).map_err(|e| e.to_string())?;
-        gpu.draw(&prepared, &target).map_err(|e| e.to_string())?;
-        gpu.read(&target).map_err(|e| e.to_string())
-    };
-    let images = (once(OutputFormat::Srgb8, ToneCurve::Reinhard)?, once(OutputFormat::Hdr32, ToneCurve::None)?);
-    Ok((images, setup))
+) -> std::result::Result<(Prepared, Frame), String> {
+    let options = FrameOptions { shading: Shading::Method(method), ..FrameOptions::new(w, h, Encoding::Display) };
+    let mut prepared = renderer.prepare(scene, &options).map_err(|e| format!("{}: {e}", method.name()))?;
+    let frame = renderer.draw(&mut prepared, &scene.cameras[0]).map_err(|e| e.to_string())?;
+    Ok((prepared, frame))
 }
 
-/// The median GPU frame time in seconds over `frames` frames after a warm-up (wall clock where the
-/// adapter has no timestamps).
+/// The linear frame of `prepared`, which is left display-encoded again.
+fn draw_linear(
+    renderer: &Renderer,
+    scene: &Scene,
+    prepared: &mut Prepared,
+    size: (u32, u32),
+) -> std::result::Result<Frame, String> {
+    renderer.retarget(scene, prepared, size, Encoding::Linear).map_err(|e| e.to_string())?;
+    let frame = renderer.draw(prepared, &scene.cameras[0]).map_err(|e| e.to_string())?;
+    renderer.retarget(scene, prepared, size, Encoding::Display).map_err(|e| e.to_string())?;
+    Ok(frame)
+}
+
+/// The median GPU frame time in seconds of `prepared` over `frames` frames after a warm-up
+/// (wall clock where the adapter has no timestamps).
 fn frame_seconds(
-    gpu: &Gpu,
-    inputs: &RenderInputs,
-    setup: &SkinSetup,
-    (w, h): (u32, u32),
+    renderer: &Renderer,
+    prepared: &mut Prepared,
+    scene: &Scene,
     frames: usize,
 ) -> std::result::Result<f64, String> {
-    let target = gpu.create_target(w, h, OutputFormat::Srgb8).map_err(|e| e.to_string())?;
-    let scene = gpu.prepare_with(inputs, setup).map_err(|e| e.to_string())?;
-    gpu.draw(&scene, &target).map_err(|e| e.to_string())?;
+    renderer.draw(prepared, &scene.cameras[0]).map_err(|e| e.to_string())?;
     let mut times = Vec::new();
     for _ in 0..frames.max(1) {
         let t = Instant::now();
-        let passes = gpu.draw_timed_passes(&scene, &target).map_err(|e| e.to_string())?;
+        let passes = renderer.draw_timed(prepared).map_err(|e| e.to_string())?;
         times.push(match passes {
             Some(passes) => passes.iter().map(|(_, d)| d.as_secs_f64()).sum(),
             None => t.elapsed().as_secs_f64(),

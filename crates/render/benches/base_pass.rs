@@ -1,9 +1,10 @@
 //! Frame time of the base pass (issue 5): 1920x1080, a 4096x2048 normal map (the paper's size),
 //! a 128x64-segment sphere (8385 vertices, under the paper's 15k), the 3-lobe skin BRDF per
-//! pixel and two lights, into an Rgba16Float target.
+//! pixel and two lights, into the linear encoding's Rgba32Float target (it was Rgba16Float before
+//! the renderer's front door, issue 38, which offers linear and display encodings only).
 //!
-//! Only [`Gpu::draw`] is timed (encode, submit, wait for the GPU): the scene is uploaded once
-//! (`upload` times that separately: CPU mip chain, f16 conversion and copy). On the machines that
+//! Only [`Renderer::draw_only`] is timed (encode, submit, wait for the GPU): the scene is uploaded
+//! once (`upload` times that separately: CPU mip chain, f16 conversion, copy and the target). On the machines that
 //! build skinkit this is a lavapipe figure (software Vulkan on the CPU), not a GPU one: it says
 //! how long CI and a GPU-less user wait per frame, nothing about real-time rates on hardware.
 //! Needs an adapter (`WGPU_BACKEND=vulkan` with Mesa's lavapipe). The GPU time of one pass from
@@ -17,7 +18,8 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use skinkit_render::brdf::Lafortune;
-use skinkit_render::gpu::{Gpu, OutputFormat};
+use skinkit_render::passes::SkinSetup;
+use skinkit_render::renderer::{Encoding, FrameOptions, Renderer};
 use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
 };
@@ -59,20 +61,22 @@ fn scene() -> RenderInputs {
 }
 
 fn base_pass(c: &mut Criterion) {
-    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    eprintln!("adapter: {}", gpu.adapter_name());
+    let renderer = Renderer::new().unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("adapter: {}", renderer.adapter_name());
     let inputs = scene();
-    let prepared = gpu.prepare(&inputs).unwrap();
-    let target = gpu.create_target(WIDTH, HEIGHT, OutputFormat::Hdr16).unwrap();
-    if let Some(t) = gpu.draw_timed(&prepared, &target).unwrap() {
+    let options = FrameOptions::new(WIDTH, HEIGHT, Encoding::Linear);
+    let prepare = || renderer.prepare_inputs(inputs.clone(), &SkinSetup::default(), &options).unwrap();
+    let prepared = prepare();
+    if let Some(passes) = renderer.draw_timed(&prepared).unwrap() {
+        let t: std::time::Duration = passes.iter().map(|(_, d)| *d).sum();
         eprintln!("base pass GPU time (timestamp queries): {t:?}");
     }
     let mut group = c.benchmark_group("base_pass");
     group.sample_size(10);
     group.throughput(Throughput::Elements(WIDTH as u64 * HEIGHT as u64));
-    group.bench_function("draw_1920x1080_map_4096x2048", |b| b.iter(|| gpu.draw(&prepared, &target).unwrap()));
+    group.bench_function("draw_1920x1080_map_4096x2048", |b| b.iter(|| renderer.draw_only(&prepared).unwrap()));
     group.throughput(Throughput::Elements(4096 * 2048));
-    group.bench_function("upload_map_4096x2048", |b| b.iter(|| gpu.prepare(&inputs).unwrap()));
+    group.bench_function("upload_map_4096x2048", |b| b.iter(prepare));
     group.finish();
 }
 

@@ -28,11 +28,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use skinkit_render::effect::Effect;
-use skinkit_render::gpu::{Gpu, OutputFormat, Rendered};
-use skinkit_render::load;
-use skinkit_render::passes::SkinSetup;
+use skinkit_render::renderer::{Encoding, Frame as Rendered, FrameOptions, Prepared, Renderer, Shading};
 use skinkit_render::scene::Scene;
-use skinkit_render::shading::ToneCurve;
 use skinkit_render::skin::compare::{self, Method};
 
 const FRAMES: usize = 7;
@@ -68,8 +65,8 @@ fn main() {
         _ => vec![false, true],
     };
     let reference_size = std::env::var("SKIN_METHODS_REFERENCE").ok().and_then(|s| s.parse().ok()).unwrap_or(2048);
-    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    eprintln!("adapter: {}, reference light map {reference_size}", gpu.adapter_name());
+    let renderer = Renderer::new().unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("adapter: {}, reference light map {reference_size}", renderer.adapter_name());
     let out = root.join("target");
     std::fs::create_dir_all(&out).unwrap();
     let mut tables = Vec::new();
@@ -80,7 +77,7 @@ fn main() {
         for &unshadowed in &modes {
             let stem = if unshadowed { format!("{name}-unshadowed") } else { name.to_owned() };
             let table = measure(
-                &gpu,
+                &renderer,
                 &root.join(format!("samples/scenes/{name}.toml")),
                 label,
                 unshadowed,
@@ -104,15 +101,23 @@ fn docs() -> bool {
 
 /// Every method of [`Method::table`] on one scene: renders, errors against the reference and
 /// frame times, written to `stem.{md,json}` and one PNG per method; returns the table.
-fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, reference_size: u32, stem: &Path) -> String {
+fn measure(
+    renderer: &Renderer,
+    scene_file: &Path,
+    label: &str,
+    unshadowed: bool,
+    reference_size: u32,
+    stem: &Path,
+) -> String {
     let mut scene = Scene::load(scene_file).unwrap_or_else(|e| panic!("{e}"));
     if unshadowed {
         scene.effects.retain(|&e| e != Effect::Shadows && e != Effect::ShadowScattering);
     }
     let (width, height) = size().unwrap_or((scene.output.size[0], scene.output.size[1]));
     eprintln!("{}{}: {width}x{height}", scene_file.display(), if unshadowed { ", unshadowed" } else { "" });
-    let loaded = load::load(&scene, width, height, gpu.max_texture_side()).unwrap();
-    let base_ms = frame_ms(gpu, &loaded.inputs, &SkinSetup::default(), width, height).0;
+    let options = |shading| FrameOptions { shading, ..FrameOptions::new(width, height, Encoding::Display) };
+    let prepare = |shading| renderer.prepare(&scene, &options(shading)).unwrap_or_else(|e| panic!("{e}"));
+    let base_ms = frame_ms(renderer, &mut prepare(Shading::Plain), &scene).0;
     eprintln!("base pass (Lambert, no shadows): {base_ms:.2} ms");
     let mut renders = Vec::new();
     let only = std::env::var("SKIN_METHODS_ONLY").ok();
@@ -121,11 +126,10 @@ fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, referenc
             || only.as_deref().is_none_or(|o| o.split(',').any(|x| x.trim() == m.name()))
     };
     for method in Method::table(reference_size).into_iter().filter(wanted) {
-        let t = Instant::now();
-        let setup = method.setup(&scene, &loaded).unwrap_or_else(|e| panic!("{}: {e}", method.name()));
-        let cpu_setup_s = t.elapsed().as_secs_f64();
-        let (ms, passes) = frame_ms(gpu, &loaded.inputs, &setup, width, height);
-        let images = draw(gpu, &loaded.inputs, &setup, width, height);
+        let mut prepared = prepare(Shading::Method(method));
+        let cpu_setup_s = prepared.times().skin.as_secs_f64();
+        let (ms, passes) = frame_ms(renderer, &mut prepared, &scene);
+        let images = draw(renderer, &mut prepared, &scene, (width, height));
         eprintln!("{:>16}: {ms:8.2} ms ({:.2}x base), cpu setup {cpu_setup_s:.2} s", method.name(), ms / base_ms);
         renders.push((method, images, ms, passes, cpu_setup_s));
     }
@@ -146,26 +150,25 @@ fn measure(gpu: &Gpu, scene_file: &Path, label: &str, unshadowed: bool, referenc
     let file = scene_file.file_name().and_then(|f| f.to_str()).unwrap_or("");
     let what = if unshadowed { ", unshadowed (the diffuse falloff alone)" } else { "" };
     let caption = format!("{label} (`samples/scenes/{file}`){what}");
-    let table = markdown(&caption, &rows, base_ms, &gpu.adapter_name(), width, height, reference_size);
+    let table = markdown(&caption, &rows, base_ms, &renderer.adapter_name(), width, height, reference_size);
     println!("{table}");
     let with = |ext: &str| PathBuf::from(format!("{}.{ext}", stem.display()));
     write(&with("md"), &table);
     write(&with("json"), &serde_json::to_string_pretty(&rows).unwrap());
-    for (method, (ldr, _), ..) in &renders {
-        let path = PathBuf::from(format!("{}-{}.png", stem.display(), method.name()));
-        let samples: Vec<u16> =
-            ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
-        skinkit_maps::io::write_png(
-            &path,
-            width as usize,
-            height as usize,
-            skinkit_maps::io::PngLayout::Rgb8,
-            &samples,
-        )
-        .unwrap();
-    }
+    write_pngs(stem, renders.iter().map(|(method, (ldr, _), ..)| (method.name(), ldr)), (width, height));
     eprintln!("wrote {}", with("{md,json}").display());
     table
+}
+
+/// Each method's display-encoded render as `stem-<method>.png`.
+fn write_pngs<'a>(stem: &Path, renders: impl Iterator<Item = (String, &'a Rendered)>, (width, height): (u32, u32)) {
+    for (name, ldr) in renders {
+        let path = PathBuf::from(format!("{}-{name}.png", stem.display()));
+        let samples: Vec<u16> =
+            ldr.srgb_bytes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(u16::from)).collect();
+        let layout = skinkit_maps::io::PngLayout::Rgb8;
+        skinkit_maps::io::write_png(&path, width as usize, height as usize, layout, &samples).unwrap();
+    }
 }
 
 /// Replaces the README's text between `<!-- skin-methods:start -->` and `<!-- skin-methods:end -->`.
@@ -192,39 +195,21 @@ fn write(path: &PathBuf, text: &str) {
     std::fs::write(path, text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
 }
 
-/// The LDR (Reinhard, sRGB) and HDR (linear) renders of one setup.
-fn draw(
-    gpu: &Gpu,
-    inputs: &skinkit_render::shading::RenderInputs,
-    setup: &SkinSetup,
-    width: u32,
-    height: u32,
-) -> (Rendered, Rendered) {
-    let once = |format: OutputFormat, tone: ToneCurve| {
-        let inputs = skinkit_render::shading::RenderInputs { tone, ..inputs.clone() };
-        let target = gpu.create_target(width, height, format).unwrap();
-        let scene = gpu.prepare_with(&inputs, setup).unwrap();
-        gpu.draw(&scene, &target).unwrap();
-        gpu.read(&target).unwrap()
-    };
-    (once(OutputFormat::Srgb8, ToneCurve::Reinhard), once(OutputFormat::Hdr32, ToneCurve::None))
+/// The LDR (Reinhard, sRGB) and HDR (linear) renders of one prepared method.
+fn draw(renderer: &Renderer, prepared: &mut Prepared, scene: &Scene, size: (u32, u32)) -> (Rendered, Rendered) {
+    let camera = &scene.cameras[0];
+    let ldr = renderer.draw(prepared, camera).unwrap();
+    renderer.retarget(scene, prepared, size, Encoding::Linear).unwrap();
+    (ldr, renderer.draw(prepared, camera).unwrap())
 }
 
 /// Median GPU frame time (ms) over `FRAMES` frames after a warm-up, and the median frame's passes.
-fn frame_ms(
-    gpu: &Gpu,
-    inputs: &skinkit_render::shading::RenderInputs,
-    setup: &SkinSetup,
-    width: u32,
-    height: u32,
-) -> (f64, Vec<(String, Duration)>) {
-    let target = gpu.create_target(width, height, OutputFormat::Srgb8).unwrap();
-    let scene = gpu.prepare_with(inputs, setup).unwrap();
-    gpu.draw(&scene, &target).unwrap();
+fn frame_ms(renderer: &Renderer, prepared: &mut Prepared, scene: &Scene) -> (f64, Vec<(String, Duration)>) {
+    renderer.draw(prepared, &scene.cameras[0]).unwrap();
     let mut frames: Vec<(f64, Vec<(String, Duration)>)> = (0..FRAMES)
         .map(|_| {
             let t = Instant::now();
-            match gpu.draw_timed_passes(&scene, &target).unwrap() {
+            match renderer.draw_timed(prepared).unwrap() {
                 Some(passes) => (passes.iter().map(|(_, d)| d.as_secs_f64()).sum::<f64>() * 1e3, passes),
                 None => (t.elapsed().as_secs_f64() * 1e3, Vec::new()),
             }

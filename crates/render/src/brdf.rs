@@ -98,7 +98,7 @@ impl Lafortune {
     }
 
     /// The diffuse term `rho_d / pi`.
-    pub fn diffuse_term(&self) -> Vec3 {
+    pub(crate) fn diffuse_term(&self) -> Vec3 {
         self.diffuse / std::f32::consts::PI
     }
 

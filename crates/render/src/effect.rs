@@ -47,17 +47,17 @@ impl Effect {
     }
 
     /// The effect a scene file's name stands for.
-    pub fn from_name(name: &str) -> Option<Effect> {
+    pub(crate) fn from_name(name: &str) -> Option<Effect> {
         Effect::ALL.into_iter().find(|e| e.name() == name)
     }
 
     /// The known names, comma separated (for messages).
-    pub fn known_names() -> String {
+    pub(crate) fn known_names() -> String {
         Effect::ALL.map(Effect::name).join(", ")
     }
 
     /// Whether the effect decides the base pass's diffuse term (one such effect at most).
-    pub fn decides_diffuse(self) -> bool {
+    pub(crate) fn decides_diffuse(self) -> bool {
         matches!(self, Effect::Preintegrated | Effect::PreintegratedAnalytic | Effect::Tsd)
     }
 }
@@ -69,14 +69,14 @@ impl std::fmt::Display for Effect {
 }
 
 /// Why a list of effects cannot be built: the scene field at fault and the reason.
-pub type RuleError = (&'static str, String);
+pub(crate) type RuleError = (&'static str, String);
 
 /// The rules between effects: at most one effect decides the diffuse term, `shadow-scattering`
 /// needs `shadows`, `sh-ambient` needs an `[environment]` table.
 ///
 /// # Errors
 /// The first rule broken, as (field, reason).
-pub fn check_rules(effects: &[Effect], has_environment: bool) -> Result<(), RuleError> {
+pub(crate) fn check_rules(effects: &[Effect], has_environment: bool) -> Result<(), RuleError> {
     let has = |e: Effect| effects.contains(&e);
     let diffuse: Vec<&str> = effects.iter().filter(|e| e.decides_diffuse()).map(|e| e.name()).collect();
     if diffuse.len() > 1 {

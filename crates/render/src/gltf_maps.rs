@@ -24,7 +24,7 @@ use skinkit_maps::{Channels, Grid, NormalEncoding, NormalMap, Photo, Samples, Tr
 use crate::shading::Texture;
 
 /// Whether `path` names a glTF file (`.gltf` or `.glb`, any case).
-pub fn is_gltf(path: &Path) -> bool {
+pub(crate) fn is_gltf(path: &Path) -> bool {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     matches!(ext.as_deref(), Some("gltf" | "glb"))
 }
@@ -99,7 +99,7 @@ fn image(path: &Path, slot: Slot, limits: &Limits) -> skinkit_maps::Result<(Phot
     let refuse = |reason: String| skinkit_maps::Error::Unsupported { path: named.clone(), reason };
     let io_error = |error| skinkit_maps::Error::Io { path: path.to_owned(), error };
     let bytes = std::fs::read(path).map_err(io_error)?;
-    let gltf = crate::mesh_source::parse_gltf(&bytes).map_err(|reason| {
+    let gltf = crate::mesh::source::parse_gltf(&bytes).map_err(|reason| {
         io_error(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not a readable glTF file: {reason}")))
     })?;
     let material = gltf.document.materials().next().ok_or_else(|| refuse("the file has no material".into()))?;
@@ -135,7 +135,7 @@ fn material_label(material: &gltf::Material) -> String {
 /// The bytes of a buffer view: from the GLB's binary chunk or an external buffer file (a regular
 /// file: the mesh loader's check of buffer URIs runs first).
 fn view_bytes(gltf: &gltf::Gltf, view: &gltf::buffer::View, base: &Path) -> Result<Vec<u8>, String> {
-    crate::mesh_source::check_gltf_buffer_uris(&gltf.document, base)?;
+    crate::mesh::source::check_gltf_buffer_uris(&gltf.document, base)?;
     let buffer = view.buffer();
     let external;
     let data: &[u8] = match buffer.source() {
@@ -164,7 +164,7 @@ fn view_bytes(gltf: &gltf::Gltf, view: &gltf::buffer::View, base: &Path) -> Resu
 
 /// A relative URI as a path: percent-escapes decoded; absolute and scheme URIs refused.
 fn uri_path(uri: &str) -> Result<PathBuf, String> {
-    let decoded = crate::mesh_source::percent_decode(uri)
+    let decoded = crate::mesh::source::percent_decode(uri)
         .ok_or_else(|| format!("uri `{uri}`: its percent-encoding is not UTF-8"))?;
     if decoded.contains("://") || Path::new(&decoded).is_absolute() {
         return Err(format!("uri `{uri}`: only relative file URIs are read"));

@@ -5,17 +5,16 @@
 //! shadow map (the first with `shadows = true`, and only when `shadows` is listed) and at which
 //! size, which tables are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
 //! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse), and
-//! the ordered list of passes. The order itself is written once, in [`ordered_passes`]: the
+//! the ordered list of passes. The order itself is written once, in `ordered_passes`: the
 //! graph, the GPU encoder ([`crate::gpu::Gpu::draw`]), its timestamps and `--explain`
 //! ([`crate::load::plan`]) all walk that list. What was asked and cannot be built (a `shadows`
 //! effect with no shadow-casting light) is a note, never a silent omission.
 
 use crate::effect::Effect;
-use crate::passes::{DiffuseMode, Features};
 use crate::scene::Scene;
 use crate::skin::options::{Analytic, CurvatureSource};
 
-/// One pass of a frame, in the order [`ordered_passes`] gives.
+/// One pass of a frame, in the order `ordered_passes` gives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PassKind {
@@ -48,7 +47,7 @@ impl PassKind {
 
     /// Whether the pass belongs to texture-space diffusion (which frustum and distance culling
     /// may skip as a whole).
-    pub fn is_tsd(self) -> bool {
+    pub(crate) fn is_tsd(self) -> bool {
         matches!(self, PassKind::TsdPrepass | PassKind::TsdLightMap | PassKind::TsdBlur(_))
     }
 }
@@ -56,7 +55,7 @@ impl PassKind {
 /// The passes of a frame, in execution order: the shadow map (and its translucent casters),
 /// texture-space diffusion's pre-pass, light map and `tsd_blurs` blurs, then the base pass. The
 /// one place the order is written.
-pub fn ordered_passes(shadow_map: bool, translucent: bool, tsd_blurs: Option<u32>) -> Vec<PassKind> {
+pub(crate) fn ordered_passes(shadow_map: bool, translucent: bool, tsd_blurs: Option<u32>) -> Vec<PassKind> {
     let mut passes = Vec::new();
     if shadow_map {
         passes.push(PassKind::ShadowMap);
@@ -111,7 +110,7 @@ pub struct PassGraph {
     pub vertex_curvature: bool,
     /// Texture-space diffusion, if it runs.
     pub tsd: Option<TsdPlan>,
-    /// The passes, in execution order ([`ordered_passes`]).
+    /// The passes, in execution order (`ordered_passes`).
     pub passes: Vec<PassKind>,
     /// Why something asked for is not built (no shadow-casting light, extra shadow lights).
     pub notes: Vec<String>,
@@ -212,5 +211,71 @@ fn key_light(scene: &Scene, notes: &mut Vec<String>) -> Option<usize> {
             }
             None
         }
+    }
+}
+/// Where the base pass takes its diffuse term from (the `DIFFUSE_MODE` override).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DiffuseMode {
+    /// `max(0, N.L)`.
+    #[default]
+    Lambert,
+    /// The pre-integrated LUT D(N.L, 1/r) with per-channel normals.
+    Lut,
+    /// The blog's closed-form curves.
+    Blog,
+    /// Our fit to the LUT.
+    OwnFit,
+    /// A light map in texture space (TSD's blurred one, or the CPU reference).
+    LightMap,
+}
+
+impl DiffuseMode {
+    fn code(self) -> f64 {
+        match self {
+            Self::Lambert => 0.0,
+            Self::Lut => 1.0,
+            Self::Blog => 2.0,
+            Self::OwnFit => 3.0,
+            Self::LightMap => 4.0,
+        }
+    }
+
+    /// Whether the mode reads 1/r.
+    pub(crate) fn reads_curvature(self) -> bool {
+        matches!(self, Self::Lut | Self::Blog | Self::OwnFit)
+    }
+}
+
+/// The shader features of one base-pass pipeline: every combination compiles its own pipeline,
+/// with what it does not use folded away.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
+pub struct Features {
+    /// The diffuse term.
+    pub diffuse: DiffuseMode,
+    /// 1/r from screen-space derivatives instead of the vertex attribute.
+    pub derivative_curvature: bool,
+    /// Order-2 SH ambient light.
+    pub sh_ambient: bool,
+    /// The key light through its shadow map.
+    pub shadows: bool,
+    /// The shadow-scattering LUT on the key light's penumbra.
+    pub shadow_scattering: bool,
+    /// Translucent casters tint the key light (the shadow map's opacity channels).
+    pub translucent_shadows: bool,
+}
+
+impl Features {
+    /// The pipeline-overridable constants of the mesh passes' WGSL (`pass/common.wgsl`).
+    pub fn constants(&self) -> [(&'static str, f64); 6] {
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        [
+            ("DIFFUSE_MODE", self.diffuse.code()),
+            ("CURVATURE_MODE", flag(self.derivative_curvature)),
+            ("SH_AMBIENT", flag(self.sh_ambient)),
+            ("SHADOWS", flag(self.shadows)),
+            ("SHADOW_SCATTERING", flag(self.shadow_scattering)),
+            ("TRANSLUCENT_SHADOWS", flag(self.translucent_shadows)),
+        ]
     }
 }

@@ -190,7 +190,7 @@ pub fn write_obj(mesh: &Mesh, path: &Path) -> skinkit_maps::Result<()> {
 ///
 /// # Errors
 /// When `w` fails.
-pub fn obj_text(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
+pub(crate) fn obj_text(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
     writeln!(w, "# skinkit sample head: {} mm per unit", HEAD_MM_PER_UNIT)?;
     for p in &mesh.positions {
         writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;

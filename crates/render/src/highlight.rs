@@ -3,28 +3,28 @@
 //! pixel by pixel. The difference is exactly the lobes' radiance, because the base pass adds the
 //! lobes to the diffuse term before the (linear) sum over lights and nothing else depends on them.
 //!
-//! Highlight pixels are the brightest [`HIGHLIGHT_FRACTION`] of the pixels the surface covers
+//! Highlight pixels are the brightest `HIGHLIGHT_FRACTION` of the pixels the surface covers
 //! (luminance of the render with lobes, Rec. 709 weights; background pixels are 0 in both
 //! renders and never count). For them [`SpecularShare`] gives the mean and median of
 //! `(with - without) / with`, the share of each highlight pixel's luminance the lobes make, and
 //! the lobes' local contrast there: the mean absolute difference between the lobes' luminance
-//! and its [`CONTRAST_BOX`] x [`CONTRAST_BOX`] box average, over the lobes' mean luminance. Smooth
+//! and its `CONTRAST_BOX` x `CONTRAST_BOX` box average, over the lobes' mean luminance. Smooth
 //! shading varies little over 9 pixels; fine-scale bumps that break a sheen up raise it.
 
 use serde::Serialize;
 
 /// The brightest part of the covered pixels taken as the highlight: 2 %.
-pub const HIGHLIGHT_FRACTION: f64 = 0.02;
+pub(crate) const HIGHLIGHT_FRACTION: f64 = 0.02;
 
 /// Side of the box the local contrast compares each pixel with (odd).
-pub const CONTRAST_BOX: usize = 9;
+pub(crate) const CONTRAST_BOX: usize = 9;
 
 /// The lobes' part of a render's highlights.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SpecularShare {
     /// Pixels the surface covers (luminance above 0 with the lobes).
     pub covered: usize,
-    /// Highlight pixels measured (the brightest [`HIGHLIGHT_FRACTION`] of `covered`, at least 1).
+    /// Highlight pixels measured (the brightest `HIGHLIGHT_FRACTION` of `covered`, at least 1).
     pub highlight: usize,
     /// Mean over the highlight pixels of the lobes' share of the pixel's luminance.
     pub mean: f64,

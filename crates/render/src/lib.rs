@@ -1,6 +1,10 @@
 //! The bundled renderer (Haro et al. 2001, section 5, on today's hardware): scenes, meshes,
 //! texture-space frames, the Lafortune skin BRDF with its CPU reference, and the wgpu passes.
 //!
+//! The front door is [`renderer`]: a [`renderer::Renderer`] prepares a scene once (loaded,
+//! planned, set up, memory-checked and uploaded) and draws its frames in memory; callers outside
+//! this crate wire nothing else of the sequence (issue 38).
+//!
 //! Geometry side: [`scene`] (TOML scenes), [`mesh`] (OBJ and glTF loading), [`frames`] (the
 //! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
 //! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
@@ -22,9 +26,9 @@ pub mod highlight;
 pub mod label;
 pub mod load;
 pub mod mesh;
-mod mesh_source;
 pub mod pass;
 pub mod passes;
+pub mod renderer;
 pub mod scene;
 pub mod shading;
 pub mod skin;

@@ -110,7 +110,7 @@ impl Loaded {
 }
 
 /// The shading camera of a scene camera for a `width x height` image.
-pub fn gpu_camera(camera: &scene::Camera, width: u32, height: u32) -> shading::Camera {
+pub(crate) fn gpu_camera(camera: &scene::Camera, width: u32, height: u32) -> shading::Camera {
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     shading::Camera::look_at(camera.position, camera.target, camera.up, camera.fov_deg, aspect)
 }
@@ -121,15 +121,6 @@ pub fn orbit(camera: &scene::Camera, index: usize, count: usize) -> scene::Camer
     let angle = std::f32::consts::TAU * index as f32 / count.max(1) as f32;
     let turn = Mat3::from_axis_angle(camera.up, angle);
     scene::Camera { position: camera.target + turn * (camera.position - camera.target), ..*camera }
-}
-
-/// The target format and tone curve for an output file format: PNG is tone mapped (Reinhard, so
-/// highlights roll off instead of clipping) and sRGB encoded; EXR stays linear.
-pub fn target_for(format: scene::OutputFormat) -> (TargetFormat, ToneCurve) {
-    match format {
-        scene::OutputFormat::Png => (TargetFormat::Srgb8, ToneCurve::Reinhard),
-        scene::OutputFormat::Exr => (TargetFormat::Hdr32, ToneCurve::None),
-    }
 }
 
 /// Loads the mesh and maps of `scene`, builds the frames and the inputs of its first camera.
@@ -186,7 +177,7 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         albedo,
         specular: scene.specular,
         exposure: 1.0,
-        // The output decides the curve (`target_for`); callers set it.
+        // The frame's encoding decides the curve (`crate::renderer::Encoding`), at upload.
         tone: ToneCurve::None,
         background: [0.0, 0.0, 0.0, 1.0],
     };
@@ -301,7 +292,7 @@ pub struct Pass {
 }
 
 /// The passes and GPU resources a scene needs, in execution order.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Plan {
     /// Passes in order.
     pub passes: Vec<Pass>,
@@ -524,7 +515,7 @@ fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Re
         out.push(table("diffuse LUT", w, h, &what));
     }
     if graph.zonal_table {
-        let n = crate::skin::setup::ZONAL_SAMPLES as u32;
+        let n = crate::skin::sh::ZONAL_SAMPLES as u32;
         out.push(table("zonal table", n, 3, "the skin's SH zonal factors A_l(1/r), l = 0, 1, 2"));
     }
     if let Some(shadow) = graph.shadow {
@@ -538,7 +529,7 @@ fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Re
         }
     }
     if graph.shadow_lut {
-        let n = crate::skin::setup::SHADOW_LUT_SIDE;
+        let n = crate::skin::shadow::SHADOW_LUT_SIDE;
         out.push(table("shadow LUT", n, n, "shadow scattering P_S(s, w), penumbra of a disc of taps"));
     }
     if let Some(tsd) = graph.tsd {

@@ -11,72 +11,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::shading::{Light, LightKind, Texture, Vertex};
 
-/// Where the base pass takes its diffuse term from (the `DIFFUSE_MODE` override).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum DiffuseMode {
-    /// `max(0, N.L)`.
-    #[default]
-    Lambert,
-    /// The pre-integrated LUT D(N.L, 1/r) with per-channel normals.
-    Lut,
-    /// The blog's closed-form curves.
-    Blog,
-    /// Our fit to the LUT.
-    OwnFit,
-    /// A light map in texture space (TSD's blurred one, or the CPU reference).
-    LightMap,
-}
-
-impl DiffuseMode {
-    fn code(self) -> f64 {
-        match self {
-            Self::Lambert => 0.0,
-            Self::Lut => 1.0,
-            Self::Blog => 2.0,
-            Self::OwnFit => 3.0,
-            Self::LightMap => 4.0,
-        }
-    }
-
-    /// Whether the mode reads 1/r.
-    pub fn reads_curvature(self) -> bool {
-        matches!(self, Self::Lut | Self::Blog | Self::OwnFit)
-    }
-}
-
-/// The shader features of one base-pass pipeline: every combination compiles its own pipeline,
-/// with what it does not use folded away.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
-pub struct Features {
-    /// The diffuse term.
-    pub diffuse: DiffuseMode,
-    /// 1/r from screen-space derivatives instead of the vertex attribute.
-    pub derivative_curvature: bool,
-    /// Order-2 SH ambient light.
-    pub sh_ambient: bool,
-    /// The key light through its shadow map.
-    pub shadows: bool,
-    /// The shadow-scattering LUT on the key light's penumbra.
-    pub shadow_scattering: bool,
-    /// Translucent casters tint the key light (the shadow map's opacity channels).
-    pub translucent_shadows: bool,
-}
-
-impl Features {
-    /// The pipeline-overridable constants of the mesh passes' WGSL (`pass/common.wgsl`).
-    pub fn constants(&self) -> [(&'static str, f64); 6] {
-        let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        [
-            ("DIFFUSE_MODE", self.diffuse.code()),
-            ("CURVATURE_MODE", flag(self.derivative_curvature)),
-            ("SH_AMBIENT", flag(self.sh_ambient)),
-            ("SHADOWS", flag(self.shadows)),
-            ("SHADOW_SCATTERING", flag(self.shadow_scattering)),
-            ("TRANSLUCENT_SHADOWS", flag(self.translucent_shadows)),
-        ]
-    }
-}
+pub use crate::graph::{DiffuseMode, Features};
 
 /// An RGB float table for the GPU, with the affine map from its parameter to a texture coordinate.
 #[derive(Debug, Clone, PartialEq)]
@@ -96,7 +31,7 @@ pub struct Table {
 
 impl Table {
     /// The affine map putting `lo` on the centre of the first texel and `hi` on the last of `n`.
-    pub fn centred_map(lo: f32, hi: f32, n: u32) -> (f32, f32) {
+    pub(crate) fn centred_map(lo: f32, hi: f32, n: u32) -> (f32, f32) {
         if n <= 1 || hi <= lo {
             return (0.0, 0.5);
         }
@@ -147,7 +82,7 @@ pub struct TsdSetup {
     pub size: u32,
     /// How the light map is blurred.
     pub kernel: crate::skin::options::TsdKernel,
-    /// Blur passes (with the Gaussians, per Gaussian: [`crate::skin::tsd::blur_count`]).
+    /// Blur passes (with the Gaussians, per Gaussian: `crate::skin::tsd::blur_count`).
     pub passes: u32,
     /// An artist's kernel map (red channel in [0, 1)), if any.
     pub kernel_map: Option<Texture>,
@@ -171,61 +106,9 @@ impl TsdSetup {
     }
 }
 
-/// The largest derived Poisson radius, in light-map texels (alpha = radius / this).
-pub const MAX_KERNEL_TEXELS: f32 = 64.0;
-
-/// The 12 Poisson taps of Gosselin et al. (the centre is the 13th).
-pub const POISSON: [[f32; 2]; 12] = [
-    [-0.326212, -0.40581],
-    [-0.840144, -0.07358],
-    [-0.695914, 0.457137],
-    [-0.203345, 0.620716],
-    [0.96234, -0.194983],
-    [0.473434, -0.480026],
-    [0.519456, 0.767022],
-    [0.185461, -0.893124],
-    [0.507431, 0.064425],
-    [0.89642, 0.412458],
-    [-0.32194, -0.932615],
-    [-0.791559, -0.59771],
-];
-
-/// The mean of the 13 taps (centre included), in radii: the disc is off centre by about 0.1 of its
-/// radius along v, so the blur moves its taps back by this to keep the map in place.
-pub fn poisson_mean() -> [f32; 2] {
-    let sum = POISSON.iter().fold([0.0f32; 2], |s, p| [s[0] + p[0], s[1] + p[1]]);
-    sum.map(|v| v / 13.0)
-}
-
-/// The mean squared distance of the 13 taps (centre included) from their mean
-/// ([`poisson_mean`]), in radii^2: one blur pass of radius rho adds `rho^2 * this / 2` of
-/// variance per axis.
-pub fn poisson_second_moment() -> f32 {
-    let [mx, my] = poisson_mean();
-    let raw = POISSON.iter().map(|[x, y]| x * x + y * y).sum::<f32>() / 13.0;
-    raw - (mx * mx + my * my)
-}
-
-/// The 13 taps' variance along u and along v about their mean ([`poisson_mean`]), in radii^2:
-/// the disc is not isotropic (0.352 along u, 0.285 along v), so a blur that should add the same
-/// variance along both axes sizes its radius per axis.
-pub fn poisson_axis_variance() -> [f32; 2] {
-    std::array::from_fn(|axis| centred_taps(axis).map(|o| o * o).sum::<f32>() / 13.0)
-}
-
-/// The 13 taps' coordinates along `axis` (0: u, 1: v), centre first, moved by minus their mean
-/// ([`poisson_mean`]) as the blur places them, in radii.
-pub fn centred_taps(axis: usize) -> impl Iterator<Item = f32> {
-    let mean = poisson_mean()[axis];
-    std::iter::once(0.0).chain(POISSON.iter().map(move |p| p[axis])).map(move |p| p - mean)
-}
-
-/// The derived kernel radius (mm) for `passes` blur passes so that their combined variance per
-/// axis equals `variance_mm2` (the profile's luminance-weighted variance).
-pub fn kernel_mm_for(variance_mm2: f32, passes: u32) -> f32 {
-    let per_pass = poisson_second_moment() / 2.0;
-    (variance_mm2 / (passes.max(1) as f32 * per_pass)).sqrt()
-}
+pub use crate::skin::poisson::{
+    MAX_KERNEL_TEXELS, POISSON, poisson_axis_variance, poisson_mean, poisson_second_moment,
+};
 
 /// Everything the skin effects add to a base-pass scene; the default adds nothing.
 #[derive(Debug, Clone, PartialEq)]
@@ -261,7 +144,7 @@ pub struct SkinSetup {
 
 impl SkinSetup {
     /// The passes the GPU runs for this setup, in order (the one order,
-    /// [`crate::graph::ordered_passes`]; for a scene's setup the same list as its graph's).
+    /// `crate::graph::ordered_passes`; for a scene's setup the same list as its graph's).
     pub fn passes(&self) -> Vec<crate::graph::PassKind> {
         let translucent = self.shadow.as_ref().is_some_and(|s| !s.translucent.is_empty());
         crate::graph::ordered_passes(self.shadow.is_some(), translucent, self.tsd.as_ref().map(TsdSetup::blurs))
@@ -335,7 +218,7 @@ fn any_up(dir: Vec3) -> Vec3 {
 
 /// Whether a sphere is at least partly inside the frustum of `view_proj` (the TSD frustum
 /// culling test; planes from the matrix's rows, Gribb-Hartmann, wgpu depth 0..1).
-pub fn sphere_in_frustum(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
+pub(crate) fn sphere_in_frustum(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
     let m = view_proj.transpose();
     let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
     let planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
@@ -348,7 +231,7 @@ pub fn sphere_in_frustum(view_proj: Mat4, centre: Vec3, radius: f32) -> bool {
 
 /// The sphere's projected diameter in pixels for an image `height` pixels tall (the TSD distance
 /// culling measure); infinite when the camera is inside it.
-pub fn projected_diameter(view_proj: Mat4, eye: Vec3, centre: Vec3, radius: f32, height: u32) -> f32 {
+pub(crate) fn projected_diameter(view_proj: Mat4, eye: Vec3, centre: Vec3, radius: f32, height: u32) -> f32 {
     let distance = eye.distance(centre);
     if distance <= radius {
         return f32::INFINITY;
@@ -358,7 +241,7 @@ pub fn projected_diameter(view_proj: Mat4, eye: Vec3, centre: Vec3, radius: f32,
 
 /// The vertical focal scale of a perspective view-projection (cot(fov/2)): the length of the
 /// matrix's second row in its spatial part.
-pub fn focal_from(view_proj: Mat4) -> f32 {
+pub(crate) fn focal_from(view_proj: Mat4) -> f32 {
     view_proj.row(1).truncate().length()
 }
 

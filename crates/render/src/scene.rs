@@ -5,7 +5,7 @@
 //! default). Relative paths are taken against the scene file's folder. Validation happens once,
 //! here: a [`Scene`] holds only values the renderer can use (finite, unit directions, exponents
 //! above zero, a field of view inside (0, 180) degrees, at most [`MAX_LIGHTS`] lights and
-//! [`MAX_LOBES`] lobes, effects the rules of [`crate::effect`] allow). Every error names the file
+//! `MAX_LOBES` lobes, effects the rules of [`crate::effect`] allow). Every error names the file
 //! and the field (`light[1].direction`). The scene deserialises into the shading types
 //! ([`Light`], [`Lafortune`], [`SpecularMode`]); it keeps its file for later messages.
 //!
@@ -107,7 +107,7 @@ pub struct Scene {
     pub cameras: Vec<Camera>,
     /// Output size and optional path.
     pub output: Output,
-    /// The effects, in file order, without repeats, allowed by [`effect::check_rules`].
+    /// The effects, in file order, without repeats, allowed by `effect::check_rules`.
     pub effects: Vec<Effect>,
     /// The scattering tables (`[preintegrated]`, `[environment]`, `[shadow]`, `[tsd]`).
     pub skin: SkinOptions,

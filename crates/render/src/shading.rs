@@ -30,7 +30,7 @@ use rayon::prelude::*;
 /// Most lights one pass shades (the WGSL uniform arrays have this length).
 pub const MAX_LIGHTS: usize = 4;
 /// Most Lafortune lobes one pass evaluates.
-pub const MAX_LOBES: usize = 4;
+pub(crate) const MAX_LOBES: usize = 4;
 
 /// One mesh vertex as the GPU reads it (48 bytes, `#[repr(C)]`). `tangent.w` is the handedness:
 /// bitangent = cross(normal, tangent.xyz) * tangent.w (MikkTSpace convention).
@@ -187,7 +187,7 @@ impl Texture {
     /// for odd sizes). For normal maps this averages the unnormalised vectors, so a bumpy region
     /// becomes a shorter, smoother vector that the shader renormalises: distant skin does not
     /// sparkle (normal-aware filtering without extra storage).
-    pub fn downsample(&self) -> Self {
+    pub(crate) fn downsample(&self) -> Self {
         let width = (self.width / 2).max(1);
         let height = (self.height / 2).max(1);
         Self::from_fn(width, height, |x, y| {
@@ -222,7 +222,7 @@ pub struct RenderInputs {
     pub camera: Camera,
     /// At most [`MAX_LIGHTS`] lights.
     pub lights: Vec<Light>,
-    /// The BRDF, at most [`MAX_LOBES`] lobes.
+    /// The BRDF, at most `MAX_LOBES` lobes.
     pub brdf: Lafortune,
     /// Normal map vectors in texture space (decoded to [-1, 1]; zero = no detail).
     pub normal_map: Texture,
@@ -247,7 +247,7 @@ pub struct ShadingParams<'a> {
     pub eye: Vec3,
     /// Lights (only the first [`MAX_LIGHTS`] are used).
     pub lights: &'a [Light],
-    /// The BRDF (only the first [`MAX_LOBES`] lobes are used).
+    /// The BRDF (only the first `MAX_LOBES` lobes are used).
     pub brdf: &'a Lafortune,
     /// Normal map.
     pub normal_map: &'a Texture,
@@ -335,7 +335,7 @@ pub fn tangent_frame(normal: Vec3, tangent: Vec4) -> (Vec3, Vec3, Vec3) {
 /// The unit part of `v` perpendicular to the unit `n`, or `any_perpendicular` when `v` is
 /// (nearly) parallel to `n`, zero or not finite. The threshold is relative (1e-4 of |v|), so a
 /// tangent parallel to the normal up to rounding does not normalise rounding noise.
-pub fn perpendicular_part(v: Vec3, n: Vec3) -> Vec3 {
+pub(crate) fn perpendicular_part(v: Vec3, n: Vec3) -> Vec3 {
     let p = v - n * n.dot(v);
     let len = p.length();
     if len > 1e-4 * v.length() && len.is_finite() { p / len } else { any_perpendicular(n) }
@@ -348,7 +348,7 @@ fn any_perpendicular(n: Vec3) -> Vec3 {
 }
 
 /// The unit vector from `world` toward the light, and the light's irradiance there.
-pub fn light_at(light: &Light, world: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn light_at(light: &Light, world: Vec3) -> (Vec3, Vec3) {
     let radiance = light.color * light.intensity;
     match light.kind {
         LightKind::Directional { toward } => (normalize_or(toward, Vec3::Z), radiance),
@@ -398,7 +398,7 @@ pub fn decode_normal(texel: Vec4, green: GreenAxis) -> Vec3 {
 
 /// Express texture-space `d` in the frame whose z is the map normal `n` (x follows the texture's
 /// u direction projected onto the perturbed surface).
-pub fn to_normal_frame(n: Vec3, d: Vec3) -> Vec3 {
+pub(crate) fn to_normal_frame(n: Vec3, d: Vec3) -> Vec3 {
     let t = perpendicular_part(Vec3::X, n);
     let b = n.cross(t);
     Vec3::new(d.dot(t), d.dot(b), d.dot(n))

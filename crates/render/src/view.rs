@@ -1,27 +1,13 @@
 //! What the interactive viewer draws, without a window: a scene's pass graph with some of its
-//! effects switched off and the base pass's ingredients toggled, rendered offscreen. The viewer
-//! (`crate::viewer`, cargo feature `viewer`) shows these frames; the tests draw them headless,
-//! so the path a user sees is the path that is tested.
+//! effects switched off and the base pass's ingredients toggled, rendered offscreen through the
+//! [`Renderer`]. The viewer (`crate::viewer`, cargo feature `viewer`) shows these frames; the
+//! tests draw them headless, so the path a user sees is the path that is tested.
 
 use crate::effect::Effect;
-use crate::gpu::{Gpu, GpuError, PreparedScene, Rendered, Target};
-use crate::graph::PassGraph;
-use crate::load::{LoadError, Loaded};
-use crate::scene::Scene;
-use crate::shading::{Camera, Light, SpecularMode, Texture};
-use crate::skin::setup;
-
-/// What went wrong drawing a frame.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum FrameError {
-    /// The renderer failed.
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-    /// A table or map of an effect could not be built.
-    #[error(transparent)]
-    Load(#[from] LoadError),
-}
+use crate::load::Loaded;
+use crate::renderer::{Frame, FrameOptions, Prepared, RenderError, Renderer};
+use crate::scene::{Camera, Scene};
+use crate::shading::{Light, SpecularMode, Texture};
 
 /// The switches of one frame.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -62,17 +48,23 @@ impl Toggles {
 }
 
 /// A scene loaded once, its frames prepared once per set of toggles (pipelines and tables stay
-/// cached in the [`Gpu`] across them).
+/// cached in the [`Renderer`] across them).
 pub struct ViewSession {
     scene: Scene,
     loaded: Loaded,
-    prepared: Vec<(Toggles, PreparedScene)>,
+    options: FrameOptions,
+    warnings: Vec<String>,
+    prepared: Vec<(Toggles, Prepared)>,
 }
 
 impl ViewSession {
-    /// A session on `scene` and its loaded inputs.
-    pub fn new(scene: Scene, loaded: Loaded) -> ViewSession {
-        ViewSession { scene, loaded, prepared: Vec::new() }
+    /// A session on `scene` drawn with `options`, loaded (and memory-checked) once by `renderer`.
+    ///
+    /// # Errors
+    /// As [`Renderer::prepare`]'s loading.
+    pub fn new(renderer: &Renderer, scene: Scene, options: FrameOptions) -> Result<ViewSession, RenderError> {
+        let (loaded, explanation) = renderer.load(&scene, &options)?;
+        Ok(ViewSession { scene, loaded, options, warnings: explanation.warnings, prepared: Vec::new() })
     }
 
     /// The scene.
@@ -80,9 +72,36 @@ impl ViewSession {
         &self.scene
     }
 
+    /// Notes of the loading and the plan, for the user.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
     /// The effects the scene lists (what the viewer's number keys toggle).
     pub fn effects(&self) -> &[Effect] {
         &self.scene.effects
+    }
+
+    /// The frame size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.options.width, self.options.height)
+    }
+
+    /// Draws the next frames at `width x height` (the window was resized): every prepared set of
+    /// toggles gets a new target, memory-checked.
+    ///
+    /// # Errors
+    /// A frame over the memory limit or a size the device refuses.
+    pub fn resize(&mut self, renderer: &Renderer, width: u32, height: u32) -> Result<(), RenderError> {
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        self.options.width = width;
+        self.options.height = height;
+        for (_, prepared) in &mut self.prepared {
+            renderer.retarget(&self.scene, prepared, (width, height), self.options.encoding)?;
+        }
+        Ok(())
     }
 
     /// The scene's first light, as loaded.
@@ -90,34 +109,31 @@ impl ViewSession {
         self.loaded.inputs.lights.first().copied()
     }
 
-    /// Draws one frame with `toggles` from `camera`, the first light replaced by `light`, into
-    /// `target`, and reads it back.
+    /// Draws one frame with `toggles` from `camera`, the first light replaced by `light`, and
+    /// reads it back.
     ///
     /// # Errors
     /// A table that cannot be built, or a renderer error.
     pub fn frame(
         &mut self,
-        gpu: &Gpu,
+        renderer: &Renderer,
         toggles: &Toggles,
         camera: &Camera,
         light: Option<Light>,
-        target: &Target,
-    ) -> Result<Rendered, FrameError> {
+    ) -> Result<Frame, RenderError> {
         if !self.prepared.iter().any(|(t, _)| t == toggles) {
-            let prepared = self.prepare(gpu, toggles)?;
+            let prepared = self.prepare(renderer, toggles)?;
             self.prepared.push((toggles.clone(), prepared));
         }
         let (_, prepared) = self.prepared.iter_mut().find(|(t, _)| t == toggles).expect("prepared above");
-        prepared.set_camera(camera);
         if let Some(light) = light {
             prepared.set_light(0, &light);
         }
-        gpu.draw(prepared, target)?;
-        Ok(gpu.read(target)?)
+        renderer.draw(prepared, camera)
     }
 
     /// The graph of the scene with `toggles.off` removed, built and uploaded.
-    fn prepare(&self, gpu: &Gpu, toggles: &Toggles) -> Result<PreparedScene, FrameError> {
+    fn prepare(&self, renderer: &Renderer, toggles: &Toggles) -> Result<Prepared, RenderError> {
         let mut scene = self.scene.clone();
         scene.effects.retain(|e| !toggles.off.contains(e));
         let mut loaded = self.loaded.clone();
@@ -128,8 +144,6 @@ impl ViewSession {
             loaded.inputs.brdf.lobes.clear();
         }
         loaded.inputs.specular = if toggles.vertex_specular { SpecularMode::Vertex } else { SpecularMode::Pixel };
-        let graph = PassGraph::build(&scene);
-        let skin = setup::build(&scene, &loaded, &graph)?;
-        Ok(gpu.prepare_with(&loaded.inputs, &skin)?)
+        renderer.prepare_loaded(&scene, loaded, &self.options, Default::default())
     }
 }

@@ -28,11 +28,10 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::gpu::{Gpu, GpuError, OutputFormat, Target};
-use crate::load::Loaded;
-use crate::scene::{self, Scene};
-use crate::shading::{LightKind, ToneCurve};
-use crate::view::{FrameError, Toggles, ViewSession};
+use crate::renderer::{RenderError, Renderer};
+use crate::scene;
+use crate::shading::LightKind;
+use crate::view::{Toggles, ViewSession};
 
 /// What went wrong opening or running the window.
 #[derive(Debug, thiserror::Error)]
@@ -41,12 +40,9 @@ pub enum ViewerError {
     /// No display, or the window system refused a window.
     #[error("cannot open a window ({0}): the viewer needs a display (X11 or Wayland; DISPLAY or WAYLAND_DISPLAY)")]
     Window(String),
-    /// The renderer failed.
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
     /// A frame could not be drawn.
     #[error(transparent)]
-    Frame(#[from] FrameError),
+    Frame(#[from] RenderError),
 }
 
 /// The orbit camera: the scene camera's target and up, a direction and a distance.
@@ -70,13 +66,14 @@ impl Orbit {
 }
 
 struct App {
-    gpu: Gpu,
+    renderer: Renderer,
     session: ViewSession,
     orbit: Orbit,
     toggles: Toggles,
     light_turn: (f32, f32),
     size: (u32, u32),
-    target: Option<Target>,
+    /// The size the session last drew at (its targets follow the window).
+    drawn: Option<(u32, u32)>,
     window: Option<Rc<Window>>,
     surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
     drag: Option<(MouseButton, PhysicalPosition<f64>)>,
@@ -89,19 +86,20 @@ struct App {
 ///
 /// # Errors
 /// No display, or a renderer error.
-pub fn run(gpu: Gpu, scene: Scene, mut loaded: Loaded, size: (u32, u32)) -> Result<(), ViewerError> {
-    loaded.inputs.tone = ToneCurve::Reinhard;
+pub fn run(renderer: Renderer, session: ViewSession) -> Result<(), ViewerError> {
+    let scene = session.scene();
     let camera = scene.cameras[0];
-    let toggles = Toggles::all_on(&scene);
+    let toggles = Toggles::all_on(scene);
+    let size = session.size();
     let event_loop = EventLoop::new().map_err(|e| ViewerError::Window(e.to_string()))?;
     let mut app = App {
-        gpu,
-        session: ViewSession::new(scene, loaded),
+        renderer,
+        session,
         orbit: Orbit { start: camera, yaw: 0.0, pitch: 0.0, zoom: 1.0 },
         toggles,
         light_turn: (0.0, 0.0),
         size,
-        target: None,
+        drawn: None,
         window: None,
         surface: None,
         drag: None,
@@ -130,16 +128,16 @@ impl App {
 
     fn draw(&mut self) -> Result<(), ViewerError> {
         let (w, h) = self.size;
-        let fresh = self.target.is_none();
+        let fresh = self.drawn != Some((w, h));
         if fresh {
-            self.target = Some(self.gpu.create_target(w, h, OutputFormat::Srgb8)?);
+            self.session.resize(&self.renderer, w, h)?;
+            self.drawn = Some((w, h));
         }
         let toggles = self.toggles.clone();
-        let camera = crate::load::gpu_camera(&self.orbit.camera(), w, h);
+        let camera = self.orbit.camera();
         let light = self.light();
         let start = Instant::now();
-        let target = self.target.as_ref().expect("created above");
-        let frame = self.session.frame(&self.gpu, &toggles, &camera, light, target)?;
+        let frame = self.session.frame(&self.renderer, &toggles, &camera, light)?;
         self.last_frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let (Some(surface), Some(window)) = (self.surface.as_mut(), self.window.as_ref()) else { return Ok(()) };
         let (Some(nw), Some(nh)) = (NonZeroU32::new(w), NonZeroU32::new(h)) else { return Ok(()) };
@@ -165,7 +163,7 @@ impl App {
             on(toggles.specular),
             if toggles.vertex_specular { "per vertex" } else { "per pixel" },
             self.last_frame_ms,
-            self.gpu.adapter_name()
+            self.renderer.adapter_name()
         ));
         Ok(())
     }
@@ -224,10 +222,7 @@ impl ApplicationHandler for App {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
                 let size = (size.width.max(1), size.height.max(1));
-                if size != self.size {
-                    self.size = size;
-                    self.target = None;
-                }
+                self.size = size;
                 self.redraw();
             }
             WindowEvent::RedrawRequested => {

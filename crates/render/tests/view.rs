@@ -5,8 +5,7 @@
 use std::path::Path;
 
 use skinkit_render::effect::Effect;
-use skinkit_render::gpu::{Gpu, OutputFormat, Rendered};
-use skinkit_render::load;
+use skinkit_render::renderer::{Encoding, Frame as Rendered, FrameOptions, Renderer};
 use skinkit_render::scene::Scene;
 use skinkit_render::view::{Toggles, ViewSession};
 
@@ -18,8 +17,8 @@ fn changed(a: &Rendered, b: &Rendered) -> usize {
 
 #[test]
 fn toggling_one_effect_changes_the_frame() {
-    let gpu = match Gpu::new() {
-        Ok(gpu) => gpu,
+    let renderer = match Renderer::new() {
+        Ok(renderer) => renderer,
         Err(e) => {
             eprintln!("skipping: {e}");
             return;
@@ -32,21 +31,20 @@ fn toggling_one_effect_changes_the_frame() {
     );
     let scene = Scene::parse(&text, &file).unwrap();
     assert_eq!(scene.effects, [Effect::Shadows, Effect::Tsd]);
-    let loaded = load::load(&scene, SIZE, SIZE, gpu.max_texture_side()).unwrap();
-    let camera = load::gpu_camera(&scene.cameras[0], SIZE, SIZE);
-    let target = gpu.create_target(SIZE, SIZE, OutputFormat::Srgb8).unwrap();
-    let mut session = ViewSession::new(scene.clone(), loaded);
+    let camera = scene.cameras[0];
+    let options = FrameOptions::new(SIZE, SIZE, Encoding::Display);
+    let mut session = ViewSession::new(&renderer, scene.clone(), options).unwrap();
     let mut toggles = Toggles::all_on(&scene);
-    let all = session.frame(&gpu, &toggles, &camera, None, &target).unwrap();
+    let all = session.frame(&renderer, &toggles, &camera, None).unwrap();
     let lit = all.srgb_bytes.chunks_exact(4).filter(|p| p[..3].iter().any(|&c| c > 8)).count();
     assert!(lit > (SIZE * SIZE / 10) as usize, "the head covers {lit} pixels");
     for effect in [Effect::Shadows, Effect::Tsd] {
         toggles.flip(effect);
-        let without = session.frame(&gpu, &toggles, &camera, None, &target).unwrap();
+        let without = session.frame(&renderer, &toggles, &camera, None).unwrap();
         assert!(changed(&all, &without) > 50, "{effect} off changed {} samples", changed(&all, &without));
         toggles.flip(effect);
     }
     // Back on: the same frame as before, from the cached preparation.
-    let again = session.frame(&gpu, &toggles, &camera, None, &target).unwrap();
+    let again = session.frame(&renderer, &toggles, &camera, None).unwrap();
     assert_eq!(changed(&all, &again), 0);
 }

@@ -30,8 +30,8 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use skinkit_maps::Samples;
 use skinkit_maps::io::{self, Limits};
-use skinkit_render::gpu::Gpu;
 use skinkit_render::highlight::{SpecularShare, specular_share};
+use skinkit_render::renderer::Renderer;
 
 use super::figures::{grid, write_text};
 use super::render::{Job, RenderReport, render};
@@ -92,8 +92,14 @@ size = [{PANEL}, {PANEL}]
 
 /// Renders figure 7 of `map` (an absolute path with forward slashes) into `dir`, which already
 /// holds `head.obj`; every render's report is pushed to `renders`.
-pub fn figure7(map: &str, dir: &Path, gpu: &Gpu, out: &Output, renders: &mut Vec<RenderReport>) -> Result<Figure7> {
-    let mut scenes = Scenes { dir, gpu, out, renders };
+pub fn figure7(
+    map: &str,
+    dir: &Path,
+    renderer: &Renderer,
+    out: &Output,
+    renders: &mut Vec<RenderReport>,
+) -> Result<Figure7> {
+    let mut scenes = Scenes { dir, renderer, out, renders };
     let smooth = scenes.draw("head-smooth", face_scene(None, true), "png")?;
     let skin = scenes.draw("head-skin", face_scene(Some(map), true), "png")?;
     let skin_share = scenes.share("head-skin", Some(map))?;
@@ -107,7 +113,7 @@ pub fn figure7(map: &str, dir: &Path, gpu: &Gpu, out: &Output, renders: &mut Vec
 /// Writes scenes into a folder and renders them on one device.
 struct Scenes<'a> {
     dir: &'a Path,
-    gpu: &'a Gpu,
+    renderer: &'a Renderer,
     out: &'a Output,
     renders: &'a mut Vec<RenderReport>,
 }
@@ -119,7 +125,7 @@ impl Scenes<'_> {
         write_text(&scene, &text)?;
         let image = self.dir.join(format!("{name}.{ext}"));
         let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
-        self.renders.push(render(&job, self.gpu, self.out)?);
+        self.renders.push(render(&job, self.renderer, self.out)?);
         Ok(image)
     }
 

@@ -20,10 +20,10 @@ use glam::{Vec2, Vec3};
 use serde::Serialize;
 use skinkit_maps::io::{self, Limits, PngLayout};
 use skinkit_maps::{Channels, Samples};
-use skinkit_render::gpu::Gpu;
 use skinkit_render::head;
 use skinkit_render::label::{RgbImage, draw_label};
 use skinkit_render::mesh::Mesh;
+use skinkit_render::renderer::Renderer;
 
 use super::figure7::{Figure7, figure7};
 use super::render::{Job, RenderReport, render};
@@ -193,24 +193,24 @@ pub fn figures(normal_map: &Path, mm_per_texel: Option<f64>, dir: &Path, out: &O
     head::write_obj(&patch(20.0, [0.47, 0.53], [0.12, 0.24]), &dir.join("patch.obj"))?;
 
     // One device for every render of the figures: shaders and pipelines are built once.
-    let gpu = Gpu::new()?;
+    let renderer = Renderer::new()?;
     let mut renders = Vec::new();
     let mut job = |name: &str, text: String| -> Result<PathBuf> {
         let scene = dir.join(format!("{name}.toml"));
         write_text(&scene, &text)?;
         let image = dir.join(format!("{name}.png"));
         let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
-        renders.push(render(&job, &gpu, out)?);
+        renders.push(render(&job, &renderer, out)?);
         Ok(image)
     };
     let lit: Vec<PathBuf> =
         AZIMUTHS_DEG.iter().map(|&a| job(&format!("patch-{a:03}"), patch_scene(&map, a))).collect::<Result<_>>()?;
 
-    let figure7 = figure7(&map, dir, &gpu, out, &mut renders)?;
+    let figure7 = figure7(&map, dir, &renderer, out, &mut renders)?;
     let height_round_trip = match mm_per_texel {
         Some(mm) => {
             let (exr, skin) = (normal_map.with_file_name("height.exr"), dir.join("head-skin.png"));
-            Some(round_trip(normal_map, &exr, mm, &skin, (dir, &gpu, out), &mut renders)?)
+            Some(round_trip(normal_map, &exr, mm, &skin, (dir, &renderer, out), &mut renders)?)
         }
         None => None,
     };
@@ -231,7 +231,7 @@ pub fn figures(normal_map: &Path, mm_per_texel: Option<f64>, dir: &Path, out: &O
             frames: None,
             reference: reference.then_some(REFERENCE_TEXELS),
         };
-        let report = render(&job, &gpu, out)?;
+        let report = render(&job, &renderer, out)?;
         let seconds = report.skin_seconds + report.images.iter().map(|i| i.render_seconds).sum::<f64>();
         renders.push(report);
         panels.push((name, image, seconds));

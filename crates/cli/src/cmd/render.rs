@@ -14,17 +14,13 @@ use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, PngLayout};
 use skinkit_maps::limits;
-use skinkit_render::gpu::{Gpu, Rendered};
-use skinkit_render::graph::PassGraph;
 use skinkit_render::load::{self, Plan};
+use skinkit_render::renderer::{self, Encoding, Frame, FrameOptions, Renderer, Shading};
 use skinkit_render::scene::{self, Scene};
-use skinkit_render::skin;
+use skinkit_render::skin::compare::Method;
 
 use crate::guard;
 use crate::output::Output;
-
-/// Largest texture side assumed by `--explain` when no adapter is present (WebGPU's default).
-const EXPLAIN_TEXTURE_SIDE: u32 = 8192;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -129,7 +125,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     check_outputs(&job, &resolved.scene, &resolved.path, args.report.as_deref())?;
     // One set: every image and the report appear together or not at all.
     let mut set = OutputSet::files();
-    let report = render_into(&job, &Gpu::new()?, out, &mut set, args.report.as_deref())?;
+    let report = render_into(&job, resolved, &Renderer::new()?, out, &mut set)?;
     if let Some(path) = &args.report {
         crate::pipeline::write_json_file(&mut set, path, &report)?;
     }
@@ -160,10 +156,12 @@ fn check_outputs(job: &Job, scene: &Scene, path: &Path, report: Option<&Path>) -
     guard::output_files(&outputs, &inputs)
 }
 
-/// Renders every image of a job on `gpu` and writes them, all or none (see [`render_into`]).
-pub fn render(job: &Job, gpu: &Gpu, out: &Output) -> Result<RenderReport> {
+/// Renders every image of a job on `renderer` and writes them, all or none (see [`render_into`]).
+pub fn render(job: &Job, renderer: &Renderer, out: &Output) -> Result<RenderReport> {
+    let resolved = resolve(job)?;
+    check_outputs(job, &resolved.scene, &resolved.path, None)?;
     let mut set = OutputSet::files();
-    let report = render_into(job, gpu, out, &mut set, None)?;
+    let report = render_into(job, resolved, renderer, out, &mut set)?;
     set.commit().with_context(|| format!("cannot write the images of {}", job.scene.display()))?;
     Ok(report)
 }
@@ -197,7 +195,7 @@ fn resolve(job: &Job) -> Result<Resolved> {
 /// [`resolve`]; with `explain`, a scene without an output path explains as a PNG (nothing is
 /// written).
 fn resolve_for(job: &Job, explain: bool) -> Result<Resolved> {
-    let scene = Scene::load(&job.scene)?;
+    let scene = load_scene(&job.scene)?;
     let (width, height) = match job.size {
         Some((w, h)) => (side(w, "--size")?, side(h, "--size")?),
         None => (scene.output.size[0], scene.output.size[1]),
@@ -214,119 +212,103 @@ fn resolve_for(job: &Job, explain: bool) -> Result<Resolved> {
 
 fn explain(job: &Job) -> Result<Explained> {
     let r = resolve_for(job, true)?;
-    let (target_format, _) = load::target_for(r.format);
-    let gpu = Gpu::new();
-    let (adapter, limit) = match &gpu {
-        Ok(gpu) => (Some(gpu.adapter_name()), gpu.max_texture_side()),
-        Err(_) => (None, EXPLAIN_TEXTURE_SIDE),
-    };
-    let loaded = load::load(&r.scene, r.width, r.height, limit)?;
-    let graph = PassGraph::build(&r.scene);
-    let plan = load::plan(&r.scene, &loaded, &graph, r.width, r.height, target_format);
-    let mut warnings = loaded.warnings;
-    warnings.extend(plan.notes.iter().cloned());
-    Ok(Explained { scene: job.scene.display().to_string(), adapter, width: r.width, height: r.height, plan, warnings })
+    let renderer = Renderer::new().ok();
+    let options = frame_options(&r, job, u64::MAX)?;
+    let explained = renderer::explain(&r.scene, &options, renderer.as_ref())?;
+    Ok(Explained {
+        scene: job.scene.display().to_string(),
+        adapter: renderer.map(|r| r.adapter_name()),
+        width: r.width,
+        height: r.height,
+        plan: explained.plan,
+        warnings: explained.warnings,
+    })
 }
 
-/// Renders every image of a job on `gpu` (a session: its shaders, pipelines and tables are
-/// reused by the next job) and stages them in `set`; `report` is where the caller will write the
-/// report (checked with the images before any work).
-fn render_into(job: &Job, gpu: &Gpu, out: &Output, set: &mut OutputSet, report: Option<&Path>) -> Result<RenderReport> {
+/// The frames a job asks for: the size and encoding of its output, the scene's shading or with
+/// `--reference` the exact light map, within `memory_limit`.
+fn frame_options(r: &Resolved, job: &Job, memory_limit: u64) -> Result<FrameOptions> {
+    let shading = match job.reference {
+        None => Shading::Scene,
+        Some(size) if (16..=8192).contains(&size) => Shading::Method(Method::Reference { size }),
+        Some(size) => return Err(guard::usage(format!("--reference: {size} is outside 16..=8192 texels"))),
+    };
+    Ok(FrameOptions { shading, memory_limit, ..FrameOptions::new(r.width, r.height, Encoding::for_output(r.format)) })
+}
+
+/// Renders every image of a job, its scene already loaded and its outputs checked (`resolved`),
+/// on `renderer` (a session: its shaders, pipelines and tables are reused by the next job) and
+/// stages them in `set`.
+fn render_into(
+    job: &Job,
+    resolved: Resolved,
+    renderer: &Renderer,
+    out: &Output,
+    set: &mut OutputSet,
+) -> Result<RenderReport> {
     let start = Instant::now();
-    let Resolved { scene, width, height, path, format } = resolve(job)?;
-    check_outputs(job, &scene, &path, report)?;
-    let (target_format, tone) = load::target_for(format);
-    let what = format!("rendering {width}x{height}");
-    let frame_bytes = target_format.frame_bytes(width, height);
-    limits::check_memory(&job.scene.display().to_string(), &what, frame_bytes, out.memory_limit())?;
-    let t = Instant::now();
-    let mut loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
-    loaded.inputs.tone = tone;
-    let graph = PassGraph::build(&scene);
-    let plan = load::plan(&scene, &loaded, &graph, width, height, target_format);
-    loaded.warnings.extend(plan.notes.iter().cloned());
-    loaded.warnings.iter().for_each(|warning| out.warn(warning));
-    let load_seconds = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let skin = skin_setup(job, &scene, &loaded, &graph, out)?;
-    let skin_seconds = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let mut prepared = gpu.prepare_with(&loaded.inputs, &skin)?;
-    let upload_seconds = t.elapsed().as_secs_f64();
-    let target = gpu.create_target(width, height, target_format)?;
-
     let frames = job.frames.unwrap_or(1);
     if !(1..=limits::MAX_FRAMES).contains(&frames) {
         return Err(guard::usage(format!("--frames: {frames} is not a frame count from 1 to {}", limits::MAX_FRAMES)));
     }
+    let options = frame_options(&resolved, job, out.memory_limit())?;
+    let Resolved { scene, width, height, path, format } = resolved;
+    if job.reference.is_some() {
+        let size = job.reference.unwrap_or_default();
+        out.note(format!("baking and scattering the {size}x{size} reference light map on the CPU"));
+    }
+    let mut prepared = renderer.prepare(&scene, &options)?;
+    let explanation = prepared.explanation().clone();
+    explanation.warnings.iter().for_each(|warning| out.warn(warning));
     // One (camera, frame) at a time: nothing is held per frame but its line in the report.
     let bar = out.progress((scene.cameras.len() * frames) as u64, "render");
     let mut images = Vec::new();
     for (c, f) in (0..scene.cameras.len()).flat_map(|c| (0..frames).map(move |f| (c, f))) {
         let camera = if job.frames.is_some() { load::orbit(&scene.cameras[c], f, frames) } else { scene.cameras[c] };
-        prepared.set_camera(&load::gpu_camera(&camera, width, height));
         let file = numbered(&path, (scene.cameras.len() > 1).then_some(c), job.frames.map(|_| f));
-        let (render_seconds, write_seconds) = draw_and_stage(gpu, &prepared, &target, &file, format, set)?;
+        let t = Instant::now();
+        let frame = renderer.draw(&mut prepared, &camera)?;
+        let render_seconds = t.elapsed().as_secs_f64();
+        let write_seconds = stage(&frame, &file, format, set)?;
         images.push(Image { path: file.display().to_string(), camera: c, frame: f, render_seconds, write_seconds });
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let times = prepared.times();
     Ok(RenderReport {
         scene: job.scene.display().to_string(),
-        adapter: gpu.adapter_name(),
+        adapter: renderer.adapter_name(),
         width,
         height,
-        vertices: loaded.vertex_count,
-        triangles: loaded.triangle_count,
-        plan,
+        vertices: prepared.vertex_count(),
+        triangles: prepared.triangle_count(),
+        plan: explanation.plan,
         images,
-        warnings: loaded.warnings,
-        load_seconds,
-        skin_seconds,
-        upload_seconds,
+        warnings: explanation.warnings,
+        load_seconds: times.load.as_secs_f64(),
+        skin_seconds: times.skin.as_secs_f64(),
+        upload_seconds: times.upload.as_secs_f64(),
         total_seconds: start.elapsed().as_secs_f64(),
     })
 }
 
-/// Draws one frame into `target`, reads it back and stages it in `set` as `file`: the seconds
-/// of the draw and read, and of the write.
-fn draw_and_stage(
-    gpu: &Gpu,
-    prepared: &skinkit_render::gpu::PreparedScene,
-    target: &skinkit_render::gpu::Target,
-    file: &Path,
-    format: scene::OutputFormat,
-    set: &mut OutputSet,
-) -> Result<(f64, f64)> {
+/// Stages `frame` in `set` as `file`: the seconds of the write.
+fn stage(frame: &Frame, file: &Path, format: scene::OutputFormat, set: &mut OutputSet) -> Result<f64> {
     let t = Instant::now();
-    gpu.draw(prepared, target)?;
-    let rendered = gpu.read(target)?;
-    let render_seconds = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    set.write_file(file, |p| write_image(p, &rendered, format))
+    set.write_file(file, |p| write_image(p, frame, format))
         .with_context(|| format!("cannot write {}", file.display()))?;
-    Ok((render_seconds, t.elapsed().as_secs_f64()))
+    Ok(t.elapsed().as_secs_f64())
 }
 
-/// The skin effects' CPU set-up: the scene's own, or with `--reference` the exact light map.
-fn skin_setup(
-    job: &Job,
-    scene: &Scene,
-    loaded: &load::Loaded,
-    graph: &PassGraph,
-    out: &Output,
-) -> Result<skinkit_render::passes::SkinSetup> {
-    match job.reference {
-        None => Ok(skin::setup::build(scene, loaded, graph)?),
-        Some(size) => {
-            if !(16..=8192).contains(&size) {
-                return Err(guard::usage(format!("--reference: {size} is outside 16..=8192 texels")));
-            }
-            out.note(format!("baking and scattering the {size}x{size} reference light map on the CPU"));
-            Ok(skin::compare::Method::Reference { size }.setup(scene, loaded)?)
-        }
-    }
+thread_local! {
+    /// Scene files this thread has read (the test that `skinkit render` reads its scene once).
+    static SCENE_LOADS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// Reads a scene file: every scene of `render` is read here, and counted.
+fn load_scene(path: &Path) -> Result<Scene> {
+    SCENE_LOADS.with(|n| n.set(n.get() + 1));
+    Ok(Scene::load(path)?)
 }
 
 /// `skinkit view`.
@@ -342,18 +324,20 @@ pub struct ViewArgs {
 
 #[cfg(feature = "viewer")]
 pub fn view(args: ViewArgs, out: &Output) -> Result<i32> {
-    let scene = Scene::load(&args.scene)?;
+    let scene = load_scene(&args.scene)?;
     let (width, height) = match args.size {
         Some((w, h)) => (side(w, "--size")?, side(h, "--size")?),
         None => (scene.output.size[0].min(1280), scene.output.size[1].min(960)),
     };
-    let gpu = Gpu::new()?;
-    let loaded = load::load(&scene, width, height, gpu.max_texture_side())?;
-    for warning in &loaded.warnings {
+    let renderer = Renderer::new()?;
+    let options =
+        FrameOptions { memory_limit: out.memory_limit(), ..FrameOptions::new(width, height, Encoding::Display) };
+    let session = skinkit_render::view::ViewSession::new(&renderer, scene, options)?;
+    for warning in session.warnings() {
         out.warn(warning);
     }
     out.note("left drag: orbit, wheel: zoom, right drag: move the light, N: normal map, S: specular, V: per-vertex specular, 1-6: the scene's effects, R: reset, Esc: quit");
-    skinkit_render::viewer::run(gpu, scene, loaded, (width, height))?;
+    skinkit_render::viewer::run(renderer, session)?;
     Ok(0)
 }
 
@@ -382,7 +366,7 @@ fn numbered(path: &Path, camera: Option<usize>, frame: Option<usize>) -> PathBuf
 }
 
 /// Writes a rendered image atomically: PNG as 8-bit sRGB RGB, EXR as linear float RGB.
-pub fn write_image(path: &Path, image: &Rendered, format: scene::OutputFormat) -> skinkit_maps::Result<()> {
+pub fn write_image(path: &Path, image: &Frame, format: scene::OutputFormat) -> skinkit_maps::Result<()> {
     let (w, h) = (image.width as usize, image.height as usize);
     match format {
         scene::OutputFormat::Png => {
@@ -446,4 +430,46 @@ fn human(r: &RenderReport) -> String {
         s.push_str(&format!("\n  {}  render {:.3} s, write {:.3} s", i.path, i.render_seconds, i.write_seconds));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::output::GlobalArgs;
+
+    fn quiet() -> Output {
+        Output::new(&GlobalArgs { quiet: true, json: false, threads: None, memory_limit: None })
+    }
+
+    fn args(scene: &Path, out: &Path, explain: bool) -> Args {
+        Args {
+            scene: scene.to_owned(),
+            out: Some(out.to_owned()),
+            size: Some((32, 24)),
+            explain,
+            orbit: false,
+            frames: 1,
+            report: None,
+            reference: None,
+        }
+    }
+
+    /// Issue 38: `skinkit render` read its scene file twice (once to check the outputs, once to
+    /// render). Needs an adapter (lavapipe) for the render; `--explain` runs without one.
+    #[test]
+    fn render_reads_its_scene_once() {
+        let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/scenes/skin-sphere.toml");
+        let dir = tempfile::tempdir().unwrap();
+        let image = dir.path().join("sphere.png");
+        let loads = || SCENE_LOADS.with(|n| n.get());
+        let before = loads();
+        run(args(&scene, &image, true), &quiet()).unwrap();
+        assert_eq!(loads() - before, 1, "--explain reads the scene once");
+        let before = loads();
+        run(args(&scene, &image, false), &quiet()).unwrap();
+        assert_eq!(loads() - before, 1, "a render reads the scene once");
+        assert!(image.exists());
+    }
 }

@@ -12,7 +12,7 @@ use skinkit_height::compare::normals_of;
 use skinkit_height::round_trip::as_central_differences;
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::{NormalEncoding, NormalMap, Vec3};
-use skinkit_render::gpu::Gpu;
+use skinkit_render::renderer::Renderer;
 
 use super::figure7::face_scene;
 use super::figures::{grid, rgba, write_text};
@@ -41,7 +41,7 @@ pub fn round_trip(
     height_exr: &Path,
     mm_per_texel: f64,
     skin_render: &Path,
-    (dir, gpu, out): (&Path, &Gpu, &Output),
+    (dir, renderer, out): (&Path, &Renderer, &Output),
     renders: &mut Vec<RenderReport>,
 ) -> Result<RoundTripFigure> {
     let limits = Limits::default();
@@ -64,7 +64,7 @@ pub fn round_trip(
         write_text(&scene, &face_scene(Some(&file.to_string_lossy().replace('\\', "/")), true))?;
         let image = dir.join(format!("head-{name}.png"));
         let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
-        renders.push(render(&job, gpu, out)?);
+        renders.push(render(&job, renderer, out)?);
         Ok(image)
     };
     let height = draw("height-normals", &NormalMap::from_grid(from_height))?;

@@ -25,7 +25,7 @@ pub struct Geometry<'a> {
 }
 
 /// The material's numbers and which images it samples.
-pub struct MaterialSpec {
+pub(crate) struct MaterialSpec {
     /// Linear RGBA multiplying the base colour texture (or standing for it).
     pub base_color_factor: [f32; 4],
     /// glTF `roughnessFactor`.
@@ -41,7 +41,7 @@ pub enum ImageSource<'a> {
 }
 
 /// One texture of the material.
-pub struct ImageSpec<'a> {
+pub(crate) struct ImageSpec<'a> {
     /// The image's name in the document.
     pub name: &'static str,
     /// Where its PNG is.

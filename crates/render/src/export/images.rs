@@ -62,7 +62,7 @@ pub struct Png {
 ///
 /// # Errors
 /// The PNG encoder's message (it fails only on sizes PNG cannot hold).
-pub fn albedo_png(albedo: &Texture) -> Result<Png, String> {
+pub(crate) fn albedo_png(albedo: &Texture) -> Result<Png, String> {
     let to_byte = |v: f32| (linear_to_srgb(v) * 255.0).round() as u16;
     let samples: Vec<u16> = albedo.texels.iter().flat_map(|t| [t[0], t[1], t[2]].map(to_byte)).collect();
     encode(albedo.width, albedo.height, 8, &samples)
@@ -73,7 +73,7 @@ pub fn albedo_png(albedo: &Texture) -> Result<Png, String> {
 ///
 /// # Errors
 /// As [`albedo_png`].
-pub fn normal_png(map: &NormalMap, bits: NormalBits) -> Result<(Png, usize), String> {
+pub(crate) fn normal_png(map: &NormalMap, bits: NormalBits) -> Result<(Png, usize), String> {
     let max = if bits == NormalBits::Eight { 255 } else { 65535 };
     let encoding = NormalEncoding::default();
     let mut invalid = 0usize;

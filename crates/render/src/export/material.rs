@@ -49,7 +49,7 @@ pub fn roughness(brdf: &Lafortune) -> Roughness {
 
 /// Walter et al.'s Blinn-Phong to GGX rule `alpha = sqrt(2 / (n + 2))`; a non-finite or
 /// non-positive exponent gives 1 (fully rough), so no input yields NaN.
-pub fn blinn_phong_alpha(n: f32) -> f32 {
+pub(crate) fn blinn_phong_alpha(n: f32) -> f32 {
     if !(n.is_finite() && n > 0.0) {
         return 1.0;
     }
@@ -71,7 +71,7 @@ fn sharpest<'a>(candidates: impl Iterator<Item = (usize, &'a Lobe)>) -> Option<(
 /// The glTF `baseColorFactor` (linear RGBA) for a scene: white under an albedo map (the map is
 /// the colour), the constant itself, or the BRDF's `rho_d` when the scene gives no albedo (what
 /// the renderer shades with in each case).
-pub fn base_color_factor(albedo: Option<&crate::scene::Albedo>, brdf: &Lafortune) -> [f32; 4] {
+pub(crate) fn base_color_factor(albedo: Option<&crate::scene::Albedo>, brdf: &Lafortune) -> [f32; 4] {
     let rgb = match albedo {
         Some(crate::scene::Albedo::Map(_)) => Vec3::ONE,
         Some(crate::scene::Albedo::Constant(c)) => *c,

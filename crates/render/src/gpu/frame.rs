@@ -49,9 +49,14 @@ impl PreparedScene {
 impl PreparedScene {
     /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the
     /// uniform block, which every draw writes anyway).
-    pub fn set_camera(&mut self, camera: &crate::shading::Camera) {
+    pub(crate) fn set_camera(&mut self, camera: &crate::shading::Camera) {
         self.globals.scene.view_proj = camera.view_proj.to_cols_array_2d();
         self.globals.scene.eye = camera.eye.to_array();
+    }
+
+    /// Sets the tone curve of the next [`Gpu::draw`] (the target's format may still impose one).
+    pub(crate) fn set_tone(&mut self, tone: ToneCurve) {
+        self.globals.base.tone = tone_code(tone);
     }
 
     /// Replaces light `index` (below the scene's light count) for the next [`Gpu::draw`].

@@ -160,7 +160,7 @@ impl OutputFormat {
     /// readback buffer and its mapped copy, the linear f32 RGBA pixels and, for
     /// [`OutputFormat::Srgb8`], the encoded bytes. Checked against the memory limit before the
     /// target is created (issue 15: a 16384x16384 render reached 9.5 GB).
-    pub fn frame_bytes(self, width: u32, height: u32) -> u64 {
+    pub(crate) fn frame_bytes(self, width: u32, height: u32) -> u64 {
         let bpp = u64::from(self.bytes_per_pixel());
         let srgb = if self == Self::Srgb8 { 4 } else { 0 };
         let per_pixel = bpp + 4 + 2 * bpp + 16 + srgb;

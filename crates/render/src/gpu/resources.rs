@@ -24,7 +24,7 @@ const TABLE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl Gpu {
     /// Rgba32Float for tables where the device filters it, else Rgba16Float.
-    pub fn table_format(&self) -> wgpu::TextureFormat {
+    pub(crate) fn table_format(&self) -> wgpu::TextureFormat {
         if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
             TABLE_FORMAT
         } else {
@@ -36,7 +36,7 @@ impl Gpu {
     /// blur pass rounds the map to its format, and a half float's rounding (lavapipe truncates)
     /// darkens it by about 2^-12 per pass: red, which goes through every pass of the widest
     /// Gaussians, lost 0.4 % more at 8 passes per Gaussian than at one on the sample head.
-    pub fn light_map_format(&self) -> wgpu::TextureFormat {
+    pub(crate) fn light_map_format(&self) -> wgpu::TextureFormat {
         if self.device.features().contains(wgpu::Features::FLOAT32_FILTERABLE) {
             LIGHT_MAP_FORMAT
         } else {

@@ -1,4 +1,4 @@
-//! The passes of a frame, one module each, in the order [`crate::graph::ordered_passes`] gives:
+//! The passes of a frame, one module each, in the order `crate::graph::ordered_passes` gives:
 //! `shadow` (the key light's depth), `translucent` (the translucent casters' opacity),
 //! `tsd_prepass`, `light_map` and `blur` (texture-space diffusion, with what they share in
 //! `tsd`), then `base`. Each module owns its WGSL (beside it), the resources it allocates,

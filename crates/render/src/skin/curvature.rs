@@ -32,14 +32,14 @@
 //! facet seams; it lives in the shader, not here.
 //!
 //! # Hard cases
-//! - Vertices at the same position up to [`WELD_TOLERANCE`] (UV seams, pole fans) are welded first, so a seam is
+//! - Vertices at the same position up to `WELD_TOLERANCE` (UV seams, pole fans) are welded first, so a seam is
 //!   not a boundary and both copies get the same value.
 //! - Triangles with an index out of range, a repeated (welded) corner, a non-finite corner, or a
 //!   zero or non-finite area are skipped; cotangents are clamped to `[-COT_LIMIT, COT_LIMIT]`
 //!   so slivers cannot dominate.
 //! - Boundary vertices (an edge used by one triangle) carry no valid estimate (the one-ring is
 //!   open): they take the mean of their interior neighbours, spreading inward-out for a few rings;
-//!   a boundary vertex with no interior vertex within [`BOUNDARY_RINGS`] rings gets 0.
+//!   a boundary vertex with no interior vertex within `BOUNDARY_RINGS` rings gets 0.
 //! - Isolated vertices, non-finite positions, and a non-finite or non-positive `mm_per_unit`
 //!   give 0. Every output is finite and non-negative.
 
@@ -48,14 +48,14 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 /// Largest cotangent magnitude used (an angle of about 0.06 degrees).
-pub const COT_LIMIT: f32 = 1000.0;
+pub(crate) const COT_LIMIT: f32 = 1000.0;
 
 /// Vertices closer than this fraction of the mesh's extent (largest absolute coordinate) are
 /// one vertex: UV-seam copies computed with rounding (`sin(2 pi)` is not 0 in f32) still weld.
-pub const WELD_TOLERANCE: f32 = 1e-5;
+pub(crate) const WELD_TOLERANCE: f32 = 1e-5;
 
 /// How many rings of neighbours a boundary vertex looks through for interior values.
-pub const BOUNDARY_RINGS: usize = 4;
+pub(crate) const BOUNDARY_RINGS: usize = 4;
 
 /// `|H|` per vertex in 1/mm (see the module docs): the pre-integrated LUT's `1/r`.
 pub fn vertex_curvature(positions: &[Vec3], indices: &[u32], mm_per_unit: f32) -> Vec<f32> {

@@ -12,7 +12,7 @@
 //!   final blend weight `mad(c2, -1.0 * c2, 1.0)` is `1 - (1 - curva)^4`). The blog's
 //!   `curvature` in [0, 1] stands for `r = 1 / (curvature (0.5 - 0.0625) + 0.0625)`, r from 16
 //!   down to 2; we read r in millimetres, so `curvature = (1/r - 0.0625) / 0.4375`
-//!   ([`blog_curvature`]). Outside `1/r` in [0.0625, 0.5] mm^-1 the blog's curve is clamped to
+//!   (`blog_curvature`). Outside `1/r` in [0.0625, 0.5] mm^-1 the blog's curve is clamped to
 //!   its end curves: below 0.0625 it stays the r = 16 mm curve (not the clamped N.L of flat skin).
 //!   The blog fitted its own table (whose definitions it does not state; see below), so its
 //!   error here is the error against our table, not a measure of the blog's care.
@@ -26,7 +26,7 @@
 //!   `x < -w`, exactly `x` above `w`, C1 everywhere). Blurring the clamped cosine over the
 //!   surface by a narrow kernel does this near the terminator, and dims it by a factor elsewhere (the
 //!   gain); two widths stand for the profile's narrow and wide Gaussians. At `1/r = 0` both
-//!   widths are [`OWN_MIN_WIDTH`], which gives the clamped N.L to within that width. The seven
+//!   widths are `OWN_MIN_WIDTH`, which gives the clamped N.L to within that width. The seven
 //!   coefficients per channel ([`OWN_FIT`]) are the least-squares fit ([`fit_own_direct`],
 //!   Levenberg-Marquardt) on [`FitGrid::FIT`]; `1/r` above 1 mm^-1 is clamped to 1. On the GPU
 //!   this is two clamps, two divides and about a dozen multiply-adds per pixel for all three
@@ -91,24 +91,24 @@ fn lerp(a: f32, b: f32, t: f32) -> f32 {
 
 /// The blog's `curvature` in [0, 1] for `1/r` in mm^-1: 0 at r = 16 mm, 1 at r = 2 mm, clamped
 /// outside (NaN counts as flat skin, so 0).
-pub fn blog_curvature(inv_r_mm: f32) -> f32 {
+pub(crate) fn blog_curvature(inv_r_mm: f32) -> f32 {
     let inv_r = or_if_nan(inv_r_mm, 0.0);
     saturate((inv_r - BLOG_INV_R_MIN) / (BLOG_INV_R_MAX - BLOG_INV_R_MIN))
 }
 
 /// The blog's per-channel constants for its curve at r = 2 mm (`curve0`) and r = 16 mm (`curve1`).
 mod blog {
-    pub const RANGE_MIN: [f32; 3] = [0.0, 0.3, 0.3];
-    pub const RANGE_MAX: [f32; 3] = [1.0, 0.7, 0.7];
-    pub const OFFSET: [f32; 3] = [0.0, 0.06, 0.06];
-    pub const LOWER_SCALE: [f32; 3] = [0.65, 0.5, 0.9];
-    pub const LOWER_ADD: [f32; 3] = [0.045, 0.0, 0.0];
-    pub const SLOPE0: [f32; 3] = [1.75, 2.0, 1.97];
-    pub const TOP0: [f32; 3] = [0.99, 0.99, 0.99];
-    pub const LERP_MIN: [f32; 3] = [0.0, 0.35, 0.35];
-    pub const LERP_MAX: [f32; 3] = [1.0, 0.7, 0.6];
-    pub const SLOPE1: [f32; 3] = [1.95, 2.0, 2.0];
-    pub const TOP1: [f32; 3] = [0.99, 0.99, 1.0];
+    pub(crate) const RANGE_MIN: [f32; 3] = [0.0, 0.3, 0.3];
+    pub(crate) const RANGE_MAX: [f32; 3] = [1.0, 0.7, 0.7];
+    pub(crate) const OFFSET: [f32; 3] = [0.0, 0.06, 0.06];
+    pub(crate) const LOWER_SCALE: [f32; 3] = [0.65, 0.5, 0.9];
+    pub(crate) const LOWER_ADD: [f32; 3] = [0.045, 0.0, 0.0];
+    pub(crate) const SLOPE0: [f32; 3] = [1.75, 2.0, 1.97];
+    pub(crate) const TOP0: [f32; 3] = [0.99, 0.99, 0.99];
+    pub(crate) const LERP_MIN: [f32; 3] = [0.0, 0.35, 0.35];
+    pub(crate) const LERP_MAX: [f32; 3] = [1.0, 0.7, 0.6];
+    pub(crate) const SLOPE1: [f32; 3] = [1.95, 2.0, 2.0];
+    pub(crate) const TOP1: [f32; 3] = [0.99, 0.99, 1.0];
 }
 
 /// The blog's `curve0` (r = 2 mm) for channel `c` at `ndl01 = N.L / 2 + 1 / 2`.
@@ -146,7 +146,7 @@ pub fn blog_direct(n_dot_l: f32, inv_r_mm: f32) -> [f32; 3] {
 pub const OWN_FIT_PARAMS: usize = 7;
 
 /// Smallest ramp width of [`own_direct`]: flat skin gives the clamped N.L to within this.
-pub const OWN_MIN_WIDTH: f32 = 1e-6;
+pub(crate) const OWN_MIN_WIDTH: f32 = 1e-6;
 
 /// The fitted coefficients of [`own_direct`], `OWN_FIT[i][channel]`, i in order: `a1, b1`
 /// (first width `a1 k / (1 + |b1| k)`), `a2, b2` (second width), `beta` (mix), `c, d` (gain

@@ -50,7 +50,7 @@
 
 use rayon::prelude::*;
 
-use super::profile::{Domain, Normalisation, Profile, VARIANCES_MM2, WEIGHTS};
+use super::profile::{Domain, KERNEL_CUT_SIGMAS, Normalisation, Profile, VARIANCES_MM2, WEIGHTS, gauss_legendre_nodes};
 use super::sphere::SphereFalloff;
 
 /// Largest side a table may have (a GPU's 2-D texture limit is at least 8192; 4096 is far beyond
@@ -59,7 +59,7 @@ pub const MAX_SIDE: u32 = 4096;
 
 /// Bumped whenever a change to the builders changes texel values, so caches keyed on
 /// [`DiffuseLut::cache_key`] or [`super::shadow::ShadowLut::cache_key`] are invalidated.
-pub const BUILDER_VERSION: u32 = 2;
+pub(crate) const BUILDER_VERSION: u32 = 2;
 
 /// A table specification a caller got wrong.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -134,7 +134,7 @@ impl DiffuseLutSpec {
 
     /// The texture u a shader samples for `n_dot_l`: `saturate(N.L * 0.5 + 0.5)` (NaN gives 0,
     /// as `saturate` does on GPUs).
-    pub fn u_for(&self, n_dot_l: f32) -> f32 {
+    pub(crate) fn u_for(&self, n_dot_l: f32) -> f32 {
         saturate(n_dot_l * 0.5 + 0.5)
     }
 
@@ -240,8 +240,6 @@ fn sphere_row(spec: &DiffuseLutSpec, profile: &Profile, inv_r: f64) -> Vec<[f32;
 
 /// Cells of the per-row tabulation of `C_i`, `S_i` (module docs).
 const RING_CELLS: usize = 256;
-/// The kernel is cut where the chord reaches this many standard deviations (`exp(-40.5)`).
-pub(crate) const KERNEL_CUT_SIGMAS: f64 = 9.0;
 
 /// The cumulative integrals `C(t)`, `S(t)` and `Z(t) = int_0^t K` of one Gaussian's ring kernel on
 /// `[0, t_max]`, where `t_max` is the angle beyond which the kernel is negligible (or the domain
@@ -330,17 +328,6 @@ fn gauss_legendre_cell(k: &impl Fn(f64) -> f64, a: f64, h: f64) -> [f64; 3] {
         out[2] += kw;
     }
     out
-}
-
-/// The 4-point Gauss-Legendre nodes and weights of `[a, a + h]`.
-pub(crate) fn gauss_legendre_nodes(a: f64, h: f64) -> impl Iterator<Item = (f64, f64)> {
-    const NODES: [(f64, f64); 4] = [
-        (-0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
-        (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
-        (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
-        (0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
-    ];
-    NODES.into_iter().map(move |(node, weight)| (a + 0.5 * h * (node + 1.0), weight * 0.5 * h))
 }
 
 /// The cubic Hermite interpolant on one cell at fraction `f`, from values and derivatives (the

@@ -21,6 +21,7 @@ pub mod fit;
 pub mod lut;
 pub mod lut_file;
 pub mod options;
+pub mod poisson;
 pub mod profile;
 pub mod reference;
 pub mod setup;

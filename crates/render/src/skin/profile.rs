@@ -29,7 +29,7 @@ pub const WEIGHTS: [[f64; 3]; 6] = [
 ];
 
 /// The listing's variance scale for [`Normalisation::OneD`].
-pub const ONE_D_VARIANCE_SCALE: f64 = 1.414;
+pub(crate) const ONE_D_VARIANCE_SCALE: f64 = 1.414;
 
 /// How each Gaussian of the profile is normalised.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -231,4 +231,17 @@ pub fn sphere_integral(profile: &Profile, n_dot_l: f64, inv_r_mm: f64, steps: us
         }
     }
     std::array::from_fn(|c| if total[c] > 0.0 { light[c] / total[c] } else { n_dot_l.max(0.0) })
+}
+/// The kernel is cut where the chord reaches this many standard deviations (`exp(-40.5)`).
+pub(crate) const KERNEL_CUT_SIGMAS: f64 = 9.0;
+
+/// The 4-point Gauss-Legendre nodes and weights of `[a, a + h]`.
+pub(crate) fn gauss_legendre_nodes(a: f64, h: f64) -> impl Iterator<Item = (f64, f64)> {
+    const NODES: [(f64, f64); 4] = [
+        (-0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+        (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+        (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+        (0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+    ];
+    NODES.into_iter().map(move |(node, weight)| (a + 0.5 * h * (node + 1.0), weight * 0.5 * h))
 }

@@ -15,8 +15,8 @@
 //!   Jacobian ([`crate::frames::triangle_partials`]), kept as an equal-area rectangle in the
 //!   triangle's plane ([`Footprint`]) and as `area_mm2`;
 //! - the irradiance `E = sum_lights colour * intensity * max(0, n.l) * V`, point lights divided
-//!   by the squared distance in mesh units ([`crate::shading::light_at`]). `V` is exact for lights
-//!   flagged in `shadows`: a ray from the texel toward the light, started [`RAY_OFFSET`] times the
+//!   by the squared distance in mesh units (`crate::shading::light_at`). `V` is exact for lights
+//!   flagged in `shadows`: a ray from the texel toward the light, started `RAY_OFFSET` times the
 //!   mesh's size off the surface along the geometric normal, is tested against every triangle
 //!   (its own excepted) through a bounding-volume hierarchy ([`Bvh`], median splits). Every light
 //!   in the inputs is used (the GPU passes stop at [`crate::shading::MAX_LIGHTS`]).
@@ -97,10 +97,10 @@ mod fast;
 pub use bvh::Bvh;
 
 /// Shadow rays start this fraction of the mesh's bounding-box diagonal off the surface.
-pub const RAY_OFFSET: f32 = 1e-4;
+pub(crate) const RAY_OFFSET: f32 = 1e-4;
 
 /// The support radius in units of the widest Gaussian's standard deviation.
-pub const SUPPORT_SIGMAS: f64 = 3.5;
+pub(crate) const SUPPORT_SIGMAS: f64 = 3.5;
 
 /// Below `a / sigma` of this, a texel's 1-D Gaussian mass uses the corrected midpoint rule
 /// ([`midpoint_correction`]); above, differences of `erfc`.

@@ -23,14 +23,10 @@ use crate::scene::Scene;
 use crate::shading::Texture;
 
 /// 1/r range of the diffuse LUT and the zonal table, 1/mm (r >= 1 mm: ears and nostrils).
-pub const INV_R_RANGE: (f32, f32) = (0.0, 1.0);
+pub(crate) const INV_R_RANGE: (f32, f32) = (0.0, 1.0);
 
-/// Samples of 1/r in the zonal table (linear interpolation between them is within 0.11% of the
-/// exact factors; see [`super::sh::ZonalTable`]).
-pub const ZONAL_SAMPLES: usize = 33;
-
-/// Side of the shadow-scattering LUT.
-pub const SHADOW_LUT_SIDE: u32 = 64;
+use super::sh::ZONAL_SAMPLES;
+use super::shadow::SHADOW_LUT_SIDE;
 
 /// The luminance weights the TSD kernel is matched with (Gosselin et al.'s specular luminance).
 const LUMINANCE: [f64; 3] = [0.2125, 0.7154, 0.0721];
@@ -178,7 +174,7 @@ pub fn diffuse_table(spec: &DiffuseLutSpec) -> Result<Table, String> {
 ///
 /// # Errors
 /// The spec's refusal, as text.
-pub fn shadow_table(spec: &ShadowLutSpec) -> Result<Table, String> {
+pub(crate) fn shadow_table(spec: &ShadowLutSpec) -> Result<Table, String> {
     static CACHE: OnceLock<Cache<ShadowLut>> = OnceLock::new();
     let lut = cached(&CACHE, spec.cache_key(), || ShadowLut::build(spec).map_err(|e| e.to_string()))?;
     let (scale, offset) = Table::centred_map(spec.w_min_mm, spec.w_max_mm, spec.height);
@@ -186,7 +182,7 @@ pub fn shadow_table(spec: &ShadowLutSpec) -> Result<Table, String> {
 }
 
 /// The skin's zonal factors over [`INV_R_RANGE`] (exact projection, cached, or the blog's).
-pub fn zonal_table(zonal: Zonal) -> Table {
+pub(crate) fn zonal_table(zonal: Zonal) -> Table {
     static CACHE: OnceLock<Cache<ZonalTable>> = OnceLock::new();
     let (lo, hi) = INV_R_RANGE;
     let n = ZONAL_SAMPLES;
@@ -232,7 +228,7 @@ fn read_linear(path: &Path) -> skinkit_maps::Result<Texture> {
 }
 
 /// The profile's variance per axis, weighted by luminance over the channels (mm^2).
-pub fn luminance_variance() -> f32 {
+pub(crate) fn luminance_variance() -> f32 {
     (0..3).map(|c| LUMINANCE[c] * WEIGHTS.iter().zip(VARIANCES_MM2).map(|(w, v)| w[c] * v).sum::<f64>()).sum::<f64>()
         as f32
 }
@@ -257,7 +253,7 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
         kernel_map,
         kernel_scale,
         kernel_mm: match options.kernel {
-            TsdKernel::Single => passes::kernel_mm_for(luminance_variance(), options.passes),
+            TsdKernel::Single => super::poisson::kernel_mm_for(luminance_variance(), options.passes),
             TsdKernel::Gaussians => super::tsd::GAUSSIANS_KERNEL_MM,
         },
         curvature_gain: options.curvature_gain,

@@ -52,6 +52,9 @@
 
 use rayon::prelude::*;
 
+/// Side of the shadow-scattering LUT the renderer builds.
+pub(crate) const SHADOW_LUT_SIDE: u32 = 64;
+
 use super::lut::{SpecError, bilinear, column_coordinate, row_value, saturate, v_for_range, validate_size};
 use super::profile::{VARIANCES_MM2, WEIGHTS};
 

@@ -14,14 +14,13 @@
 //! `A = 2 (a psi0 + b sin(psi0))` (`2 pi a` when `a >= b`, 0 when `a <= -b`). `A` is C1, so
 //! 4-point Gauss-Legendre cells need no breakpoints at its kinks.
 
-use super::lut::{KERNEL_CUT_SIGMAS, gauss_legendre_nodes};
-use super::profile::{Profile, VARIANCES_MM2, WEIGHTS};
+use super::profile::{KERNEL_CUT_SIGMAS, Profile, VARIANCES_MM2, WEIGHTS, gauss_legendre_nodes};
 
 /// Gauss-Legendre cells per Gaussian over its reach in the chord.
 const CELLS: usize = 96;
 
 /// The chord quadrature of one sphere radius, reused for every N.L.
-pub struct SphereFalloff {
+pub(crate) struct SphereFalloff {
     /// Per Gaussian: the nodes `(cos phi, sin phi, G(d) d dd)` and `2 pi int G(d) d dd`.
     gaussians: Vec<(Vec<[f64; 3]>, f64)>,
 }

@@ -13,18 +13,18 @@
 //!   the blurs does not change the sum.
 
 use super::options::TsdKernel;
+use super::poisson::{centred_taps, poisson_axis_variance, poisson_second_moment};
 use super::profile::{VARIANCES_MM2, WEIGHTS};
-use crate::passes::{centred_taps, poisson_axis_variance, poisson_second_moment};
 
 /// The radius the light map's alpha stores for [`TsdKernel::Gaussians`], mm: each pass scales it
 /// by [`BlurStage::scale`] (with the single kernel, alpha stores that kernel's own radius).
-/// Alpha holds it over [`crate::passes::MAX_KERNEL_TEXELS`] and is clamped below 1, so it must fit
+/// Alpha holds it over [`super::poisson::MAX_KERNEL_TEXELS`] and is clamped below 1, so it must fit
 /// in 64 texels of the finest light map: 0.1 mm does down to 1.6 micrometres a texel. At 1 mm it
 /// clamped on the 6 mm sphere, whose texels are 0.01-0.02 mm at 2048, and the error doubled there.
 pub const GAUSSIANS_KERNEL_MM: f32 = 0.1;
 
 /// Names of the light maps, by index.
-pub const LIGHT_MAP_NAMES: [&str; 3] = ["light map A", "light map B", "light map C"];
+pub(crate) const LIGHT_MAP_NAMES: [&str; 3] = ["light map A", "light map B", "light map C"];
 
 /// The Gaussians blurred by the Horner stages (the profile's six less the two the first pass
 /// covers).
@@ -45,7 +45,7 @@ pub struct BlurStage {
 
 /// The blur passes `kernel` runs with `passes` (per Gaussian for [`TsdKernel::Gaussians`]; 0
 /// runs none, so the light map is drawn unblurred).
-pub fn blur_count(kernel: TsdKernel, passes: u32) -> u32 {
+pub(crate) fn blur_count(kernel: TsdKernel, passes: u32) -> u32 {
     match (kernel, passes) {
         (_, 0) => 0,
         (TsdKernel::Single, n) => n,
@@ -54,7 +54,7 @@ pub fn blur_count(kernel: TsdKernel, passes: u32) -> u32 {
 }
 
 /// How many light maps `kernel` needs: two to ping-pong, a third to keep map B.
-pub fn map_count(kernel: TsdKernel) -> usize {
+pub(crate) fn map_count(kernel: TsdKernel) -> usize {
     match kernel {
         TsdKernel::Single => 2,
         TsdKernel::Gaussians => 3,
@@ -64,7 +64,7 @@ pub fn map_count(kernel: TsdKernel) -> usize {
 /// The light maps blur `i` reads and writes (indices into [`LIGHT_MAP_NAMES`]). The light-map
 /// pass writes map A; blur 0 writes map B; the single kernel then ping-pongs A and B, the
 /// Gaussians A and C (B is kept).
-pub fn blur_maps(kernel: TsdKernel, i: u32) -> (usize, usize) {
+pub(crate) fn blur_maps(kernel: TsdKernel, i: u32) -> (usize, usize) {
     match (kernel, i) {
         (_, 0) => (0, 1),
         (TsdKernel::Single, i) => ((i % 2) as usize, ((i + 1) % 2) as usize),
@@ -75,7 +75,7 @@ pub fn blur_maps(kernel: TsdKernel, i: u32) -> (usize, usize) {
 }
 
 /// The light map the base pass reads after `blurs` blurs.
-pub fn final_map(kernel: TsdKernel, blurs: u32) -> usize {
+pub(crate) fn final_map(kernel: TsdKernel, blurs: u32) -> usize {
     if blurs == 0 { 0 } else { blur_maps(kernel, blurs - 1).1 }
 }
 

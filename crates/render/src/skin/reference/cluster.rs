@@ -37,19 +37,19 @@ use super::{ReferenceBake, support_mm};
 use crate::skin::profile::{Profile, WEIGHTS};
 
 /// A cluster serves a Gaussian when its radius is at most this many of its standard deviations.
-pub const RADIUS_PER_SIGMA: f64 = 0.5;
+pub(crate) const RADIUS_PER_SIGMA: f64 = 0.5;
 
 /// A source is left out where its Gaussian is below `exp(-SKIP_EXPONENT)` (6e-6) of its peak:
 /// the light lost is far below the clusters' own error (the texel path keeps `exp(-20)`).
 const SKIP_EXPONENT: f64 = 12.0;
 
 /// A block is a cluster only when every child's normal is within this cosine of the mean normal.
-pub const MAX_NORMAL_SPREAD: f32 = 0.9;
+pub(crate) const MAX_NORMAL_SPREAD: f32 = 0.9;
 
 /// A block is a cluster only when its radius is at most this many times twice its widest
 /// child's (children side by side: at most 1; a block whose children lie apart, across a UV
 /// seam, more).
-pub const MAX_EXTENT: f64 = 1.25;
+pub(crate) const MAX_EXTENT: f64 = 1.25;
 
 /// Grid cells per reach: smaller cells gather fewer far sources but share each list less.
 const CELLS_PER_REACH: f64 = 2.0;

@@ -24,6 +24,11 @@
 //!   in (cell, index) order: the same bits whatever the thread count. The result is within 1e-5
 //!   relative of the oracle (a test: below 2e-6 on its spheres;
 //!   5e-7 on the sample head at 256 texels, 1.1e-6 at 512).
+//!
+//! Over 600 lines on purpose: each SSE2 kernel of [`simd`] mirrors a scalar function here
+//! (`exp_neg`, `erfc`, `correction`, the wide and narrow sums), and they are checked side by
+//! side; splitting them apart would separate each kernel from the formula it must match. The
+//! unsafe code is the SSE2 intrinsics in [`simd`] only, every `unsafe fn` with its `# Safety`.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -554,12 +559,22 @@ mod simd {
         unsafe { lanes(near, kernel, r, start, end, acc) }
     }
 
+    /// Four floats of `col` from `j` on, unaligned.
+    ///
+    /// # Safety
+    /// `j + 4 <= col.len()` (checked in debug builds): the load reads `col[j..j + 4]` through a
+    /// raw pointer. The columns of [`Near`] are padded by [`LANES`] past their sources for this.
     #[inline(always)]
     unsafe fn load(col: &[f32], j: usize) -> __m128 {
         debug_assert!(j + 4 <= col.len());
         unsafe { _mm_loadu_ps(col.as_ptr().add(j)) }
     }
 
+    /// The body of [`wide_lanes`].
+    ///
+    /// # Safety
+    /// `start <= end <=` the wide list's length, and every column of `near.columns` holds at least
+    /// `end + LANES` entries: each group loads four lanes from `j < end` ([`load`]).
     unsafe fn lanes(
         near: &Near,
         kernel: &Kernel,
@@ -640,6 +655,11 @@ mod simd {
         unsafe { narrow_lanes(near, kernel, r) }
     }
 
+    /// The body of [`narrow_pass`].
+    ///
+    /// # Safety
+    /// Every column of `near.narrow_columns` holds at least `near.narrow.len() + LANES` entries
+    /// (the padding [`Near`] builds): each group loads four lanes from below that length.
     unsafe fn narrow_lanes(near: &Near, kernel: &Kernel, r: &Source) -> ([f64; 3], [f64; 3]) {
         unsafe {
             let c = &near.narrow_columns;
@@ -704,6 +724,11 @@ mod simd {
         }
     }
 
+    /// The dot products of four pairs of vectors.
+    ///
+    /// # Safety
+    /// Needs SSE2, which every x86-64 CPU has (this module is compiled for x86-64 only); it reads
+    /// no memory, so that is its only requirement.
     #[inline(always)]
     unsafe fn dot(a: [__m128; 3], b: [__m128; 3]) -> __m128 {
         unsafe { _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2])) }
@@ -711,6 +736,10 @@ mod simd {
 
     /// `super::box_mass` on four lanes: the midpoint rule where `a < sigma`, erfc elsewhere
     /// (each computed only when some lane takes it).
+    ///
+    /// # Safety
+    /// Needs SSE2, which every x86-64 CPU has (this module is compiled for x86-64 only); it reads
+    /// no memory, so that is its only requirement.
     #[inline(always)]
     unsafe fn side_mass(g: &Gaussian, x: __m128, a: __m128) -> __m128 {
         unsafe {
@@ -741,6 +770,10 @@ mod simd {
     }
 
     /// `super::erfc` on four lanes.
+    ///
+    /// # Safety
+    /// Needs SSE2, which every x86-64 CPU has (this module is compiled for x86-64 only); it reads
+    /// no memory, so that is its only requirement.
     #[inline(always)]
     unsafe fn erfc(x: __m128) -> __m128 {
         unsafe {
@@ -758,6 +791,10 @@ mod simd {
     }
 
     /// `super::correction` on four lanes.
+    ///
+    /// # Safety
+    /// Needs SSE2, which every x86-64 CPU has (this module is compiled for x86-64 only); it reads
+    /// no memory, so that is its only requirement.
     #[inline(always)]
     unsafe fn correction(t: __m128, r: __m128) -> __m128 {
         unsafe {
@@ -771,6 +808,10 @@ mod simd {
     }
 
     /// `super::exp_neg` on four lanes (finite inputs).
+    ///
+    /// # Safety
+    /// Needs SSE2, which every x86-64 CPU has (this module is compiled for x86-64 only); it reads
+    /// no memory, so that is its only requirement.
     #[inline(always)]
     unsafe fn exp_neg(x: __m128) -> __m128 {
         unsafe {

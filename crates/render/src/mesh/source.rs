@@ -8,7 +8,7 @@
 //! overruns its buffer view, and reads a view past its buffer's end as empty; checking the byte
 //! ranges first names the accessor or view at fault.
 
-use crate::mesh::MeshError;
+use super::MeshError;
 
 /// The kinds of OBJ vertex data a face may refer to, in the order of a face token `v/vt/vn`.
 const KINDS: [&str; 3] = ["v", "vt", "vn"];

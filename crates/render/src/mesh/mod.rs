@@ -20,6 +20,8 @@
 //! - loaded normals that are zero or non-finite are replaced by computed ones, with a warning;
 //! - a vertex that no triangle with area touches gets the normal +z (deterministic, finite).
 
+pub(crate) mod source;
+
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
@@ -119,7 +121,7 @@ impl Mesh {
         let mut bytes = Vec::new();
         reader.read_to_end(&mut bytes).map_err(|error| MeshError::Io { file: origin.to_owned(), error })?;
         // Source lines are checked first: the parser below re-indexes and forgets them.
-        crate::mesh_source::check_obj(&String::from_utf8_lossy(&bytes), origin)?;
+        source::check_obj(&String::from_utf8_lossy(&bytes), origin)?;
         let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
         let (models, _materials) =
             tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
@@ -139,9 +141,9 @@ impl Mesh {
     /// As [`Mesh::load`].
     pub fn parse_gltf(bytes: &[u8], base: Option<&Path>, origin: &str) -> Result<LoadedMesh> {
         let refused = |reason: String| MeshError::Gltf { file: origin.to_owned(), reason };
-        let gltf::Gltf { document, blob } = crate::mesh_source::parse_gltf(bytes).map_err(refused)?;
+        let gltf::Gltf { document, blob } = source::parse_gltf(bytes).map_err(refused)?;
         let base = base.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
-        crate::mesh_source::check_gltf_buffer_uris(&document, &base).map_err(refused)?;
+        source::check_gltf_buffer_uris(&document, &base).map_err(refused)?;
         let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(|e| refused(e.to_string()))?;
         let scene = document
             .default_scene()
@@ -316,7 +318,7 @@ impl Builder {
             self.warnings.push(format!("{}: {name} is not a triangle list: skipped", self.file));
             return Ok(());
         }
-        crate::mesh_source::check_gltf_primitive(primitive, buffers, &name)
+        source::check_gltf_primitive(primitive, buffers, &name)
             .map_err(|reason| MeshError::Gltf { file: self.file.clone(), reason })?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
         let positions: Vec<Vec3> = match reader.read_positions() {
