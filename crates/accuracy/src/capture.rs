@@ -11,7 +11,7 @@
 //! dividing by each light's flat field (a white target under the same light), beside the
 //! uniform-light case; the flats' cost is their fit and the correction, timed with the solve.
 //!
-//! Photos as the lab takes them ([`photos`]): exposure brackets against a single exposure, and
+//! Photos as the lab takes them (the `photos` module): exposure brackets against a single exposure, and
 //! half-size DNG against the same photos as 16-bit TIFF.
 
 mod photos;
