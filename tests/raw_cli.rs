@@ -8,7 +8,7 @@ use std::path::Path;
 mod support;
 use support::{s, skinkit, stderr};
 
-use skinkit_heightfield::dng::{Dng, dng_bytes, mosaic_of_rgb};
+use skinkit_heightfield::dng::dng_of_rgb;
 
 const SIDE: usize = 24;
 
@@ -22,16 +22,8 @@ fn session(dir: &Path) {
         let d = [h * a.cos(), h * a.sin(), h];
         rig += &format!("[[light]]\ndirection = [{}, {}, {}]\n", d[0], d[1], d[2]);
         let rgb = vec![[0.35 * d[2], 0.5 * d[2], 0.3 * d[2]]; SIDE * SIDE];
-        let samples = mosaic_of_rgb(&rgb, SIDE, SIDE, [0, 1, 1, 2], 128, 4095);
-        let dng = Dng {
-            width: 2 * SIDE as u32,
-            height: 2 * SIDE as u32,
-            samples: &samples,
-            cfa: [0, 1, 1, 2],
-            black: 128,
-            white: 4095,
-        };
-        std::fs::write(dir.join(format!("{:02}.dng", i + 1)), dng_bytes(&dng)).unwrap();
+        let dng = dng_of_rgb(&rgb, SIDE, SIDE, [0, 1, 1, 2], 128, 4095);
+        std::fs::write(dir.join(format!("{:02}.dng", i + 1)), dng).unwrap();
     }
     std::fs::write(dir.join("rig.toml"), rig).unwrap();
 }

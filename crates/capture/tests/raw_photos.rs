@@ -6,7 +6,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
-use skinkit_heightfield::dng::{Dng, dng_bytes, mosaic_of_rgb};
+use skinkit_heightfield::dng::dng_of_rgb;
 use skinkit_heightfield::{Heightfield, Quantise, RenderConfig, RenderLight, SkinParams};
 use skinkit_maps::raw::RawMode;
 use skinkit_maps::{Channels, NormalEncoding, Samples, io};
@@ -61,9 +61,7 @@ fn write_tiffs(dir: &Path, photos: &[Vec<[f32; 3]>]) {
 /// `black..white`.
 fn write_dngs(dir: &Path, photos: &[Vec<[f32; 3]>], cfa: [u8; 4], black: u16, white: u16) {
     for (i, rgb) in photos.iter().enumerate() {
-        let samples = mosaic_of_rgb(rgb, SIDE, SIDE, cfa, black, white);
-        let dng = Dng { width: 2 * SIDE as u32, height: 2 * SIDE as u32, samples: &samples, cfa, black, white };
-        std::fs::write(dir.join(format!("{:02}.dng", i + 1)), dng_bytes(&dng)).unwrap();
+        std::fs::write(dir.join(format!("{:02}.dng", i + 1)), dng_of_rgb(rgb, SIDE, SIDE, cfa, black, white)).unwrap();
     }
 }
 

@@ -100,6 +100,13 @@ pub fn dng_bytes(dng: &Dng) -> Vec<u8> {
     out
 }
 
+/// The DNG file of the sensor (pattern `cfa`, levels `black..white`, twice the size) that
+/// recorded the linear RGB image `rgb` (`w x h`): [`mosaic_of_rgb`] written by [`dng_bytes`].
+pub fn dng_of_rgb(rgb: &[[f32; 3]], w: usize, h: usize, cfa: [u8; 4], black: u16, white: u16) -> Vec<u8> {
+    let samples = mosaic_of_rgb(rgb, w, h, cfa, black, white);
+    dng_bytes(&Dng { width: 2 * w as u32, height: 2 * h as u32, samples: &samples, cfa, black, white })
+}
+
 /// The mosaic a sensor with pattern `cfa` records of the linear RGB image `rgb` (`w x h`, values
 /// 0..1) at twice its size: each pixel becomes a 2x2 cell whose samples carry its own colours,
 /// `black + v * (white - black)` rounded (so a half-size decode gives `rgb` back to within one

@@ -14,7 +14,7 @@ use glam::Vec3;
 use skinkit_capture::bracket;
 use skinkit_capture::solve::{self, PhotoStack, SolveConfig};
 use skinkit_capture::{Light, Rig};
-use skinkit_heightfield::dng::{Dng, dng_bytes, mosaic_of_rgb};
+use skinkit_heightfield::dng::dng_of_rgb;
 use skinkit_heightfield::{Heightfield, Quantise, RenderConfig, RenderLight};
 use skinkit_maps::raw::{self, RawMode};
 use skinkit_maps::{Channels, Limits, NormalMap, Photo, Samples};
@@ -147,16 +147,8 @@ fn solve_raw(field: &Heightfield, dng: bool, seed: u64) -> Result<NormalMap> {
         let Samples::F32(v) = photo.samples() else { unreachable!("float render") };
         photos.push(if dng {
             let rgb: Vec<[f32; 3]> = v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-            let samples = mosaic_of_rgb(&rgb, w, h, [0, 1, 1, 2], 512, 16383);
-            let file = Dng {
-                width: 2 * w as u32,
-                height: 2 * h as u32,
-                samples: &samples,
-                cfa: [0, 1, 1, 2],
-                black: 512,
-                white: 16383,
-            };
-            raw::decode(Path::new(&format!("{:02}.dng", i + 1)), &dng_bytes(&file), &Limits::default(), RawMode::Half)?
+            let file = dng_of_rgb(&rgb, w, h, [0, 1, 1, 2], 512, 16383);
+            raw::decode(Path::new(&format!("{:02}.dng", i + 1)), &file, &Limits::default(), RawMode::Half)?
         } else {
             let q = v.iter().map(|x| (x.clamp(0.0, 1.0) * 65535.0).round() as u16).collect();
             Photo::new(w, h, Channels::Rgb, Samples::U16(q))?

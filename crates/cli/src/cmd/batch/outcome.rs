@@ -68,12 +68,13 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let (dir, out_dir, options) = (&job.dir, &job.out, settings.options);
     let files = Session::from_dir(dir)?;
     // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
-    let rig_ambient = Rig::load(&files.rig).ok().and_then(|r| r.ambient().map(Path::to_path_buf));
-    let ambient = files.ambient.clone().or(rig_ambient);
+    let rig = Rig::load(&files.rig).ok();
+    let ambient = files.ambient.clone().or_else(|| rig.as_ref().and_then(|r| r.ambient().map(Path::to_path_buf)));
     let previews = settings.review_dir.join(&job.name);
     // Hashed before the capture reads them: a file changed meanwhile is captured again next time.
     let previous = resume::recorded(out_dir);
-    let made = resume::made_from(&resume::inputs(dir, &files, ambient.as_deref()), options, previous.as_ref())?;
+    let made =
+        resume::made_from(&resume::inputs(dir, &files, ambient.as_deref(), rig.as_ref()), options, previous.as_ref())?;
     if let Some(done) = resume::up_to_date(out_dir, previous.as_ref(), &made).filter(|_| !settings.force) {
         let swept = skinkit_maps::output_set::sweep_folder(out_dir);
         let signs = review::signs_of_skipped(out_dir, &previews, &done)?;

@@ -94,9 +94,13 @@ fn stat_key(m: &std::fs::Metadata) -> StatKey {
     StatKey { size: m.len(), ..StatKey::default() }
 }
 
-/// The files a capture of `files` reads, the rig's own files included.
-pub fn inputs(dir: &Path, files: &Session, ambient: Option<&Path>) -> Vec<std::path::PathBuf> {
-    let rig = skinkit_capture::rig::Rig::load(&files.rig).ok();
+/// The files a capture of `files` reads, the files of its `rig` (when it loads) included.
+pub fn inputs(
+    dir: &Path,
+    files: &Session,
+    ambient: Option<&Path>,
+    rig: Option<&skinkit_capture::rig::Rig>,
+) -> Vec<std::path::PathBuf> {
     let listing = dir.join("filenames.txt");
     let mut all: Vec<std::path::PathBuf> = files
         .photos
@@ -105,7 +109,7 @@ pub fn inputs(dir: &Path, files: &Session, ambient: Option<&Path>) -> Vec<std::p
         .chain([files.rig.clone()])
         .chain(files.mask.clone())
         .chain(ambient.map(Path::to_path_buf))
-        .chain(rig.iter().flat_map(|r| r.input_files()).map(Path::to_path_buf))
+        .chain(rig.into_iter().flat_map(|r| r.input_files()).map(Path::to_path_buf))
         .chain(files.truth.clone())
         .chain(Some(listing).filter(|p| p.is_file()))
         .collect();
