@@ -22,6 +22,7 @@
 //! millimetres through the map's scale ([`Scale`]) and measures the integrability residual. The
 //! deliverables ([`deliver`]) are computed from the resulting [`Height`].
 
+mod buffer;
 pub mod compare;
 mod dct;
 pub mod deliver;
@@ -32,6 +33,7 @@ mod poisson;
 pub mod round_trip;
 mod slopes;
 mod transform;
+mod tridiagonal;
 
 use std::time::Instant;
 
@@ -287,17 +289,30 @@ pub(crate) struct Moments {
 impl Moments {
     const EMPTY: Moments = Moments { sum: 0.0, squares: 0.0, n: 0, lo: f32::INFINITY, hi: f32::NEG_INFINITY };
 
-    /// The moments of every value of `v`, in eight running sums added in a fixed order.
+    /// The moments of every value of `v`, in eight running sums (and extremes) per lane, combined
+    /// in a fixed order; written lane by lane so that it vectorises.
     fn of(v: &[f32]) -> Moments {
         const LANES: usize = 8;
         let (mut sum, mut squares) = ([0f64; LANES], [0f64; LANES]);
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (i, &x) in v.iter().enumerate() {
-            sum[i % LANES] += f64::from(x);
-            squares[i % LANES] += f64::from(x) * f64::from(x);
-            lo = lo.min(x);
-            hi = hi.max(x);
+        let (mut lo, mut hi) = ([f32::INFINITY; LANES], [f32::NEG_INFINITY; LANES]);
+        let mut chunks = v.chunks_exact(LANES);
+        for c in chunks.by_ref() {
+            for i in 0..LANES {
+                let x = c[i];
+                sum[i] += f64::from(x);
+                squares[i] += f64::from(x) * f64::from(x);
+                lo[i] = if x < lo[i] { x } else { lo[i] };
+                hi[i] = if x > hi[i] { x } else { hi[i] };
+            }
         }
+        for (i, &x) in chunks.remainder().iter().enumerate() {
+            sum[i] += f64::from(x);
+            squares[i] += f64::from(x) * f64::from(x);
+            lo[i] = lo[i].min(x);
+            hi[i] = hi[i].max(x);
+        }
+        let lo = lo.iter().fold(f32::INFINITY, |a, &b| a.min(b));
+        let hi = hi.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
         Moments { sum: sum.iter().sum(), squares: squares.iter().sum(), n: v.len(), lo, hi }
     }
 

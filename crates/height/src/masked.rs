@@ -26,7 +26,7 @@ pub fn solve(slopes: &Slopes, tolerance: f64, max_iterations: usize) -> (Vec<f32
     let mut q = vec![0f32; w * h];
     let preconditioner = Neumann::new(w, h);
     let mut z = r.clone();
-    preconditioner.solve_in_place(&mut z, &mut q);
+    preconditioner.solve_in_place(&mut z);
     let mut p = z.clone();
     let mut rz = dot(&r, &z);
     for iteration in 1..=max_iterations {
@@ -42,7 +42,7 @@ pub fn solve(slopes: &Slopes, tolerance: f64, max_iterations: usize) -> (Vec<f32
             return (x, iteration);
         }
         z.copy_from_slice(&r);
-        preconditioner.solve_in_place(&mut z, &mut q);
+        preconditioner.solve_in_place(&mut z);
         let rz_next = dot(&r, &z);
         let beta = (rz_next / rz) as f32;
         rz = rz_next;

@@ -24,8 +24,7 @@ pub fn solve_neumann(slopes: &Slopes) -> Vec<f32> {
     let (w, h) = (slopes.width(), slopes.height());
     let solver = Neumann::new(w, h);
     let mut b = slopes.rhs(false, false);
-    let mut scratch = vec![0f32; w * h];
-    solver.solve_in_place(&mut b, &mut scratch);
+    solver.solve_in_place(&mut b);
     b
 }
 

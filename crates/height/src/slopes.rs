@@ -96,33 +96,27 @@ fn slope_or_flat(n: Vec3, ok: bool) -> (f32, f32) {
     if ok { (x, y) } else { (0.0, 0.0) }
 }
 
-/// Classifies one row of `normals` into `ok` and writes its slopes (clamped; 0 at invalid
-/// texels) into `px` and `py`; returns the row's counts.
-pub(crate) fn classify_row(normals: &[Vec3], px: &mut [f32], py: &mut [f32], ok: &mut [bool]) -> TexelCounts {
-    let mut c = TexelCounts::default();
-    for (((n, px), py), ok) in normals.iter().zip(px.iter_mut()).zip(py.iter_mut()).zip(ok.iter_mut()) {
-        *ok = match classify(*n) {
-            Kind::Valid { clamped } => {
-                c.valid += 1;
-                c.clamped += usize::from(clamped);
-                true
-            }
-            Kind::Zero => {
-                c.zero += 1;
-                false
-            }
-            Kind::NonFinite => {
-                c.non_finite += 1;
-                false
-            }
-            Kind::BackFacing => {
-                c.back_facing += 1;
-                false
-            }
-        };
-        (*px, *py) = slope_or_flat(*n, *ok);
+/// The fused path's reading of a row: slopes (clamped) into `px` and `py`, and counts that are
+/// exact when every normal is usable; an unusable one is counted in `non_finite` alone (the
+/// caller then takes the general path, which classifies it). Branch-free, so it vectorises.
+pub(crate) fn usable_row(normals: &[Vec3], px: &mut [f32], py: &mut [f32]) -> TexelCounts {
+    let (mut unusable, mut clamped) = (0u32, 0u32);
+    for ((n, px), py) in normals.iter().zip(px.iter_mut()).zip(py.iter_mut()) {
+        let finite = n.x.abs() < f32::INFINITY && n.y.abs() < f32::INFINITY && n.z < f32::INFINITY;
+        let ok = finite & (n.z > 0.0);
+        unusable += u32::from(!ok);
+        clamped += u32::from((n.x.abs() > MAX_SLOPE * n.z) | (n.y.abs() > MAX_SLOPE * n.z));
+        let inv = 1.0 / n.z;
+        *px = (-n.x * inv).clamp(-MAX_SLOPE, MAX_SLOPE);
+        *py = (n.y * inv).clamp(-MAX_SLOPE, MAX_SLOPE);
     }
-    c
+    let (unusable, clamped) = (unusable as usize, clamped as usize);
+    TexelCounts {
+        valid: normals.len() - unusable,
+        non_finite: unusable,
+        clamped: if unusable == 0 { clamped } else { 0 },
+        ..Default::default()
+    }
 }
 
 impl<'a> Slopes<'a> {
