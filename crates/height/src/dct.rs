@@ -63,17 +63,22 @@ impl Dct {
         let n = self.len;
         assert_eq!(x.len(), n, "DCT-II: length");
         let (evens, odds) = s.real.split_at_mut(n.div_ceil(2));
-        evens.iter_mut().zip(x.iter().step_by(2)).for_each(|(v, &x)| *v = x);
-        odds.iter_mut().rev().zip(x.iter().skip(1).step_by(2)).for_each(|(v, &x)| *v = x);
+        for ((e, o), pair) in evens.iter_mut().zip(odds.iter_mut().rev()).zip(x.chunks_exact(2)) {
+            (*e, *o) = (pair[0], pair[1]);
+        }
+        if n % 2 == 1 {
+            evens[n / 2] = x[n - 1];
+        }
         self.forward
             .process_with_scratch(&mut s.real, &mut s.spectrum, &mut s.fft)
             .expect("buffers sized by DctScratch");
-        for (k, (v, t)) in s.spectrum.iter().zip(&self.twiddles).enumerate() {
-            let w = v * t;
-            x[k] = w.re;
-            if k > 0 && n - k != k {
-                x[n - k] = -w.im;
-            }
+        // X_k for k up to N/2 from the real parts, X_{N-k} for the rest from the imaginary ones.
+        let (low, high) = x.split_at_mut(n / 2 + 1);
+        for ((x, v), t) in low.iter_mut().zip(&s.spectrum).zip(&self.twiddles) {
+            *x = v.re * t.re - v.im * t.im;
+        }
+        for ((x, v), t) in high.iter_mut().rev().zip(&s.spectrum[1..]).zip(&self.twiddles[1..]) {
+            *x = -(v.re * t.im + v.im * t.re);
         }
     }
 
@@ -82,9 +87,11 @@ impl Dct {
         let n = self.len;
         assert_eq!(x.len(), n, "DCT-III: length");
         // V_k = conj(t_k) (X_k - i X_{N-k}) with X_N = 0; halved, the DCT-III's factor.
-        for (k, (v, t)) in s.spectrum.iter_mut().zip(&self.twiddles).enumerate() {
-            let w = Complex32::new(x[k], if k > 0 { -x[n - k] } else { 0.0 });
-            *v = 0.5 * w * t.conj();
+        // X_{N-k} beside X_k, with X_N = 0.
+        let mirrored = std::iter::once(0.0).chain(x.iter().rev().copied());
+        for (((v, t), &re), im) in s.spectrum.iter_mut().zip(&self.twiddles).zip(x.iter()).zip(mirrored) {
+            // 0.5 (re - i im) conj(t)
+            *v = Complex32::new(0.5 * (re * t.re - im * t.im), -0.5 * (re * t.im + im * t.re));
         }
         // The DC term, and Nyquist's for an even length, are real in exact arithmetic.
         s.spectrum[0].im = 0.0;
@@ -95,8 +102,12 @@ impl Dct {
             .process_with_scratch(&mut s.spectrum, &mut s.real, &mut s.fft)
             .expect("buffers sized by DctScratch, a real DC and Nyquist term");
         let (evens, odds) = s.real.split_at(n.div_ceil(2));
-        x.iter_mut().step_by(2).zip(evens).for_each(|(x, &v)| *x = v);
-        x.iter_mut().skip(1).step_by(2).zip(odds.iter().rev()).for_each(|(x, &v)| *x = v);
+        for ((pair, &e), &o) in x.chunks_exact_mut(2).zip(evens).zip(odds.iter().rev()) {
+            (pair[0], pair[1]) = (e, o);
+        }
+        if n % 2 == 1 {
+            x[n - 1] = evens[n / 2];
+        }
     }
 }
 
