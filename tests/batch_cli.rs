@@ -303,3 +303,37 @@ fn d3_session_names_that_are_not_utf8_are_refused_before_any_work() {
     assert!(stderr(&o).contains("is not valid UTF-8") && stderr(&o).contains("Patient-M"), "{}", stderr(&o));
     assert!(!out.exists(), "the batch wrote before refusing");
 }
+
+/// Issue 42, D5: a session folder that appears between two shards (a lab still uploading while
+/// the array job runs) shifted the partition: some sessions were never captured, others twice, and
+/// `--merge` said all succeeded. Each shard now records the sessions it partitioned, and `--merge`
+/// refuses shards that saw different ones, naming the difference; once every shard runs again on
+/// the same folder, the merge covers every session exactly once.
+#[test]
+fn d5_shards_that_saw_different_sessions_do_not_merge() {
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    let dir = sessions::sessions(&tmp.path().join("sessions"), &molds, &names(3), &[]);
+    let out = tmp.path().join("out");
+    let shard = |k: &str| {
+        let o = skinkit(&["batch", "--quiet", s(&dir), "--out", s(&out), "--shard", k]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    shard("1/2");
+    sessions::copy_dir(&dir.join("s000"), &dir.join("a-late"));
+    shard("2/2");
+    let o = skinkit(&["batch", "--merge", "--out", s(&out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("saw different sessions") && e.contains("only in the second: [a-late]"), "{e}");
+    assert!(!out.join("batch-report.json").exists(), "a refused merge wrote its report");
+    shard("1/2");
+    let o = skinkit(&["batch", "--merge", "--json", "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let merged: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut got: Vec<String> =
+        merged["outcomes"].as_array().unwrap().iter().map(|o| o["session"].as_str().unwrap().to_owned()).collect();
+    got.sort();
+    assert_eq!(got, ["a-late", "s000", "s001", "s002"], "every session once");
+    assert_eq!(merged["sessions"], 4);
+}

@@ -342,6 +342,36 @@ fn d5_an_out_that_is_an_input_is_refused_and_the_input_kept() {
     assert!(before.iter().all(|(p, bytes)| std::fs::read(p).unwrap() == *bytes), "an input changed");
 }
 
+/// Issue 42, D2: `render --out` or `--report` onto the scene's environment image or TSD kernel
+/// map overwrote it (the output check listed the scene's meshes and maps, not its skin options'
+/// files). The scene now lists every file it reads, and both are refused, the inputs kept.
+#[test]
+fn d2_render_onto_the_scenes_environment_or_kernel_map_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let env = exemplar(tmp.path());
+    let kernel = tmp.path().join("kernel.png");
+    std::fs::copy(&env, &kernel).unwrap();
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/head/head.obj");
+    let scene = tmp.path().join("scene.toml");
+    let text = format!(
+        "mesh = \"{}\"\nmm_per_unit = 1.0\neffects = [\"sh-ambient\", \"tsd\"]\n[environment]\nlatlong = \"{}\"\n\
+         [tsd]\nkernel_map = \"{}\"\n[[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, 1.0]\n\
+         [[camera]]\nposition = [0.0, 0.0, 300.0]\ntarget = [0.0, 0.0, 0.0]\n[output]\nsize = [16, 16]\n",
+        s(&mesh),
+        s(&env),
+        s(&kernel)
+    );
+    std::fs::write(&scene, text).unwrap();
+    let before = snapshot(tmp.path());
+    refused(&["render", s(&scene), "--out", s(&env)], &["--out", "the scene's environment image", "exemplar.png"]);
+    let o = tmp.path().join("o.png");
+    refused(
+        &["render", s(&scene), "--out", s(&o), "--report", s(&kernel)],
+        &["--report", "the scene's TSD kernel map"],
+    );
+    assert!(before == snapshot(tmp.path()), "an input changed or an output was written");
+}
+
 #[test]
 fn d5_capture_and_batch_into_their_input_folders_are_refused() {
     let tmp = tempfile::tempdir().unwrap();

@@ -60,7 +60,9 @@ use crate::brdf::{Lafortune, Lobe};
 use crate::effect::{self, Effect};
 use crate::frames::FrameMethod;
 use crate::shading::{Light, LightKind, MAX_LIGHTS, MAX_LOBES, SpecularMode};
-use crate::skin::options::{RawEnvironment, RawPreintegrated, RawShadow, RawSkin, RawTsd, SkinOptions};
+use crate::skin::options::{
+    Environment, RawEnvironment, RawPreintegrated, RawShadow, RawSkin, RawTsd, SkinOptions, Sky,
+};
 
 /// Largest output side accepted, in pixels.
 pub const MAX_OUTPUT_SIDE: u32 = 16384;
@@ -134,6 +136,26 @@ impl Scene {
     /// The scene file, for messages.
     pub fn name(&self) -> String {
         self.file.display().to_string()
+    }
+
+    /// Every file the scene reads, each with what it is for messages: the scene itself, its
+    /// meshes and maps, and the skin options' environment image and kernel map. The one list an
+    /// output check compares against, so that a new input cannot be missed.
+    pub fn input_files(&self) -> Vec<(String, PathBuf)> {
+        let mut inputs =
+            vec![("the scene".to_owned(), self.file.clone()), ("the scene's mesh".to_owned(), self.mesh.clone())];
+        if let Some(Albedo::Map(p)) = &self.albedo {
+            inputs.push(("the scene's albedo".to_owned(), p.clone()));
+        }
+        inputs.extend(self.normal_map.iter().map(|n| ("the scene's normal map".to_owned(), n.path.clone())));
+        inputs.extend(self.translucent.iter().map(|t| ("a translucent mesh of the scene".to_owned(), t.mesh.clone())));
+        if let Some(Environment { sky: Sky::LatLong(p), .. }) = &self.skin.environment {
+            inputs.push(("the scene's environment image".to_owned(), p.clone()));
+        }
+        if let Some(p) = &self.skin.tsd.kernel_map {
+            inputs.push(("the scene's TSD kernel map".to_owned(), p.clone()));
+        }
+        inputs
     }
 }
 

@@ -110,6 +110,9 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
     refuse_reserved(&all, sessions)?;
+    // What a shard partitioned, for `--merge` to check that every shard saw the same sessions.
+    let partition: Vec<String> =
+        if shard.is_some() { all.iter().map(|u| u.name().to_owned()).collect() } else { Vec::new() };
     let units = select(all, shard, &args.only, sessions)?;
     if args.list {
         list(&units, out);
@@ -120,7 +123,8 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     guard::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
     // Made here, not by the sessions' output sets: one session's failure must not remove it.
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let (report, hook) = capture_units(&units, &args, &options, shard, out);
+    let (mut report, hook) = capture_units(&units, &args, &options, (shard, &partition), out);
+    report.partition = partition;
     let code = if args.only.is_empty() {
         let path = args.out.join(shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
         report::finish(report, &path, shard.is_none(), out)
@@ -190,7 +194,7 @@ fn capture_units(
     units: &[Unit],
     args: &Args,
     options: &CaptureOptions,
-    shard: Option<Shard>,
+    (shard, partition): (Option<Shard>, &[String]),
     out: &Output,
 ) -> (BatchReport, Option<HookGuard>) {
     let start = Instant::now();
@@ -203,7 +207,15 @@ fn capture_units(
     // which the next run skips.
     let hook = args.only.is_empty().then(|| {
         let name = shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name());
-        report::on_interrupt(args.out.join(name), jobs.len(), Arc::clone(&finished), Arc::clone(&gate), shard)
+        let partition = partition.to_vec();
+        report::on_interrupt(
+            args.out.join(name),
+            jobs.len(),
+            Arc::clone(&finished),
+            Arc::clone(&gate),
+            shard,
+            partition,
+        )
     });
     let swept = Mutex::new(Vec::new());
     let review_dir = args.out.join(review::FOLDER);

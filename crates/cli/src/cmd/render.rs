@@ -138,13 +138,9 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
 /// Refuses, before any work, an image or report path that is a folder, one of the scene's
 /// inputs or another output. Images are named as [`numbered`] names them.
 fn check_outputs(job: &Job, scene: &Scene, path: &Path, report: Option<&Path>) -> Result<()> {
-    let mut inputs =
-        vec![("the scene".to_owned(), job.scene.clone()), ("the scene's mesh".to_owned(), scene.mesh.clone())];
-    if let Some(scene::Albedo::Map(p)) = &scene.albedo {
-        inputs.push(("the scene's albedo".to_owned(), p.clone()));
-    }
-    inputs.extend(scene.normal_map.iter().map(|n| ("the scene's normal map".to_owned(), n.path.clone())));
-    inputs.extend(scene.translucent.iter().map(|t| ("a translucent mesh of the scene".to_owned(), t.mesh.clone())));
+    let mut inputs = scene.input_files();
+    // The scene file as the command line named it, too (the scene records it resolved).
+    inputs.push(("the scene".to_owned(), job.scene.clone()));
     let cameras = scene.cameras.len();
     let frames = job.frames.unwrap_or(1);
     let images: Vec<PathBuf> = (0..cameras)

@@ -53,6 +53,10 @@ pub struct BatchReport {
     /// The shard this report covers (`--shard`); absent for a whole or merged batch.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<Shard>,
+    /// For a shard: every session and subject it partitioned among the shards, in name order, as
+    /// the sessions folder held them when it ran. `--merge` joins only shards that agree on it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub partition: Vec<String>,
     /// The units this report covers when it came from `--only` (one report per unit).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub only: Option<String>,
@@ -86,6 +90,7 @@ impl BatchReport {
             page_seconds: 0.0,
             outcomes,
             shard,
+            partition: Vec::new(),
             only: None,
             faces,
         };
@@ -123,9 +128,11 @@ pub fn on_interrupt(
     finished: Arc<Mutex<Vec<SessionOutcome>>>,
     gate: Arc<MemoryGate>,
     shard: Option<Shard>,
+    partition: Vec<String>,
 ) -> HookGuard {
     interrupt::on_interrupt(move || {
-        let report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard, Vec::new());
+        let mut report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard, Vec::new());
+        report.partition = partition.clone();
         // Written by the signal thread itself, whole (atomically), before the exit.
         if let Err(e) = pipeline::write_json(&path, &report) {
             eprintln!("error: {e:#}");

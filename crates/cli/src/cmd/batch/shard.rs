@@ -5,7 +5,9 @@
 //! Shard `K` of `N` takes the sessions whose index in name order is `K - 1` modulo `N`, so the
 //! shares differ by at most one session and a session's shard depends only on the sorted names.
 //! Each shard writes `batch-report-K-of-N.json` beside the session folders (shards sharing one
-//! output folder never write the same file); `--merge` checks that all N are there and writes
+//! output folder never write the same file) with the list of sessions it partitioned; `--merge`
+//! checks that all N are there, that they partitioned one list (a session folder that appeared
+//! between two shards would shift the shares) and that no session was reported twice, and writes
 //! `batch-report.json`.
 
 use std::path::{Path, PathBuf};
@@ -115,13 +117,16 @@ fn read_report(path: &Path) -> Result<BatchReport> {
 /// When there is nothing to merge, a shard is missing, or a report does not read.
 pub fn merge(dir: &Path) -> Result<BatchReport> {
     let mut reports = Vec::new();
+    let mut paths = Vec::new();
     for (shard, path) in shard_reports(dir)? {
         let report = read_report(&path)?;
         if report.shard != Some(shard) {
             bail!("{}: its `shard` field says {:?}, not {shard}", path.display(), report.shard.map(|s| s.to_string()));
         }
         reports.push(report);
+        paths.push(path);
     }
+    check_coverage(&reports, &paths)?;
     for path in part_reports(dir)? {
         reports.push(read_report(&path)?);
     }
@@ -132,6 +137,47 @@ pub fn merge(dir: &Path) -> Result<BatchReport> {
         );
     }
     Ok(join(reports))
+}
+
+/// Checks that the shard reports partitioned one list of sessions (a session folder that appeared
+/// or vanished between two shards shifts every later session's shard: some would never be
+/// captured and others twice) and that no session has an outcome in two of them.
+fn check_coverage(shards: &[BatchReport], paths: &[PathBuf]) -> Result<()> {
+    let Some(first) = shards.first() else { return Ok(()) };
+    let rerun = "run every shard again (the sessions each finished are skipped as up to date), then --merge";
+    for (report, path) in shards.iter().zip(paths) {
+        if report.partition.is_empty() {
+            bail!("{}: records no session list (written by an older skinkit); {rerun}", path.display());
+        }
+        if report.partition != first.partition {
+            let differ = |a: &[String], b: &[String]| a.iter().filter(|n| !b.contains(n)).cloned().collect::<Vec<_>>();
+            let (only_here, only_first) =
+                (differ(&report.partition, &first.partition), differ(&first.partition, &report.partition));
+            bail!(
+                "{} and {}: the shards saw different sessions (only in the first: [{}]; only in the second: [{}]): a \
+                 session folder appeared or vanished between them, so some sessions would be captured twice and \
+                 others never; {rerun}",
+                paths[0].display(),
+                path.display(),
+                only_first.join(", "),
+                only_here.join(", ")
+            );
+        }
+    }
+    let mut seen = std::collections::BTreeMap::new();
+    for (report, path) in shards.iter().zip(paths) {
+        for o in &report.outcomes {
+            if let Some(other) = seen.insert(o.session.as_str(), path) {
+                bail!(
+                    "session {}: reported by two shards ({} and {}); {rerun}",
+                    o.session,
+                    other.display(),
+                    path.display()
+                );
+            }
+        }
+    }
+    Ok(())
 }
 
 fn join(reports: Vec<BatchReport>) -> BatchReport {
