@@ -255,3 +255,33 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["layout_penalty"], 0.0);
     assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }
+
+/// Issue 42, D6: a normal map half of which is invalid (what a masked capture writes outside its
+/// mask) grew into a map nearly all invalid, exit 0, with quality figures that looked fine. The
+/// report now counts the grown map's invalid texels, and beyond 1 % the run fails, naming the
+/// share and what to do (the map is still written, to be looked at).
+#[test]
+fn d6_a_grown_map_mostly_invalid_is_a_failure_with_its_count() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut grid = truth("cheek").grid().crop(40, 60, 64, 64).unwrap();
+    for y in 0..64 {
+        for x in 0..32 {
+            *grid.get_mut(x, y) = Vec3::ZERO;
+        }
+    }
+    let exemplar = tmp.path().join("half.exr");
+    io::write_normal_map(&exemplar, &NormalMap::from_grid(grid), NormalEncoding::default(), 16).unwrap();
+    let (out, report) = (tmp.path().join("out.exr"), tmp.path().join("report.json"));
+    let o = skinkit(&["synth", s(&exemplar), "--out", s(&out), "--size", "64x64", "--report", s(&report)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("are invalid, more than the 1%") && e.contains("crop"), "{e}");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let invalid = json["invalid_texels"].as_u64().unwrap();
+    assert!(invalid > 64 * 64 / 100, "{invalid} invalid texels reported");
+    let good = normal_exemplar(tmp.path(), "cheek", 64);
+    let (out, report) = (tmp.path().join("good.exr"), tmp.path().join("good.json"));
+    synth(&good, &out, &["--report", s(&report)]);
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(json["invalid_texels"], 0);
+}

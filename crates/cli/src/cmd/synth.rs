@@ -388,10 +388,17 @@ pub struct SynthReport {
     pub seconds: Seconds,
     pub warnings: Vec<String>,
     pub quality: QualityReport,
+    /// Output texels that are the invalid marker (a normal map's zero normals, copied from the
+    /// exemplar's invalid texels); above [`MAX_INVALID_OUTPUT`] of the map the run fails.
+    pub invalid_texels: usize,
     /// The grown map's height (with `--height`): periodic, so it tiles.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_map: Option<skinkit_height::HeightReport>,
 }
+
+/// The largest share of invalid texels a grown map may have and count as a result: beyond it
+/// the map is written (to be looked at) but the run fails.
+pub const MAX_INVALID_OUTPUT: f64 = 0.01;
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     match args.command {
@@ -490,6 +497,10 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         out.warn(w);
     }
     let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap, guards);
+    let invalid_texels = match &output {
+        Map::Normal(normals) => normals.as_slice().len() - normals.valid_count(),
+        Map::Color(_) => 0,
+    };
     // One set: the map, the coordinates and the report appear together or not at all.
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
@@ -514,12 +525,26 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         seconds: Seconds { levels: level_seconds, total: start.elapsed().as_secs_f64() },
         warnings,
         quality,
+        invalid_texels,
     };
     if let Some(path) = &args.report {
         pipeline::write_json_file(&mut set, path, &report)?;
     }
     out.swept(&set.commit().with_context(|| format!("cannot write {}", out_path.display()))?);
     out.result(&report, || human(&report));
+    let share = invalid_texels as f64 / (size.0 * size.1).max(1) as f64;
+    if share > MAX_INVALID_OUTPUT {
+        out.error(&anyhow::anyhow!(
+            "{}: {invalid_texels} of {} texels ({:.1}%) are invalid, more than the {}% a grown map may have: the \
+             exemplar's invalid texels were copied; crop {} to its valid part",
+            out_path.display(),
+            size.0 * size.1,
+            100.0 * share,
+            100.0 * MAX_INVALID_OUTPUT,
+            exemplar_path.display()
+        ));
+        return Ok(1);
+    }
     Ok(0)
 }
 
