@@ -29,6 +29,9 @@ pub enum Error {
     /// Encoding an image failed.
     #[error("{path}: cannot encode: {reason}")]
     Encode { path: PathBuf, reason: String },
+    /// The input gate refused a file ([`crate::input`]).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     /// Reading or writing a file failed.
     #[error("{path}: {error}")]
     Io { path: PathBuf, error: std::io::Error },

@@ -41,10 +41,23 @@ fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }
 
-/// The file, buffered: decoders stream from it rather than from a copy of the whole file in
-/// memory (for a stack of 4096x4096 photos that copy is a quarter of a gigabyte of fresh pages).
-fn open_buffered(path: &Path) -> Result<std::io::BufReader<File>> {
-    File::open(path).map(|f| std::io::BufReader::with_capacity(1 << 16, f)).map_err(|e| Error::io(path, e))
+/// The image file, opened through the input gate ([`crate::input`]) and buffered: decoders
+/// stream from it rather than from a copy of the whole file in memory (for a stack of 4096x4096
+/// photos that copy is a quarter of a gigabyte of fresh pages).
+pub(crate) fn open_buffered(path: &Path) -> Result<std::io::BufReader<File>> {
+    let file = crate::input::open(path, crate::input::Kind::Image)?;
+    Ok(std::io::BufReader::with_capacity(1 << 16, file))
+}
+
+/// An EXR file through the gate, its signature and every part's size checked, rewound for the
+/// decoder: one open serves the checks and the decode.
+fn open_exr(path: &Path, limits: &Limits) -> Result<std::io::BufReader<File>> {
+    use std::io::Seek;
+    let mut file = open_buffered(path)?;
+    crate::signature::check_reader(path, &mut file)?;
+    crate::limits::exr_read_size(path, &mut file, limits.max_pixels)?;
+    file.rewind().map_err(|e| Error::io(path, e))?;
+    Ok(file)
 }
 
 /// Reads a PNG, TIFF, EXR or camera RAW ([`crate::raw`], half size) photo, grey or RGB (alpha dropped), 8/16-bit or float, kept in its
@@ -152,15 +165,14 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
 /// When the file is not an EXR within the limits or has no channel called `name`.
 pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<ScalarMap> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    crate::signature::check_file(path)?;
-    crate::limits::exr_read_size(path, limits.max_pixels)?;
+    let file = open_exr(path, limits)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(file)
         .map_err(|e| Error::decode(path, e))?;
     let layer = &image.layer_data;
     let Some(channel) = layer.channel_data.list.iter().find(|c| c.name == *name) else {
@@ -171,15 +183,21 @@ pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<Scal
 
 /// Reads the first RGB(A) layer of an EXR file as float triples (alpha ignored, missing channels 0).
 fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
-    use exr::prelude::read_first_rgba_layer_from_file;
-    crate::signature::check_file(path)?;
-    crate::limits::exr_read_size(path, limits.max_pixels)?;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.width() * resolution.height()]),
-        |(w, data), pos, (r, g, b, _a): (f32, f32, f32, f32)| data[pos.y() * *w + pos.x()] = [r, g, b],
-    )
-    .map_err(|e| Error::decode(path, e))?;
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let file = open_exr(path, limits)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.width() * resolution.height()]),
+            |(w, data): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                data[pos.y() * *w + pos.x()] = [r, g, b]
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(file)
+        .map_err(|e| Error::decode(path, e))?;
     let size = image.layer_data.size;
     Ok((size.width(), size.height(), image.layer_data.channel_data.pixels.1))
 }
