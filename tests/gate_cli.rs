@@ -1,6 +1,6 @@
 //! The input gate seen from the shell (issue 42): a file that is not a regular file, or is over
 //! its kind's byte limit, is refused at once with a message naming the file, what it is and the
-//! limit (D9, D10).
+//! limit (D9, D10); folder entries that are skipped are named (D17).
 
 use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
@@ -44,6 +44,15 @@ fn scene(dir: &Path, mesh: &str) -> PathBuf {
     );
     std::fs::write(&path, text).unwrap();
     path
+}
+
+/// The cheek mold's eight photos in `dir` (as links), with its rig.
+fn cheek_copy(dir: &Path) {
+    std::fs::create_dir_all(dir).unwrap();
+    for entry in std::fs::read_dir(mold("cheek")).unwrap() {
+        let path = entry.unwrap().path();
+        std::os::unix::fs::symlink(&path, dir.join(path.file_name().unwrap())).unwrap();
+    }
 }
 
 /// D9: a 3 GiB rig (sparse) is refused from its length, in well under a second of work.
@@ -92,4 +101,29 @@ fn d10_a_fifo_as_photo_exemplar_or_mesh_is_refused_at_once() {
     let scene = scene(tmp.path(), "m.obj");
     let o = run_within(30, &["export", "gltf", "--scene", s(&scene), "--out", s(&tmp.path().join("o.glb"))]);
     refused(&o, &["m.obj: a FIFO (named pipe), not a regular file (a mesh is read only"]);
+}
+
+/// D17: a FIFO among a folder's photos is named: with the rig's count of photos beside it the
+/// capture succeeds with a note and the report lists it; without, the count error names it.
+#[test]
+fn d17_skipped_photos_are_named_in_the_note_the_report_and_the_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let photos = tmp.path().join("photos");
+    cheek_copy(&photos);
+    mkfifo(&photos.join("09.png"));
+    let rig = mold("cheek").join("rig.toml");
+    let out = tmp.path().join("out");
+    let o = run_within(60, &["capture", "--rig", s(&rig), "--photos-from", s(&photos), "--out", s(&out)]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains("note: skipped ") && e.contains("09.png: a FIFO (named pipe), not a regular file"), "{e}");
+    assert!(!e.contains("error"), "a skipped entry is a note, not an error: {e}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let skipped = report["skipped"].as_array().expect("the report lists skipped entries");
+    assert!(skipped.len() == 1 && skipped[0].as_str().unwrap().contains("09.png: a FIFO"), "{report}");
+
+    std::fs::remove_file(photos.join("08.png")).unwrap();
+    let o = run_within(60, &["capture", "--rig", s(&rig), "--photos-from", s(&photos), "--out", s(&out)]);
+    refused(&o, &["7 photos", "skipped: ", "09.png: a FIFO (named pipe)"]);
 }

@@ -219,6 +219,9 @@ fn capture_units(
         if let Some(e) = &outcome.error {
             bar.suspend(|| out.warn(format!("{}: {e}", job.dir.display())));
         }
+        for skipped in &outcome.skipped_files {
+            bar.suspend(|| out.note(format!("note: skipped {skipped}")));
+        }
         bar.suspend(|| out.record("session", &outcome));
         lock(&finished).push(outcome);
         bar.inc(1);
