@@ -339,7 +339,7 @@ pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &Capt
         limits::image_header_as(path, options.limits.max_pixels, options.raw)
             .map_err(|e| context(what.to_owned(), e.into()))
     };
-    let head = header(first, "photo")?;
+    let head = header(first, "photo 1")?;
     let same_size = |path: &Path, what: &str| -> Result<limits::ImageHeader> {
         let h = header(path, what)?;
         if (h.width, h.height) != (head.width, head.height) {

@@ -51,11 +51,11 @@ pub(crate) fn open_buffered(path: &Path) -> Result<std::io::BufReader<File>> {
 
 /// An EXR file through the gate, its signature and every part's size checked, rewound for the
 /// decoder: one open serves the checks and the decode.
-fn open_exr(path: &Path, limits: &Limits) -> Result<std::io::BufReader<File>> {
+fn open_exr(path: &Path, limits: &Limits, need_rgb: bool) -> Result<std::io::BufReader<File>> {
     use std::io::Seek;
     let mut file = open_buffered(path)?;
     crate::signature::check_reader(path, &mut file)?;
-    crate::limits::exr_read_size(path, &mut file, limits.max_pixels)?;
+    crate::limits::exr_read_size(path, &mut file, limits.max_pixels, need_rgb)?;
     file.rewind().map_err(|e| Error::io(path, e))?;
     Ok(file)
 }
@@ -90,7 +90,12 @@ pub fn read_photo_as(path: &Path, limits: &Limits, raw: RawMode) -> Result<Photo
 ///
 /// # Errors
 /// As [`read_photo`].
-pub fn decode_photo(path: &Path, reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<Photo> {
+pub fn decode_photo(path: &Path, mut reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<Photo> {
+    // The signature first, so a grey TIFF with alpha under another format's name is refused too.
+    crate::signature::check_reader(path, &mut reader)?;
+    if let Some(found) = crate::tiff_grey::probe(path, &mut reader)? {
+        return crate::tiff_grey::decode(path, reader, found, limits.max_pixels);
+    }
     let image = decode_dynamic(path, reader, limits)?;
     photo_from_dynamic(path, image)
 }
@@ -99,10 +104,10 @@ fn decode_dynamic(path: &Path, reader: impl std::io::BufRead + std::io::Seek, li
     let reader = ImageReader::new(reader).with_guessed_format().map_err(|e| Error::io(path, e))?;
     // Only PNG and TIFF reach the decoder, and only under their own names (JPEG never: D13).
     crate::signature::check(path, reader.format())?;
-    let decoder = reader.into_decoder().map_err(|e| Error::decode(path, e))?;
+    let decoder = reader.into_decoder().map_err(|e| Error::image(path, e))?;
     let (w, h) = decoder.dimensions();
     limits.check(path, w as u64, h as u64)?;
-    DynamicImage::from_decoder(decoder).map_err(|e| Error::decode(path, e))
+    DynamicImage::from_decoder(decoder).map_err(|e| Error::image(path, e))
 }
 
 fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
@@ -118,11 +123,8 @@ fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
         i @ DynamicImage::ImageRgba8(_) => (Channels::Rgb, Samples::U8(i.into_rgb8().into_raw())),
         i @ DynamicImage::ImageRgba16(_) => (Channels::Rgb, Samples::U16(i.into_rgb16().into_raw())),
         i @ DynamicImage::ImageRgba32F(_) => (Channels::Rgb, Samples::F32(i.into_rgb32f().into_raw())),
-        other => {
-            return Err(Error::Unsupported {
-                path: path.to_owned(),
-                reason: format!("pixel layout {:?}", other.color()),
-            });
+        _ => {
+            return Err(Error::Unsupported { path: path.to_owned(), reason: crate::error::LAYOUTS_READ.to_owned() });
         }
     };
     Photo::new(w, h, channels, samples)
@@ -165,7 +167,7 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
 /// When the file is not an EXR within the limits or has no channel called `name`.
 pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<ScalarMap> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    let file = open_exr(path, limits)?;
+    let file = open_exr(path, limits, false)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -184,7 +186,7 @@ pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<Scal
 /// Reads the first RGB(A) layer of an EXR file as float triples (alpha ignored, missing channels 0).
 fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    let file = open_exr(path, limits)?;
+    let file = open_exr(path, limits, true)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()

@@ -35,6 +35,7 @@ pub mod pyramid;
 pub mod raw;
 pub mod resample;
 mod signature;
+mod tiff_grey;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};
