@@ -303,3 +303,20 @@ fn d3_session_names_that_are_not_utf8_are_refused_before_any_work() {
     assert!(stderr(&o).contains("is not valid UTF-8") && stderr(&o).contains("Patient-M"), "{}", stderr(&o));
     assert!(!out.exists(), "the batch wrote before refusing");
 }
+
+/// Issue 42, D15: a session folder named as the batch's own report is refused before any
+/// capture, not after all of them.
+#[test]
+fn d15_a_session_named_like_the_batch_report_is_refused_before_any_capture() {
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    let names = ["batch-report.json".to_owned(), "s001".to_owned()];
+    let dir = sessions::sessions(&tmp.path().join("sessions"), &molds, &names, &[]);
+    let out = tmp.path().join("out");
+    let o = skinkit(&["batch", "--quiet", s(&dir), "--out", s(&out)]);
+    let e = stderr(&o);
+    assert_ne!(o.status.code(), Some(0), "{e}");
+    assert!(e.contains("batch-report.json: the folder's name cannot name an output folder"), "{e}");
+    assert!(e.contains("the batch writes its report under that name"), "{e}");
+    assert!(!out.join("s001").exists(), "a session was captured before the refusal");
+}

@@ -255,3 +255,21 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
     assert_eq!(r["options"]["layout_penalty"], 0.0);
     assert!(r["options"]["fallback"].is_null() && r["options"]["finest_fallback"].is_null());
 }
+
+/// Issue 42, D15: `--out` a name that is not UTF-8 (a valid Linux name) is written, not refused
+/// after the synthesis.
+#[cfg(unix)]
+#[test]
+fn d15_an_out_name_that_is_not_utf8_is_written() {
+    use std::os::unix::ffi::OsStrExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 32);
+    let out = tmp.path().join(std::ffi::OsStr::from_bytes(b"o\xff.png"));
+    let o = support::bin()
+        .args(["synth", s(&exemplar), "--size", "16x16", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .expect("skinkit runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.is_file());
+}

@@ -86,6 +86,7 @@ impl OutputSet {
         let mut set = OutputSet::empty();
         set.folder = Some((target.to_owned(), marker.to_owned()));
         let (parent, name) = split(target)?;
+        let name = label(&name);
         set.create_parent(&parent)?;
         set.swept.extend(sweep_staging(&parent, &name));
         // Into an existing folder the staging folder goes inside it (issue 42, D12): the commit's
@@ -350,8 +351,10 @@ fn is_staging(path: &Path) -> bool {
     path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with('.') && n.contains(STAGING))
 }
 
-/// The parent folder (`.` for a bare name) and the file name of a destination.
-fn split(target: &Path) -> Result<(PathBuf, String)> {
+/// The parent folder (`.` for a bare name) and the file name of a destination. A name that is
+/// not UTF-8 is a valid Linux name and is kept as it is (issue 42, D15: it was refused only at
+/// the commit, after the work); staging folders are labelled with its lossy form ([`label`]).
+fn split(target: &Path) -> Result<(PathBuf, std::ffi::OsString)> {
     if target.file_name().is_none() && target.exists() {
         // `.` or `dir/..`: the folder's own name, beside which its staging folder goes.
         let canonical = target.canonicalize().map_err(|e| Error::io(target, e))?;
@@ -361,13 +364,17 @@ fn split(target: &Path) -> Result<(PathBuf, String)> {
     }
     let name = target
         .file_name()
-        .and_then(|n| n.to_str())
         .ok_or_else(|| Error::InvalidParameter(format!("{}: not a file or folder name", target.display())))?;
     let parent = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
         _ => PathBuf::from("."),
     };
     Ok((parent, name.to_owned()))
+}
+
+/// A destination's name as a staging folder's label: its lossy UTF-8 form.
+fn label(name: &std::ffi::OsStr) -> String {
+    name.to_string_lossy().into_owned()
 }
 
 /// Every file under `staging`, paired with its place under `target`.
@@ -443,6 +450,7 @@ fn copy_across(from: &Path, to: &Path) -> std::io::Result<()> {
 /// removed.
 pub fn sweep_folder(target: &Path) -> Vec<PathBuf> {
     let Ok((parent, name)) = split(target) else { return Vec::new() };
+    let name = label(&name);
     let mut swept = sweep_staging(&parent, &name);
     swept.extend(sweep_staging(target, &name));
     for file in entries(target).into_iter().filter(|p| p.is_file()) {

@@ -174,3 +174,20 @@ fn d12_a_copy_across_filesystems_replaces_the_destination_whole() {
     assert_eq!(read(&to), "new");
     assert_eq!(names(tmp.path()), ["out.txt"], "the source or a temporary file left");
 }
+
+/// Issue 42, D15: names that are not UTF-8 are valid file and folder names: written, not refused
+/// at the commit after the work.
+#[cfg(unix)]
+#[test]
+fn d15_names_that_are_not_utf8_are_written() {
+    use std::os::unix::ffi::OsStrExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let name = std::ffi::OsStr::from_bytes(b"o\xff");
+    let mut files = OutputSet::files();
+    files.write_file(&tmp.path().join(name), |p| write(p, "file")).unwrap();
+    files.commit().unwrap();
+    assert_eq!(read(&tmp.path().join(name)), "file");
+    let target = tmp.path().join("d").join(name);
+    folder_set(&target, "1", "r1").commit().unwrap();
+    assert_eq!(read(&target.join("report.json")), "r1");
+}
