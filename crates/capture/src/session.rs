@@ -294,12 +294,12 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
 /// Checks a rig against everything [`capture`] refuses of a rig before decoding a photo: at most
 /// [`solve::MAX_LIGHTS`] lights; for distant lights, a condition number (as the solver computes
 /// it) within `config.max_condition`; the ambient frame (`ambient`, which overrides the rig's
-/// own) present. `skinkit rig check` calls this same function, so it refuses exactly the rigs
-/// `capture` refuses.
+/// own) a readable image, by its header. `skinkit rig check` calls this same function, and
+/// `skinkit rig import` before it writes, so both refuse exactly the rigs `capture` refuses.
 ///
 /// # Errors
-/// [`Error::Context`] naming the rig file around the light-count or conditioning refusal;
-/// [`Error::InvalidInput`] naming a missing ambient frame.
+/// [`Error::Context`] naming the rig file around the light-count or conditioning refusal, or
+/// naming the ambient frame around the reason its header cannot be read.
 pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &SolveConfig) -> Result<()> {
     let in_rig = |e| context(rig_path.display().to_string(), e);
     if near::applies(rig) {
@@ -313,9 +313,9 @@ pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &So
         (None, Some(p)) => (p, format!("{}: field `ambient` (the ambient frame)", rig_path.display())),
         (None, None) => return Ok(()),
     };
-    if !path.is_file() {
-        return Err(Error::InvalidInput(format!("{whose}: {} is not a file", path.display())));
-    }
+    // Read by header, as the capture reads it first (issue 42, D13): a file that is not an image
+    // (the rig file itself, say) is refused here too, not only once photos are decoded.
+    limits::image_header(path, limits::MAX_IMAGE_PIXELS).map_err(|e| context(whose, e.into()))?;
     Ok(())
 }
 

@@ -149,3 +149,15 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
     let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default()).unwrap_err().to_string();
     assert!(e.contains("ambient frame") && e.contains("gone.png"), "the flag's file overrides the rig's: {e}");
 }
+
+/// Issue 42, D13: the ambient frame is read by its header, as `capture` reads it: a rig whose
+/// `ambient` is not an image (the rig file itself) is refused by the check `rig check` runs.
+#[test]
+fn d13_an_ambient_that_is_not_an_image_is_refused_by_the_rig_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rig.toml");
+    let rig = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(path.clone()));
+    rig.save(&path).unwrap();
+    let e = session::check_rig(&path, &rig, None, &SolveConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("field `ambient` (the ambient frame)") && e.contains("not a readable image"), "{e}");
+}
