@@ -119,27 +119,7 @@ fn output_name(dir: &Path) -> Result<String> {
     let name = dir.file_name().unwrap_or(dir.as_os_str());
     let name = skinkit_maps::names::file_component(name)
         .with_context(|| format!("{}: the folder's name cannot name an output folder", dir.display()))?;
-    if let Some(what) = batch_own(name) {
-        anyhow::bail!(
-            "{}: the folder's name cannot name an output folder: the batch writes its {what} under that name",
-            dir.display()
-        );
-    }
     Ok(name.to_owned())
-}
-
-/// What the batch itself writes in its output folder under `name`, if anything: a session of
-/// that name would collide with it, found only after every capture (issue 42, D15).
-fn batch_own(name: &str) -> Option<&'static str> {
-    let shard_report = name.strip_prefix("batch-report-").and_then(|n| n.strip_suffix(".json")).is_some();
-    match name {
-        "batch-report.json" => Some("report"),
-        _ if shard_report => Some("shard reports"),
-        super::page::PAGE => Some("review page"),
-        super::review::FOLDER => Some("review previews"),
-        super::shard::PARTS => Some("reports of `--only` runs"),
-        _ => None,
-    }
 }
 
 /// The subject of `dir/layout.toml`: the distinct sessions its regions name, in region order,
