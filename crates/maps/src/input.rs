@@ -9,6 +9,9 @@
 //! [`File`] they are given and never open the path again; [`read`] and [`read_to_string`] also
 //! stop at the limit, so a file that grows after the check is refused, not read without end.
 //!
+//! Files that describe the machine rather than the job (`/proc/meminfo`, `/proc/self/status`,
+//! the CPU's name) are not inputs and are read directly.
+//!
 //! | kind | limit |
 //! | --- | --- |
 //! | [`Kind::Image`]: photo, mask, ambient, truth, exemplar, normal or coordinate map | [`MAX_IMAGE_BYTES`] |
