@@ -69,3 +69,19 @@ impl Error {
 /// The pixel layouts image files may have, as the README's formats table gives them.
 pub(crate) const LAYOUTS_READ: &str = "its pixel layout is not one skinkit reads: PNG or TIFF of 8 or 16 bits \
      a sample, grey or RGB (alpha ignored), or float EXR with R, G and B channels";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::error::{LimitError, LimitErrorKind};
+
+    /// Issue 42, D16: the decoder's own memory limit (a PNG with a 256 MiB text chunk) is told
+    /// apart from `--memory-limit`, not shown as a bare "Memory limit exceeded".
+    #[test]
+    fn d16_the_decoders_own_limit_is_not_mistaken_for_the_memory_limit() {
+        let limit = image::ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory));
+        let e = Error::image(std::path::Path::new("03.png"), limit).to_string();
+        assert!(e.starts_with("03.png: not a readable image: the image decoder's own limit"), "{e}");
+        assert!(e.contains("--memory-limit does not change it"), "{e}");
+    }
+}
