@@ -279,7 +279,7 @@ fn a_session_named_like_the_batchs_own_folders_is_refused() {
         let out = tmp.path().join("out");
         let o = skinkit(&["batch", s(&dir), "--out", s(&out)]);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-        assert!(stderr(&o).contains(&format!("named `{reserved}`")), "{}", stderr(&o));
+        assert!(stderr(&o).contains(&format!("named `{reserved}` would write over")), "{}", stderr(&o));
         assert!(!out.exists());
     }
 }
@@ -336,4 +336,39 @@ fn d5_shards_that_saw_different_sessions_do_not_merge() {
     got.sort();
     assert_eq!(got, ["a-late", "s000", "s001", "s002"], "every session once");
     assert_eq!(merged["sessions"], 4);
+
+/// Issue 42, D15: a session folder named as the batch's own report is refused before any
+/// capture, not after all of them.
+#[test]
+fn d15_a_session_named_like_the_batch_report_is_refused_before_any_capture() {
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    let names = ["batch-report.json".to_owned(), "s001".to_owned()];
+    let dir = sessions::sessions(&tmp.path().join("sessions"), &molds, &names, &[]);
+    let out = tmp.path().join("out");
+    let o = skinkit(&["batch", "--quiet", s(&dir), "--out", s(&out)]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("named `batch-report.json` would write over the batch's own"), "{e}");
+    assert!(!out.exists(), "a session was captured before the refusal");
+}
+
+/// Issue 42, D17: a FIFO among a batch session's photos is named (a note on stderr and the
+/// session's `skipped_files`), and the session, with its rig's count of photos, succeeds.
+#[cfg(unix)]
+#[test]
+fn d17_a_fifo_among_a_sessions_photos_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    let dir = sessions::sessions(&tmp.path().join("sessions"), &molds, &names(1), &[]);
+    let fifo = dir.join("s000").join("99.png");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let out = tmp.path().join("out");
+    let o = skinkit(&["batch", s(&dir), "--out", s(&out)]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    assert!(e.contains("note: skipped ") && e.contains("99.png: a FIFO (named pipe), not a regular file"), "{e}");
+    let first = &report(&out.join("batch-report.json"))["outcomes"][0];
+    let skipped = first["skipped_files"].as_array().expect("skipped_files in the session's line");
+    assert!(skipped.len() == 1 && skipped[0].as_str().unwrap().contains("99.png: a FIFO"), "{first}");
 }

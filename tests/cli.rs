@@ -4,6 +4,9 @@
 use std::path::Path;
 use std::process::Output;
 
+#[cfg(unix)]
+#[path = "gate_cli.rs"]
+mod gate_cli;
 #[path = "height_cli.rs"]
 mod height_cli;
 #[path = "support/mod.rs"]

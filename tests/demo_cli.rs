@@ -185,3 +185,21 @@ fn demo_page_loads_every_image_without_console_errors_in_headless_chromium() {
     std::fs::copy(&screenshot, &kept).unwrap();
     eprintln!("screenshot of the report page: {}", kept.display());
 }
+
+/// Issue 42, D14: a demo of a samples folder without sample molds fails, naming the folder,
+/// rather than writing empty tables and an empty report page with exit 0.
+#[test]
+fn d14_demo_of_an_empty_samples_folder_fails() {
+    let tmp = tempfile::tempdir().unwrap();
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let out = tmp.path().join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_skinkit"))
+        .args(["demo", "--samples", empty.to_str().unwrap(), "--no-render", "--no-accuracy", "--out"])
+        .arg(&out)
+        .output()
+        .expect("skinkit runs");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("empty: no sample molds in this folder"), "{e}");
+}

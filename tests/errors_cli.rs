@@ -225,3 +225,23 @@ fn exit_codes_are_0_1_2_for_every_command() {
     }
     assert!(wrong.is_empty(), "{} of {} cases:\n{}", wrong.len(), cases.len(), wrong.join("\n"));
 }
+
+/// Issue 42, D13: `rig import` runs the check `capture` and `rig check` run before it writes: a
+/// light file of 200 lights (capture takes at most 128) is refused and no rig is written.
+#[test]
+fn d13_rig_import_refuses_a_rig_that_capture_refuses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let lights = tmp.path().join("lights.txt");
+    let mut text = "200\n".to_owned();
+    for i in 0..200 {
+        let a = i as f64 * 0.1;
+        text += &format!("{:.4} {:.4} 1\n", 0.4 * a.cos(), 0.4 * a.sin());
+    }
+    std::fs::write(&lights, text).unwrap();
+    let out = tmp.path().join("rig.toml");
+    let o = skinkit(&["rig", "import", "--uw", s(&lights), "--out", s(&out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("lights.txt") && e.contains("200 lights") && e.contains("at most 128"), "{e}");
+    assert!(!out.exists(), "a rig that capture refuses was written");
+}

@@ -91,3 +91,17 @@ fn lut_refuses_bad_flags_naming_them() {
     assert!(!o.status.success() && text(&o.stderr).contains(".exr"), "{}", text(&o.stderr));
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
 }
+
+/// Issue 42, D14: a penumbra width past the table's limit is a usage error (exit 2) naming the
+/// flag, not a table that reads lit skin as shadow.
+#[test]
+fn d14_lut_shadow_refuses_a_penumbra_width_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d14.exr");
+    for value in ["1e30", "1001", "-1", "inf"] {
+        let o = skinkit(&["lut", "shadow", &format!("--w-max-mm={value}"), "--out", s(&out)]);
+        assert_eq!(o.status.code(), Some(2), "{value}: {}", text(&o.stderr));
+        assert!(text(&o.stderr).contains("--w-max-mm") && text(&o.stderr).contains("0 to 1000"), "{}", text(&o.stderr));
+    }
+    assert!(!out.exists(), "a table was written");
+}

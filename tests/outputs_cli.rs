@@ -279,6 +279,27 @@ fn d3_failed_recapture_on_a_full_disk_keeps_the_previous_set() {
     assert_eq!(done.len() as u64, report["succeeded"].as_u64().unwrap());
 }
 
+/// Issue 42, D12: `capture --out` a mount point (a container volume, a scratch mount) writes
+/// the set there, staged inside it rather than on the parent's filesystem, and leaves no debris.
+#[test]
+fn d12_capture_into_a_mount_point_writes_the_set() {
+    let tmp = tempfile::tempdir().unwrap();
+    let Some(disk) = SmallDisk::mount(&tmp.path().join("mnt")) else {
+        eprintln!("skipped: cannot mount a tmpfs here (needs root); output_set's d12 tests cover it");
+        return;
+    };
+    let cheek = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds/cheek");
+    let o = capture(&cheek, &disk.0);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(disk.0.join("report.json").is_file() && disk.0.join("normal.png").is_file());
+    let left: Vec<_> = std::fs::read_dir(&disk.0)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "debris: {left:?}");
+}
+
 #[test]
 fn d3_a_folder_in_the_way_of_the_report_leaves_no_maps() {
     let tmp = tempfile::tempdir().unwrap();

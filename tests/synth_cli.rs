@@ -284,4 +284,21 @@ fn d6_a_grown_map_mostly_invalid_is_a_failure_with_its_count() {
     synth(&good, &out, &["--report", s(&report)]);
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     assert_eq!(json["invalid_texels"], 0);
+
+/// Issue 42, D15: `--out` a name that is not UTF-8 (a valid Linux name) is written, not refused
+/// after the synthesis.
+#[cfg(unix)]
+#[test]
+fn d15_an_out_name_that_is_not_utf8_is_written() {
+    use std::os::unix::ffi::OsStrExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 32);
+    let out = tmp.path().join(std::ffi::OsStr::from_bytes(b"o\xff.png"));
+    let o = support::bin()
+        .args(["synth", s(&exemplar), "--size", "16x16", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .expect("skinkit runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.is_file());
 }

@@ -121,13 +121,20 @@ struct Triple {
     line: usize,
 }
 
+/// A light file, through the input gate ([`skinkit_maps::input`]).
 fn open(path: &Path) -> Result<std::fs::File> {
-    std::fs::File::open(path).map_err(|error| Error::Io { path: path.to_owned(), error })
+    Ok(skinkit_maps::input::open(path, skinkit_maps::input::Kind::LightFile).map_err(skinkit_maps::Error::from)?)
 }
 
-fn read_text(mut reader: impl Read, name: &str) -> Result<String> {
+/// The reader's text, at most the input gate's limit for a light file (a file that grew past it
+/// after the gate looked is refused, not read without end).
+fn read_text(reader: impl Read, name: &str) -> Result<String> {
+    let limit = skinkit_maps::input::Kind::LightFile.limit();
     let mut text = String::new();
-    reader.read_to_string(&mut text).map_err(|e| bad(name, format!("cannot read: {e}")))?;
+    reader.take(limit + 1).read_to_string(&mut text).map_err(|e| bad(name, format!("cannot read: {e}")))?;
+    if text.len() as u64 > limit {
+        return Err(bad(name, format!("longer than a light file may be ({} MiB)", limit >> 20)));
+    }
     Ok(text)
 }
 

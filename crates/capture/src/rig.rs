@@ -396,9 +396,11 @@ impl Rig {
     /// Reads a rig file; the ambient frame path is resolved relative to the file's folder.
     ///
     /// # Errors
-    /// [`Error::Io`] when the file cannot be read; [`Error::BadFile`] as [`Rig::parse`].
+    /// [`Error::Maps`] when the input gate refuses the file or it cannot be read
+    /// ([`skinkit_maps::input`]); [`Error::BadFile`] as [`Rig::parse`].
     pub fn load(path: &Path) -> Result<Rig> {
-        let text = std::fs::read_to_string(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
+        let text = skinkit_maps::input::read_to_string(path, skinkit_maps::input::Kind::Toml)
+            .map_err(skinkit_maps::Error::from)?;
         let mut rig = Rig::parse(&text, &path.display().to_string())?;
         let folder = path.parent().unwrap_or(Path::new(""));
         if let Some(ambient) = rig.ambient.take() {

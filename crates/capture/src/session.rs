@@ -9,6 +9,8 @@
 //! photos are the files `filenames.txt` lists, one per line, when the folder has one (the DiLiGenT
 //! layout), else every `.png`, `.tif`, `.tiff`, `.exr` and camera RAW (`.dng`, `.cr2`, `.nef`,
 //! `.arw`, ...) file sorted by name except those whose stem is `mask`, `ambient` or `truth` ([`photos_in`]).
+//! An entry with such a name that is not a regular file (a FIFO, a looping symlink) is skipped
+//! and named ([`Session::skipped`], the report's `skipped`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -26,105 +28,11 @@ use skinkit_height::{Height, HeightOptions, HeightReport, Scale};
 use crate::solve::{self, PhotoStack, SolveConfig};
 use crate::{Error, Result, Rig, bracket, detrend, near};
 
+mod folder;
 mod prepare;
+pub use folder::{PHOTO_EXTENSIONS, PhotoFolder, RESERVED_STEMS, Session, Skipped, photos_in};
 pub use prepare::corrections;
 use prepare::{flatten, raw_reading, unscale_albedo};
-
-/// Photo file extensions a session folder's photos may have.
-/// Camera RAW files ([`skinkit_maps::raw::RAW_EXTENSIONS`]) are photos too.
-pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
-/// File stems a session folder reserves for other inputs: never taken as photos.
-pub const RESERVED_STEMS: &[&str] = &["mask", "ambient", "truth"];
-
-/// The files of one capture session.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Session {
-    pub rig: PathBuf,
-    /// Photos in rig order.
-    pub photos: Vec<PathBuf>,
-    pub mask: Option<PathBuf>,
-    /// Ambient frame; overrides the rig's own.
-    pub ambient: Option<PathBuf>,
-    /// Ground-truth normal map to compare against (samples and tests).
-    pub truth: Option<PathBuf>,
-}
-
-impl Session {
-    /// The session a folder holds (see the module docs for the layout).
-    ///
-    /// # Errors
-    /// [`Error::InvalidInput`] when the folder has no `rig.toml` or no photo; [`Error::Io`] when
-    /// it cannot be listed or `filenames.txt` cannot be read.
-    pub fn from_dir(dir: &Path) -> Result<Session> {
-        let optional = |name: &str| Some(dir.join(name)).filter(|p| p.is_file());
-        let rig = dir.join("rig.toml");
-        if !rig.is_file() {
-            return Err(Error::InvalidInput(format!("{}: no rig.toml in the session folder", dir.display())));
-        }
-        Ok(Session {
-            rig,
-            photos: photos_in(dir)?,
-            mask: optional("mask.png"),
-            ambient: optional("ambient.png"),
-            truth: optional("truth.png"),
-        })
-    }
-}
-
-/// Photo files of a folder in light order: the order `filenames.txt` gives when the folder has
-/// one (the DiLiGenT layout), else sorted by name (only [`PHOTO_EXTENSIONS`], never
-/// [`RESERVED_STEMS`]).
-///
-/// # Errors
-/// [`Error::Io`] when the folder cannot be listed or `filenames.txt` read;
-/// [`Error::InvalidInput`] when `filenames.txt` names a missing file or there is no photo.
-pub fn photos_in(dir: &Path) -> Result<Vec<PathBuf>> {
-    let listing = dir.join("filenames.txt");
-    if listing.is_file() {
-        return photos_listed(&listing);
-    }
-    let entries = std::fs::read_dir(dir).map_err(|error| Error::Io { path: dir.to_owned(), error })?;
-    let mut photos: Vec<PathBuf> =
-        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_photo(p)).collect();
-    photos.sort();
-    if photos.is_empty() {
-        return Err(Error::InvalidInput(format!(
-            "{}: no photos (.png, .tif, .tiff, .exr, camera RAW) found",
-            dir.display()
-        )));
-    }
-    Ok(photos)
-}
-
-/// The photos a `filenames.txt` lists, one per line, relative to its folder.
-fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
-    let text = std::fs::read_to_string(listing).map_err(|error| Error::Io { path: listing.to_owned(), error })?;
-    let dir = listing.parent().unwrap_or(Path::new("."));
-    let mut photos = Vec::new();
-    for (line, name) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let path = dir.join(name.trim());
-        if !path.is_file() {
-            return Err(Error::InvalidInput(format!(
-                "{}: line {}: photo `{}` does not exist",
-                listing.display(),
-                line + 1,
-                name.trim()
-            )));
-        }
-        photos.push(path);
-    }
-    if photos.is_empty() {
-        return Err(Error::InvalidInput(format!("{}: lists no photos", listing.display())));
-    }
-    Ok(photos)
-}
-
-fn is_photo(path: &Path) -> bool {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let stem = path.file_stem().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let photo = PHOTO_EXTENSIONS.contains(&ext.as_str()) || skinkit_maps::raw::is_raw(path);
-    photo && !RESERVED_STEMS.contains(&stem.as_str())
-}
 
 /// Everything that shapes a capture besides its files.
 #[derive(Clone, Debug)]
@@ -231,6 +139,10 @@ pub struct CaptureReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_vs_truth_degrees: Option<AngularStats>,
     pub warnings: Vec<String>,
+    /// Entries of the session folder that looked like inputs but were not regular files, each
+    /// named with the reason ([`Session::skipped`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub skipped: Vec<String>,
     /// The rig's photo pixel size on the mold, which makes the height millimetres.
     pub mm_per_pixel: Option<f64>,
     /// The height integrated from the normals: range, unit, integrator, residual (none when no
@@ -279,7 +191,10 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     // Rig::load's errors name the rig file; later rig errors get it as context, once.
     let rig = Rig::load(&session.rig)?;
     let in_rig = |e: Error| context(session.rig.display().to_string(), e);
-    rig.expect_photos(session.photos.len()).map_err(in_rig)?;
+    // A photo count that does not fit the rig names the folder's skipped entries (issue 42, D17):
+    // a FIFO among the photos is the likely missing one.
+    rig.expect_photos(session.photos.len())
+        .map_err(|e| in_rig(Error::InvalidInput(folder::with_skipped(e.to_string(), &session.skipped))))?;
     // Solver options first, so that every error of the solve below is the rig's.
     options.solve.validate()?;
     check_rig(&session.rig, &rig, session.ambient.as_deref(), &options.solve)?;
@@ -366,6 +281,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         tilt_degrees: tilt,
         error_vs_truth_degrees: error_vs_truth,
         warnings,
+        skipped: session.skipped.iter().map(ToString::to_string).collect(),
         mm_per_pixel,
         height_map: heights.as_ref().map(|h| h.report.clone()),
         timings_s: timings,
@@ -378,12 +294,12 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
 /// Checks a rig against everything [`capture`] refuses of a rig before decoding a photo: at most
 /// [`solve::MAX_LIGHTS`] lights; for distant lights, a condition number (as the solver computes
 /// it) within `config.max_condition`; the ambient frame (`ambient`, which overrides the rig's
-/// own) present. `skinkit rig check` calls this same function, so it refuses exactly the rigs
-/// `capture` refuses.
+/// own) a readable image, by its header. `skinkit rig check` calls this same function, and
+/// `skinkit rig import` before it writes, so both refuse exactly the rigs `capture` refuses.
 ///
 /// # Errors
-/// [`Error::Context`] naming the rig file around the light-count or conditioning refusal;
-/// [`Error::InvalidInput`] naming a missing ambient frame.
+/// [`Error::Context`] naming the rig file around the light-count or conditioning refusal, or
+/// naming the ambient frame around the reason its header cannot be read.
 pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &SolveConfig) -> Result<()> {
     let in_rig = |e| context(rig_path.display().to_string(), e);
     if near::applies(rig) {
@@ -397,9 +313,9 @@ pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &So
         (None, Some(p)) => (p, format!("{}: field `ambient` (the ambient frame)", rig_path.display())),
         (None, None) => return Ok(()),
     };
-    if !path.is_file() {
-        return Err(Error::InvalidInput(format!("{whose}: {} is not a file", path.display())));
-    }
+    // Read by header, as the capture reads it first (issue 42, D13): a file that is not an image
+    // (the rig file itself, say) is refused here too, not only once photos are decoded.
+    limits::image_header(path, limits::MAX_IMAGE_PIXELS).map_err(|e| context(whose, e.into()))?;
     Ok(())
 }
 
@@ -423,7 +339,7 @@ pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &Capt
         limits::image_header_as(path, options.limits.max_pixels, options.raw)
             .map_err(|e| context(what.to_owned(), e.into()))
     };
-    let head = header(first, "photo")?;
+    let head = header(first, "photo 1")?;
     let same_size = |path: &Path, what: &str| -> Result<limits::ImageHeader> {
         let h = header(path, what)?;
         if (h.width, h.height) != (head.width, head.height) {

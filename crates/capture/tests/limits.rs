@@ -32,7 +32,7 @@ fn bomb_session(dir: &Path, side: u32) -> Session {
             p
         })
         .collect();
-    Session { rig, photos, mask: None, ambient: None, truth: None }
+    Session { rig, photos, mask: None, ambient: None, truth: None, skipped: Vec::new() }
 }
 
 #[test]
@@ -102,7 +102,14 @@ fn d7_rig_check_refuses_exactly_what_capture_refuses() {
             let solve = SolveConfig { max_condition, ..SolveConfig::default() };
             let checked = session::check_rig(&path, &rig, None, &solve);
             let options = CaptureOptions { solve, detrend_block: 0, ..CaptureOptions::default() };
-            let files = Session { rig: path.clone(), photos: photos.clone(), mask: None, ambient: None, truth: None };
+            let files = Session {
+                rig: path.clone(),
+                photos: photos.clone(),
+                mask: None,
+                ambient: None,
+                truth: None,
+                skipped: Vec::new(),
+            };
             let captured = session::capture(&files, &options, &|_| {});
             assert_eq!(checked.is_ok(), captured.is_ok(), "condition {c}, limit {max_condition}");
             assert_eq!(checked.is_ok(), c <= max_condition, "condition {c}, limit {max_condition}");
@@ -131,7 +138,7 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
             p
         })
         .collect();
-    let files = Session { rig: path.clone(), photos, mask: None, ambient: None, truth: None };
+    let files = Session { rig: path.clone(), photos, mask: None, ambient: None, truth: None, skipped: Vec::new() };
     let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
     assert!(e.contains("at most 128"), "{e}");
 
@@ -141,4 +148,16 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
     let given = dir.path().join("gone.png");
     let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default()).unwrap_err().to_string();
     assert!(e.contains("ambient frame") && e.contains("gone.png"), "the flag's file overrides the rig's: {e}");
+}
+
+/// Issue 42, D13: the ambient frame is read by its header, as `capture` reads it: a rig whose
+/// `ambient` is not an image (the rig file itself) is refused by the check `rig check` runs.
+#[test]
+fn d13_an_ambient_that_is_not_an_image_is_refused_by_the_rig_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rig.toml");
+    let rig = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(path.clone()));
+    rig.save(&path).unwrap();
+    let e = session::check_rig(&path, &rig, None, &SolveConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("field `ambient` (the ambient frame)") && e.contains("not a readable image"), "{e}");
 }

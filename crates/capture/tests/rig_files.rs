@@ -144,7 +144,8 @@ fn save_and_load_round_trip_with_relative_ambient() {
 #[test]
 fn load_of_a_missing_file_names_it() {
     let err = Rig::load(Path::new("/nonexistent/rig.toml")).unwrap_err();
-    assert!(matches!(err, Error::Io { .. }));
+    // Read through the input gate (issue 42): its I/O error, as maps::Error::Input.
+    assert!(matches!(err, Error::Maps(skinkit_maps::Error::Input(skinkit_maps::input::InputError::Io { .. }))));
     assert!(err.to_string().contains("/nonexistent/rig.toml"));
 }
 

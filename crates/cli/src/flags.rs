@@ -46,6 +46,16 @@ pub fn positive_mm(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A shadow table's penumbra width in millimetres: from 0 to
+/// [`skinkit_render::skin::shadow::MAX_PENUMBRA_MM`] (issue 42, D14).
+pub fn penumbra_mm(text: &str) -> Result<f32, String> {
+    let max = skinkit_render::skin::shadow::MAX_PENUMBRA_MM;
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (0.0..=max).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}` is not a penumbra width in millimetres (0 to {max})")),
+    }
+}
+
 /// A face map size `WxH` of at most [`limits::MAX_MAP_TEXELS`] texels.
 pub fn map_size(text: &str) -> Result<(usize, usize), String> {
     size_within(text, limits::MAX_MAP_TEXELS, "a face map may be", "texels, 32768x32768")

@@ -29,6 +29,9 @@ pub enum Error {
     /// Encoding an image failed.
     #[error("{path}: cannot encode: {reason}")]
     Encode { path: PathBuf, reason: String },
+    /// The input gate refused a file ([`crate::input`]).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     /// Reading or writing a file failed.
     #[error("{path}: {error}")]
     Io { path: PathBuf, error: std::io::Error },
@@ -43,5 +46,42 @@ impl Error {
     }
     pub(crate) fn decode(path: impl Into<PathBuf>, reason: impl ToString) -> Self {
         Error::Decode { path: path.into(), reason: reason.to_string() }
+    }
+
+    /// An `image` crate refusal in the README's words (issue 42, D16): what the decoder cannot
+    /// handle becomes the list of layouts skinkit reads, and the decoder's own memory limit is
+    /// told apart from `--memory-limit`, never a Debug dump of the decoder's types.
+    pub(crate) fn image(path: &std::path::Path, error: image::ImageError) -> Self {
+        use image::ImageError as E;
+        match error {
+            E::Unsupported(_) => Error::Unsupported { path: path.to_owned(), reason: LAYOUTS_READ.to_owned() },
+            E::Limits(_) => Error::decode(
+                path,
+                "the image decoder's own limit refuses it (a metadata chunk or a strip too large to \
+                 read; --memory-limit does not change it): re-export the image without it",
+            ),
+            E::IoError(e) => Error::io(path, e),
+            other => Error::decode(path, other),
+        }
+    }
+}
+
+/// The pixel layouts image files may have, as the README's formats table gives them.
+pub(crate) const LAYOUTS_READ: &str = "its pixel layout is not one skinkit reads: PNG or TIFF of 8 or 16 bits \
+     a sample, grey or RGB (alpha ignored), or float EXR with R, G and B channels";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::error::{LimitError, LimitErrorKind};
+
+    /// Issue 42, D16: the decoder's own memory limit (a PNG with a 256 MiB text chunk) is told
+    /// apart from `--memory-limit`, not shown as a bare "Memory limit exceeded".
+    #[test]
+    fn d16_the_decoders_own_limit_is_not_mistaken_for_the_memory_limit() {
+        let limit = image::ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory));
+        let e = Error::image(std::path::Path::new("03.png"), limit).to_string();
+        assert!(e.starts_with("03.png: not a readable image: the image decoder's own limit"), "{e}");
+        assert!(e.contains("--memory-limit does not change it"), "{e}");
     }
 }

@@ -41,10 +41,23 @@ fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }
 
-/// The file, buffered: decoders stream from it rather than from a copy of the whole file in
-/// memory (for a stack of 4096x4096 photos that copy is a quarter of a gigabyte of fresh pages).
-fn open_buffered(path: &Path) -> Result<std::io::BufReader<File>> {
-    File::open(path).map(|f| std::io::BufReader::with_capacity(1 << 16, f)).map_err(|e| Error::io(path, e))
+/// The image file, opened through the input gate ([`crate::input`]) and buffered: decoders
+/// stream from it rather than from a copy of the whole file in memory (for a stack of 4096x4096
+/// photos that copy is a quarter of a gigabyte of fresh pages).
+pub(crate) fn open_buffered(path: &Path) -> Result<std::io::BufReader<File>> {
+    let file = crate::input::open(path, crate::input::Kind::Image)?;
+    Ok(std::io::BufReader::with_capacity(1 << 16, file))
+}
+
+/// An EXR file through the gate, its signature and every part's size checked, rewound for the
+/// decoder: one open serves the checks and the decode.
+fn open_exr(path: &Path, limits: &Limits, need_rgb: bool) -> Result<std::io::BufReader<File>> {
+    use std::io::Seek;
+    let mut file = open_buffered(path)?;
+    crate::signature::check_reader(path, &mut file)?;
+    crate::limits::exr_read_size(path, &mut file, limits.max_pixels, need_rgb)?;
+    file.rewind().map_err(|e| Error::io(path, e))?;
+    Ok(file)
 }
 
 /// Reads a PNG, TIFF, EXR or camera RAW ([`crate::raw`], half size) photo, grey or RGB (alpha dropped), 8/16-bit or float, kept in its
@@ -77,7 +90,12 @@ pub fn read_photo_as(path: &Path, limits: &Limits, raw: RawMode) -> Result<Photo
 ///
 /// # Errors
 /// As [`read_photo`].
-pub fn decode_photo(path: &Path, reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<Photo> {
+pub fn decode_photo(path: &Path, mut reader: impl std::io::BufRead + std::io::Seek, limits: &Limits) -> Result<Photo> {
+    // The signature first, so a grey TIFF with alpha under another format's name is refused too.
+    crate::signature::check_reader(path, &mut reader)?;
+    if let Some(found) = crate::tiff_grey::probe(path, &mut reader)? {
+        return crate::tiff_grey::decode(path, reader, found, limits.max_pixels);
+    }
     let image = decode_dynamic(path, reader, limits)?;
     photo_from_dynamic(path, image)
 }
@@ -86,10 +104,10 @@ fn decode_dynamic(path: &Path, reader: impl std::io::BufRead + std::io::Seek, li
     let reader = ImageReader::new(reader).with_guessed_format().map_err(|e| Error::io(path, e))?;
     // Only PNG and TIFF reach the decoder, and only under their own names (JPEG never: D13).
     crate::signature::check(path, reader.format())?;
-    let decoder = reader.into_decoder().map_err(|e| Error::decode(path, e))?;
+    let decoder = reader.into_decoder().map_err(|e| Error::image(path, e))?;
     let (w, h) = decoder.dimensions();
     limits.check(path, w as u64, h as u64)?;
-    DynamicImage::from_decoder(decoder).map_err(|e| Error::decode(path, e))
+    DynamicImage::from_decoder(decoder).map_err(|e| Error::image(path, e))
 }
 
 fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
@@ -105,11 +123,8 @@ fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
         i @ DynamicImage::ImageRgba8(_) => (Channels::Rgb, Samples::U8(i.into_rgb8().into_raw())),
         i @ DynamicImage::ImageRgba16(_) => (Channels::Rgb, Samples::U16(i.into_rgb16().into_raw())),
         i @ DynamicImage::ImageRgba32F(_) => (Channels::Rgb, Samples::F32(i.into_rgb32f().into_raw())),
-        other => {
-            return Err(Error::Unsupported {
-                path: path.to_owned(),
-                reason: format!("pixel layout {:?}", other.color()),
-            });
+        _ => {
+            return Err(Error::Unsupported { path: path.to_owned(), reason: crate::error::LAYOUTS_READ.to_owned() });
         }
     };
     Photo::new(w, h, channels, samples)
@@ -152,15 +167,14 @@ pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -
 /// When the file is not an EXR within the limits or has no channel called `name`.
 pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<ScalarMap> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    crate::signature::check_file(path)?;
-    crate::limits::exr_read_size(path, limits.max_pixels)?;
+    let file = open_exr(path, limits, false)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(file)
         .map_err(|e| Error::decode(path, e))?;
     let layer = &image.layer_data;
     let Some(channel) = layer.channel_data.list.iter().find(|c| c.name == *name) else {
@@ -171,15 +185,21 @@ pub fn read_exr_channel(path: &Path, name: &str, limits: &Limits) -> Result<Scal
 
 /// Reads the first RGB(A) layer of an EXR file as float triples (alpha ignored, missing channels 0).
 fn read_exr_rgb(path: &Path, limits: &Limits) -> Result<(usize, usize, Vec<[f32; 3]>)> {
-    use exr::prelude::read_first_rgba_layer_from_file;
-    crate::signature::check_file(path)?;
-    crate::limits::exr_read_size(path, limits.max_pixels)?;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.width() * resolution.height()]),
-        |(w, data), pos, (r, g, b, _a): (f32, f32, f32, f32)| data[pos.y() * *w + pos.x()] = [r, g, b],
-    )
-    .map_err(|e| Error::decode(path, e))?;
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let file = open_exr(path, limits, true)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.width() * resolution.height()]),
+            |(w, data): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                data[pos.y() * *w + pos.x()] = [r, g, b]
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(file)
+        .map_err(|e| Error::decode(path, e))?;
     let size = image.layer_data.size;
     Ok((size.width(), size.height(), image.layer_data.channel_data.pixels.1))
 }
@@ -524,132 +544,4 @@ pub fn read_scalar_map(path: &Path, limits: &Limits) -> Result<ScalarMap> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn sample_map() -> NormalMap {
-        let g = Grid::from_fn(7, 5, |x, y| Vec3::new(x as f32 * 0.1 - 0.3, 0.2 - y as f32 * 0.1, 1.0));
-        let mut m = NormalMap::from_grid(g);
-        m.set(3, 2, Vec3::ZERO);
-        m
-    }
-
-    #[test]
-    fn normal_map_round_trips_png16_png8_exr() {
-        let dir = tempfile::tempdir().unwrap();
-        let m = sample_map();
-        for (name, bits, tol) in [("n.png", 16, 0.01), ("n8.png", 8, 0.5), ("n.exr", 32, 1e-5)] {
-            for green in [crate::GreenAxis::Up, crate::GreenAxis::Down] {
-                let enc = NormalEncoding { green };
-                let path = dir.path().join(name);
-                write_normal_map(&path, &m, enc, bits).unwrap();
-                let back = read_normal_map(&path, enc, &Limits::default()).unwrap();
-                assert_eq!(back.size(), m.size());
-                assert!(!back.is_valid(3, 2), "{name}: invalid texel survives");
-                let err = back.angular_error(&m, None).unwrap();
-                assert_eq!(err.count, 34);
-                assert!(err.max < tol, "{name} {green:?}: {err:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn green_down_file_differs_from_green_up() {
-        let dir = tempfile::tempdir().unwrap();
-        let m = sample_map();
-        let path = dir.path().join("n.png");
-        write_normal_map(&path, &m, NormalEncoding { green: crate::GreenAxis::Down }, 16).unwrap();
-        let misread = read_normal_map(&path, NormalEncoding::default(), &Limits::default()).unwrap();
-        assert!((misread.get(0, 0).y + m.get(0, 0).y).abs() < 1e-3);
-    }
-
-    #[test]
-    fn photos_keep_native_depth() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("p.png");
-        write_png(&path, 2, 2, PngLayout::Gray16, &[0, 1000, 40000, 65535]).unwrap();
-        let p = read_photo(&path, &Limits::default()).unwrap();
-        assert_eq!(p.samples(), &Samples::U16(vec![0, 1000, 40000, 65535]));
-        write_png(&path, 1, 2, PngLayout::Rgb8, &[1, 2, 3, 4, 5, 6]).unwrap();
-        let p = read_photo(&path, &Limits::default()).unwrap();
-        assert_eq!((p.channels(), p.samples()), (Channels::Rgb, &Samples::U8(vec![1, 2, 3, 4, 5, 6])));
-    }
-
-    #[test]
-    fn tiff_photos_read() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("p.tiff");
-        let buf: image::ImageBuffer<image::Luma<u16>, Vec<u16>> =
-            image::ImageBuffer::from_raw(2, 1, vec![7u16, 65000]).unwrap();
-        buf.save(&path).unwrap();
-        let p = read_photo(&path, &Limits::default()).unwrap();
-        assert_eq!(p.samples(), &Samples::U16(vec![7, 65000]));
-    }
-
-    #[test]
-    fn bad_files_name_the_path() {
-        let dir = tempfile::tempdir().unwrap();
-        let text = dir.path().join("text.png");
-        std::fs::write(&text, "hello, not a png").unwrap();
-        let e = read_photo(&text, &Limits::default()).unwrap_err().to_string();
-        assert!(e.contains("text.png"), "{e}");
-
-        let good = dir.path().join("good.png");
-        write_png(&good, 64, 64, PngLayout::Gray16, &vec![1234; 64 * 64]).unwrap();
-        let bytes = std::fs::read(&good).unwrap();
-        let cut = dir.path().join("cut.png");
-        std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
-        let e = read_photo(&cut, &Limits::default()).unwrap_err().to_string();
-        assert!(e.contains("cut.png"), "{e}");
-
-        let e = read_photo(&good, &Limits { max_pixels: 100 }).unwrap_err().to_string();
-        assert!(e.contains("exceeds"), "{e}");
-        assert!(read_photo(&dir.path().join("missing.png"), &Limits::default()).is_err());
-    }
-
-    #[test]
-    fn every_part_of_a_multi_part_exr_is_checked_against_the_limit() {
-        use exr::prelude::{Encoding, Image, ImageAttributes, IntegerBounds, Layer, LayerAttributes};
-        use exr::prelude::{SpecificChannels, Vec2, WritableImage};
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("parts.exr");
-        let pixel = |_: Vec2<usize>| (0.0f32, 0.0f32, 1.0f32);
-        let part = |name: &str, side: usize| {
-            let channels = SpecificChannels::rgb(pixel);
-            Layer::new((side, side), LayerAttributes::named(name), Encoding::UNCOMPRESSED, channels)
-        };
-        let bounds = IntegerBounds::from_dimensions((16, 16));
-        let image = Image::from_layers(ImageAttributes::new(bounds), vec![part("small", 8), part("large", 16)]);
-        image.write().to_file(&path).unwrap();
-        // The first part (64 pixels) fits 100; the second (256) does not, and the file is refused.
-        let e = read_photo(&path, &Limits { max_pixels: 100 }).unwrap_err().to_string();
-        assert!(e.contains("parts.exr") && e.contains("16x16"), "{e}");
-        let e = crate::limits::image_header(&path, 100).unwrap_err().to_string();
-        assert!(e.contains("16x16"), "{e}");
-        let header = crate::limits::image_header(&path, 1000).unwrap();
-        assert_eq!((header.width, header.height), (8, 8), "the part the reader decodes");
-        let photo = read_photo(&path, &Limits { max_pixels: 1000 }).unwrap();
-        assert_eq!((photo.width(), photo.height()), (8, 8));
-    }
-
-    #[test]
-    fn nan_in_exr_becomes_invalid() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("nan.exr");
-        write_exr_rgb(&path, 2, 1, |x, _| if x == 0 { [f32::NAN, 0.0, 1.0] } else { [0.0, 0.0, 1.0] }).unwrap();
-        let m = read_normal_map(&path, NormalEncoding::default(), &Limits::default()).unwrap();
-        assert!(!m.is_valid(0, 0));
-        assert_eq!(m.get(1, 0), Vec3::Z);
-    }
-
-    #[test]
-    fn failed_write_leaves_target_untouched() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("keep.txt");
-        std::fs::write(&path, "old").unwrap();
-        let r = write_atomic(&path, |_| Err(Error::InvalidParameter("boom".into())));
-        assert!(r.is_err());
-        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "temporary file left behind");
-    }
-}
+mod tests;

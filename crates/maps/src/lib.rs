@@ -9,6 +9,8 @@
 //!   a stack of large 16-bit photos costs two bytes a sample, not four.
 //! * [`io`] reads PNG, TIFF and EXR (and camera RAW through [`raw`]) under [`Limits`] and writes every output atomically;
 //!   [`OutputSet`] makes a command's several outputs appear all together or not at all.
+//! * [`input`] is the gate every file read passes: regular files only, each kind under a byte
+//!   limit, checked from metadata before reading.
 //! * [`limits`] states every resource limit (image sizes, lights, frames, threads, memory) and
 //!   checks them from headers and arithmetic before anything is allocated.
 //! * [`preview`] draws maps as 8-bit pictures people read (relief under a raking light).
@@ -21,6 +23,7 @@ pub mod encoding;
 pub mod error;
 mod exr_write;
 pub mod grid;
+pub mod input;
 pub mod io;
 pub mod limits;
 pub mod names;
@@ -32,6 +35,7 @@ pub mod pyramid;
 pub mod raw;
 pub mod resample;
 mod signature;
+mod tiff_grey;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};

@@ -15,7 +15,10 @@
 //! | worker threads (`--threads`) | [`max_threads`] | the CLI's flag parser |
 //! | the memory of one job (a photo stack and its maps, a synthesis, a face) | [`default_memory_limit`] or `--memory-limit` | estimates from headers |
 //! | sessions a batch runs at once | their estimates must fit the memory limit together | [`MemoryGate`] |
+//! | bytes of every file read, by kind (a regular file only) | [`crate::input::Kind::limit`] | [`crate::input::open`] |
 
+use std::fs::File;
+use std::io::BufReader;
 use std::path::Path;
 use std::sync::{Condvar, Mutex};
 
@@ -192,25 +195,29 @@ pub fn image_header_as(path: &Path, max_pixels: u64, raw: crate::raw::RawMode) -
     }
     // The same signature rules as the decoders (JPEG refused with its reason, a name that says
     // another format), so a header read first gives the error the decode would have given.
-    crate::signature::check_file(path)?;
+    let mut file = crate::io::open_buffered(path)?;
+    crate::signature::check_reader(path, &mut file)?;
+    if let Some(found) = crate::tiff_grey::probe(path, &mut file)? {
+        let header = found.header();
+        check_pixels(path, header.width, header.height, max_pixels)?;
+        return Ok(header);
+    }
     let header = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
-        exr_header(path, max_pixels)?
+        exr_header(path, file, max_pixels)?
     } else {
-        raster_header(path)?
+        raster_header(path, file)?
     };
     check_pixels(path, header.width, header.height, max_pixels)?;
     Ok(header)
 }
 
-fn raster_header(path: &Path) -> Result<ImageHeader> {
+fn raster_header(path: &Path, file: BufReader<File>) -> Result<ImageHeader> {
     use image::ImageDecoder;
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader =
-        image::ImageReader::new(std::io::BufReader::new(file)).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    let reader = image::ImageReader::new(file).with_guessed_format().map_err(|e| Error::io(path, e))?;
     if reader.format().is_none() {
         return Err(Error::decode(path, "unrecognised file signature (expected PNG, TIFF or EXR)"));
     }
-    let decoder = reader.into_decoder().map_err(|e| Error::decode(path, e))?;
+    let decoder = reader.into_decoder().map_err(|e| Error::image(path, e))?;
     let (width, height) = decoder.dimensions();
     let color = decoder.color_type();
     let channels = color.channel_count();
@@ -223,8 +230,8 @@ fn raster_header(path: &Path) -> Result<ImageHeader> {
     })
 }
 
-fn exr_header(path: &Path, max_pixels: u64) -> Result<ImageHeader> {
-    let (width, height) = exr_read_size(path, max_pixels)?;
+fn exr_header(path: &Path, file: BufReader<File>, max_pixels: u64) -> Result<ImageHeader> {
+    let (width, height) = exr_read_size(path, file, max_pixels, false)?;
     // The EXR reader keeps three f32 channels (missing ones are 0, alpha is dropped).
     Ok(ImageHeader { width: width as u64, height: height as u64, channels: 3, alpha: false, sample_bytes: 4 })
 }
@@ -235,13 +242,27 @@ fn exr_header(path: &Path, max_pixels: u64) -> Result<ImageHeader> {
 ///
 /// # Errors
 /// When the header cannot be read, the file has no part, or a part is empty or over the limit.
-pub(crate) fn exr_read_size(path: &Path, max_pixels: u64) -> Result<(usize, usize)> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::decode(path, e))?;
+/// With `need_rgb`, a file without a part holding R, G and B is refused, naming its channels
+/// (issue 42, D16: the decoder's own words were "no layer ... matched your requirements").
+pub(crate) fn exr_read_size(
+    path: &Path,
+    file: impl std::io::Read,
+    max_pixels: u64,
+    need_rgb: bool,
+) -> Result<(usize, usize)> {
+    let meta = exr::meta::MetaData::read_from_buffered(file, false).map_err(|e| Error::decode(path, e))?;
     for header in &meta.headers {
         check_pixels(path, header.layer_size.width() as u64, header.layer_size.height() as u64, max_pixels)?;
     }
     let has = |header: &exr::meta::header::Header, name: &str| header.channels.list.iter().any(|c| c.name.eq(name));
-    let read = meta.headers.iter().find(|h| has(h, "R") && has(h, "G") && has(h, "B")).or(meta.headers.first());
+    let rgb = meta.headers.iter().find(|h| has(h, "R") && has(h, "G") && has(h, "B"));
+    if need_rgb && rgb.is_none() {
+        let names: Vec<String> =
+            meta.headers.iter().flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string())).collect();
+        let reason = format!("an EXR photo or map needs R, G and B channels; this one has {}", names.join(", "));
+        return Err(Error::Unsupported { path: path.to_owned(), reason });
+    }
+    let read = rgb.or(meta.headers.first());
     let size = read.ok_or_else(|| Error::decode(path, "no layer"))?.layer_size;
     Ok((size.width(), size.height()))
 }

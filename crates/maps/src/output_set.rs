@@ -7,7 +7,9 @@
 //! renames only, after everything was written:
 //!
 //! * A folder set ([`OutputSet::folder`]) that did not exist becomes its staging folder in one
-//!   rename. Into an existing folder (a re-capture), the set's marker file (the report, written
+//!   rename. An existing folder holds its own staging folder, so the renames stay on its
+//!   filesystem when it is a mount point; a rename that still crosses filesystems (`EXDEV`)
+//!   falls back on a copy to a temporary file beside the destination and a rename of that. Into an existing folder (a re-capture), the set's marker file (the report, written
 //!   last) is removed first, the other files are renamed over their old versions and the marker
 //!   comes last, so a folder holding the marker holds one complete set. Files of the folder that the
 //!   set does not write are left alone: `--out .` must not delete a user's files.
@@ -84,9 +86,19 @@ impl OutputSet {
         let mut set = OutputSet::empty();
         set.folder = Some((target.to_owned(), marker.to_owned()));
         let (parent, name) = split(target)?;
+        let name = label(&name);
         set.create_parent(&parent)?;
         set.swept.extend(sweep_staging(&parent, &name));
-        set.new_staging(&parent, &name, target)?;
+        // Into an existing folder the staging folder goes inside it (issue 42, D12): the commit's
+        // renames then stay on the target's filesystem when it is a mount point (a container
+        // volume, a scratch mount), which a staging folder beside it would not be on.
+        let home = if target.is_dir() {
+            set.swept.extend(sweep_staging(target, &name));
+            target.to_owned()
+        } else {
+            parent
+        };
+        set.new_staging(&home, &name, target)?;
         Ok(set)
     }
 
@@ -215,7 +227,11 @@ impl OutputSet {
     fn commit_folder(&mut self, target: &Path, marker: &str) -> Result<()> {
         let (staging, _) = &self.stagings[0];
         if !target.exists() {
-            return std::fs::rename(staging, target).map_err(|e| Error::io(target, e));
+            match std::fs::rename(staging, target) {
+                // A mount point made meanwhile: moved file by file below, copying where needed.
+                Err(e) if e.kind() == std::io::ErrorKind::CrossesDevices => {}
+                done => return done.map_err(|e| Error::io(target, e)),
+            }
         }
         let mut moves = Vec::new();
         staged_files(staging, target, &mut moves).map_err(|e| Error::io(target, e))?;
@@ -335,8 +351,10 @@ fn is_staging(path: &Path) -> bool {
     path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with('.') && n.contains(STAGING))
 }
 
-/// The parent folder (`.` for a bare name) and the file name of a destination.
-fn split(target: &Path) -> Result<(PathBuf, String)> {
+/// The parent folder (`.` for a bare name) and the file name of a destination. A name that is
+/// not UTF-8 is a valid Linux name and is kept as it is (issue 42, D15: it was refused only at
+/// the commit, after the work); staging folders are labelled with its lossy form ([`label`]).
+fn split(target: &Path) -> Result<(PathBuf, std::ffi::OsString)> {
     if target.file_name().is_none() && target.exists() {
         // `.` or `dir/..`: the folder's own name, beside which its staging folder goes.
         let canonical = target.canonicalize().map_err(|e| Error::io(target, e))?;
@@ -346,13 +364,17 @@ fn split(target: &Path) -> Result<(PathBuf, String)> {
     }
     let name = target
         .file_name()
-        .and_then(|n| n.to_str())
         .ok_or_else(|| Error::InvalidParameter(format!("{}: not a file or folder name", target.display())))?;
     let parent = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
         _ => PathBuf::from("."),
     };
     Ok((parent, name.to_owned()))
+}
+
+/// A destination's name as a staging folder's label: its lossy UTF-8 form.
+fn label(name: &std::ffi::OsStr) -> String {
+    name.to_string_lossy().into_owned()
 }
 
 /// Every file under `staging`, paired with its place under `target`.
@@ -391,9 +413,34 @@ fn rename_all(moves: &[(PathBuf, PathBuf)]) -> Result<()> {
         if let Some(dir) = to.parent().filter(|d| !d.as_os_str().is_empty() && !d.exists()) {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
-        std::fs::rename(from, to).map_err(|e| Error::io(to, e))?;
+        move_file(from, to).map_err(|e| Error::io(to, e))?;
     }
     Ok(())
+}
+
+/// Renames `from` to `to`; across filesystems (`EXDEV`, a destination that is or holds a mount
+/// point), copies into a temporary file beside `to` and renames that instead, so `to` is still
+/// replaced whole or not at all (issue 42, D12).
+fn move_file(from: &Path, to: &Path) -> std::io::Result<()> {
+    match std::fs::rename(from, to) {
+        Err(e) if e.kind() == std::io::ErrorKind::CrossesDevices => copy_across(from, to),
+        done => done,
+    }
+}
+
+/// The copy of [`move_file`]: a temporary file named as [`crate::io::write_atomic`] names its
+/// own (`.<name>.XXXXXX.tmp`, swept after a killed run), renamed over `to`, then `from` removed.
+fn copy_across(from: &Path, to: &Path) -> std::io::Result<()> {
+    let dir = match to.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = to.file_name().and_then(|n| n.to_str()).unwrap_or("output");
+    let tmp = tempfile::Builder::new().prefix(&format!(".{name}.")).suffix(".tmp").tempfile_in(dir)?;
+    std::fs::copy(from, tmp.path())?;
+    tmp.as_file().sync_all()?;
+    tmp.persist(to).map_err(|e| e.error)?;
+    std::fs::remove_file(from)
 }
 
 /// Removes what killed runs left around the output folder `target` without writing it: the
@@ -403,7 +450,9 @@ fn rename_all(moves: &[(PathBuf, PathBuf)]) -> Result<()> {
 /// removed.
 pub fn sweep_folder(target: &Path) -> Vec<PathBuf> {
     let Ok((parent, name)) = split(target) else { return Vec::new() };
+    let name = label(&name);
     let mut swept = sweep_staging(&parent, &name);
+    swept.extend(sweep_staging(target, &name));
     for file in entries(target).into_iter().filter(|p| p.is_file()) {
         swept.extend(sweep_old_temps(&file));
     }

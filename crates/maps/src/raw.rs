@@ -91,7 +91,9 @@ pub fn header(path: &Path, max_pixels: u64, mode: RawMode) -> Result<ImageHeader
 
 /// The file's bytes, refused unread when it is longer than a RAW file of the pixel limit can be.
 fn read_bounded(path: &Path, limits: &Limits) -> Result<Vec<u8>> {
-    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    use std::io::Read;
+    let file = crate::input::open(path, crate::input::Kind::RawPhoto)?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let max = limits.max_pixels.saturating_mul(RAW_BYTES_PER_PIXEL).saturating_add(RAW_SLACK_BYTES);
     if len > max {
         return Err(Error::decode(
@@ -99,7 +101,9 @@ fn read_bounded(path: &Path, limits: &Limits) -> Result<Vec<u8>> {
             format!("{len} bytes is longer than a RAW file within the pixel limit ({max} bytes)"),
         ));
     }
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
+    file.take(max).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    Ok(bytes)
 }
 
 #[cfg(feature = "raw")]

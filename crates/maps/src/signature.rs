@@ -73,15 +73,16 @@ pub(crate) fn check(path: &Path, found: Option<ImageFormat>) -> Result<()> {
     }
 }
 
-/// Checks the first bytes of the file at `path` (for readers that open the file themselves).
+/// Checks the first bytes of `file` (opened from `path` through the input gate), then rewinds it
+/// for the decoder.
 ///
 /// # Errors
 /// As [`check`], and [`Error::Io`] when the file cannot be read.
-pub(crate) fn check_file(path: &Path) -> Result<()> {
+pub(crate) fn check_reader(path: &Path, file: &mut (impl std::io::Read + std::io::Seek)) -> Result<()> {
     use std::io::Read;
     let mut head = Vec::with_capacity(16);
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    file.take(16).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    file.by_ref().take(16).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    file.rewind().map_err(|e| Error::io(path, e))?;
     check(path, image::guess_format(&head).ok())
 }
 

@@ -98,7 +98,7 @@ fn image(path: &Path, slot: Slot, limits: &Limits) -> skinkit_maps::Result<(Phot
     let named = image_name(path, slot);
     let refuse = |reason: String| skinkit_maps::Error::Unsupported { path: named.clone(), reason };
     let io_error = |error| skinkit_maps::Error::Io { path: path.to_owned(), error };
-    let bytes = std::fs::read(path).map_err(io_error)?;
+    let bytes = skinkit_maps::input::read(path, skinkit_maps::input::Kind::Mesh)?;
     let gltf = crate::mesh::source::parse_gltf(&bytes).map_err(|reason| {
         io_error(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not a readable glTF file: {reason}")))
     })?;
@@ -132,10 +132,10 @@ fn material_label(material: &gltf::Material) -> String {
     }
 }
 
-/// The bytes of a buffer view: from the GLB's binary chunk or an external buffer file (a regular
-/// file: the mesh loader's check of buffer URIs runs first).
+/// The bytes of a buffer view: from the GLB's binary chunk or an external buffer file (read
+/// through the input gate, [`skinkit_maps::input`]).
 fn view_bytes(gltf: &gltf::Gltf, view: &gltf::buffer::View, base: &Path) -> Result<Vec<u8>, String> {
-    crate::mesh::source::check_gltf_buffer_uris(&gltf.document, base)?;
+    crate::mesh::source::check_gltf_buffer_uris(&gltf.document)?;
     let buffer = view.buffer();
     let external;
     let data: &[u8] = match buffer.source() {
@@ -145,8 +145,8 @@ fn view_bytes(gltf: &gltf::Gltf, view: &gltf::buffer::View, base: &Path) -> Resu
         }
         gltf::buffer::Source::Uri(uri) => {
             let file = base.join(uri_path(uri)?);
-            external =
-                std::fs::read(&file).map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?;
+            external = skinkit_maps::input::read(&file, skinkit_maps::input::Kind::GltfBuffer)
+                .map_err(|e| format!("buffer {}: {e}", buffer.index()))?;
             &external
         }
     };

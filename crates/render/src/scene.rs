@@ -74,6 +74,9 @@ pub enum SceneError {
     /// The file could not be read.
     #[error("{file}: {error}")]
     Io { file: String, error: std::io::Error },
+    /// The input gate refused the file or could not read it ([`skinkit_maps::input`]).
+    #[error(transparent)]
+    Input(#[from] skinkit_maps::input::InputError),
     /// Not valid TOML, an unknown key, or a value of the wrong type (the TOML parser's message
     /// names the key and line).
     #[error("{file}: {message}")]
@@ -238,8 +241,7 @@ impl Scene {
     /// # Errors
     /// Unreadable file, TOML syntax, unknown keys, wrong types, invalid values.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|error| SceneError::Io { file: path.display().to_string(), error })?;
+        let text = skinkit_maps::input::read_to_string(path, skinkit_maps::input::Kind::Toml)?;
         Scene::parse(&text, path)
     }
 

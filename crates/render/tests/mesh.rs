@@ -381,15 +381,15 @@ fn gltf_node_chains_deeper_than_the_limit_are_refused() {
 }
 
 /// Buffer URIs the `gltf` crate would panic on (bad percent-encoding) or read without end (a
-/// device) are refused with the buffer named.
+/// device) are refused with the buffer named; the input gate names what the file is (issue 42, D9).
 #[test]
 fn gltf_buffer_uris_that_are_not_files_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     for (uri, want) in [
         ("%FF", "percent-encoding is not UTF-8"),
-        ("/dev/zero", "/dev/zero is not a regular file"),
-        ("file:///dev/zero", "/dev/zero is not a regular file"),
-        (".", "is not a regular file"),
+        ("/dev/zero", "/dev/zero: a device, not a regular file (a glTF buffer is read only"),
+        ("file:///dev/zero", "/dev/zero: a device, not a regular file"),
+        (".", "a folder, not a regular file"),
     ] {
         let json = triangle_json(Some(uri), 68);
         let err = Mesh::parse_gltf(json.as_bytes(), Some(dir.path()), "u.gltf").unwrap_err().to_string();

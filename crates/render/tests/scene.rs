@@ -241,5 +241,7 @@ fn load_reads_the_file() {
     let s = Scene::load(&path).unwrap();
     assert_eq!(s.mesh, dir.path().join("head.obj"));
     let err = Scene::load(&dir.path().join("none.toml")).unwrap_err();
-    assert!(matches!(err, SceneError::Io { .. }) && err.to_string().contains("none.toml"));
+    // Read through the input gate (issue 42): its I/O error.
+    let gate_io = matches!(err, SceneError::Input(skinkit_maps::input::InputError::Io { .. }));
+    assert!(gate_io && err.to_string().contains("none.toml"), "{err}");
 }

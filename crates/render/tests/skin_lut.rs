@@ -646,3 +646,19 @@ fn unreadable_files_name_themselves() {
     let err = lut_file::write_diffuse(&dir.path().join("missing/lut.exr"), &lut).unwrap_err();
     assert!(err.to_string().contains("missing"), "{err}");
 }
+
+/// Issue 42, D14: at the widest penumbra a table may cover the fully lit column stays lit in
+/// every row (at `1e30` mm the lower rows read 0: lit skin as shadow), and wider is refused.
+#[test]
+fn d14_the_widest_shadow_table_keeps_lit_skin_lit_and_wider_is_refused() {
+    use skinkit_render::skin::shadow::MAX_PENUMBRA_MM;
+    let spec = ShadowLutSpec { width: 32, height: 64, w_max_mm: MAX_PENUMBRA_MM, ..ShadowLutSpec::default() };
+    let lut = ShadowLut::build(&spec).unwrap();
+    for j in 0..spec.height {
+        let lit = lut.texel(spec.width - 1, j);
+        assert!(lit.iter().all(|&c| c > 0.9), "row {j} (w {} mm): the lit column reads {lit:?}", spec.w_at(j));
+    }
+    let wider = ShadowLutSpec { w_max_mm: 1e30, ..ShadowLutSpec::default() };
+    let e = ShadowLut::build(&wider).unwrap_err().to_string();
+    assert!(e.contains("w_max_mm") && e.contains("at most 1000 mm"), "{e}");
+}

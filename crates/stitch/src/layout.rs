@@ -122,7 +122,8 @@ impl Layout {
     /// # Errors
     /// When the file cannot be read, [`Layout::parse`] fails or [`Layout::check_exemplars`] fails.
     pub fn load(path: &Path) -> Result<Layout> {
-        let text = std::fs::read_to_string(path).map_err(|error| Error::Io { path: path.to_owned(), error })?;
+        let text = skinkit_maps::input::read_to_string(path, skinkit_maps::input::Kind::Toml)
+            .map_err(skinkit_maps::Error::from)?;
         let layout = Layout::parse(&text, path)?;
         layout.check_exemplars()?;
         Ok(layout)

@@ -36,6 +36,9 @@ use skinkit_maps::limits::{self, MemoryGate};
 use skinkit_capture::session::CaptureOptions;
 
 use super::capture::SolveArgs;
+
+/// The batch's report in its output folder (one per shard: [`shard::Shard::report_name`]).
+const REPORT: &str = "batch-report.json";
 use crate::guard;
 use crate::interrupt::{self, HookGuard};
 use crate::output::Output;
@@ -99,7 +102,7 @@ fn share(text: &str) -> std::result::Result<f64, String> {
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     let Some(sessions) = args.sessions.as_deref().filter(|_| !args.merge) else {
         let report = shard::merge(&args.out)?;
-        return report::finish(report, &args.out.join("batch-report.json"), true, out);
+        return report::finish(report, &args.out.join(REPORT), true, out);
     };
     let shard = match args.shard {
         None => None,
@@ -126,7 +129,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let (mut report, hook) = capture_units(&units, &args, &options, (shard, &partition), out);
     report.partition = partition;
     let code = if args.only.is_empty() {
-        let path = args.out.join(shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name()));
+        let path = args.out.join(shard.map_or_else(|| REPORT.to_owned(), |s| s.report_name()));
         report::finish(report, &path, shard.is_none(), out)
     } else {
         report::write_parts(report, &units, &args.out, out)
@@ -135,21 +138,26 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     code
 }
 
-/// Refuses a session or subject whose output folder would be one of the batch's own
-/// (`batch-review/`, `batch-parts/`).
+/// Refuses, before any work, a session or subject whose output folder would be one of the
+/// batch's own outputs: its folders (`batch-review/`, `batch-parts/`) and its files (the report
+/// and the shard reports, the review page; a session named `batch-report.json` failed the batch
+/// only after every capture, issue 42, D15).
 fn refuse_reserved(units: &[Unit], root: &Path) -> Result<()> {
-    let reserved = [review::FOLDER, shard::PARTS];
     let top = |name: &str| name.split('/').next().unwrap_or_default().to_owned();
     let names = units.iter().flat_map(|u| std::iter::once(top(u.name())).chain(u.jobs().iter().map(|j| top(&j.name))));
-    for name in names {
-        if reserved.contains(&name.as_str()) {
-            return Err(guard::usage(format!(
-                "{}: a session or subject named `{name}` would write into the batch's own `{name}/` folder: rename it",
-                root.display()
-            )));
-        }
+    match names.into_iter().find(|name| batch_own(name)) {
+        Some(name) => Err(guard::usage(format!(
+            "{}: a session or subject named `{name}` would write over the batch's own `{name}`: rename it",
+            root.display()
+        ))),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// Whether the batch itself writes `name` in its output folder.
+fn batch_own(name: &str) -> bool {
+    let shard_report = name.strip_prefix("batch-report-").is_some_and(|n| n.ends_with(".json"));
+    shard_report || [REPORT, page::PAGE, review::FOLDER, shard::PARTS].contains(&name)
 }
 
 /// The units of the shard, or those `only` names (each must be one).
@@ -206,7 +214,7 @@ fn capture_units(
     // An interrupted `--only` run leaves no report: its finished sessions are complete folders,
     // which the next run skips.
     let hook = args.only.is_empty().then(|| {
-        let name = shard.map_or_else(|| "batch-report.json".to_owned(), |s| s.report_name());
+        let name = shard.map_or_else(|| REPORT.to_owned(), |s| s.report_name());
         let partition = partition.to_vec();
         report::on_interrupt(
             args.out.join(name),
@@ -230,6 +238,9 @@ fn capture_units(
         }
         if let Some(e) = &outcome.error {
             bar.suspend(|| out.warn(format!("{}: {e}", job.dir.display())));
+        }
+        for skipped in &outcome.skipped_files {
+            bar.suspend(|| out.note(format!("note: skipped {skipped}")));
         }
         bar.suspend(|| out.record("session", &outcome));
         lock(&finished).push(outcome);

@@ -179,11 +179,15 @@ fn saturation_fraction(text: &str) -> Result<f32, String> {
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
     let options = args.solve.options(out)?;
-    let photos = match &args.photos_from {
+    let folder = match &args.photos_from {
         Some(dir) => session::photos_in(dir)?,
-        None => args.photos.clone(),
+        None => session::PhotoFolder { photos: args.photos.clone(), skipped: Vec::new() },
     };
-    let files = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth };
+    for skipped in &folder.skipped {
+        out.note(format!("note: skipped {skipped}"));
+    }
+    let (photos, skipped) = (folder.photos, folder.skipped);
+    let files = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth, skipped };
     check_out(&args.out, args.photos_from.as_deref(), &files)?;
     let set = pipeline::capture_set(&args.out)?;
     let bar = out.progress(4, "capture");

@@ -79,11 +79,11 @@ pub struct ShadowArgs {
     /// Columns x rows (at most 4096 each).
     #[arg(long, value_parser = flags::size_at_most(lut::MAX_SIDE as usize), default_value = "256x256", value_name = "WxH")]
     pub size: (usize, usize),
-    /// Penumbra width of the first (top) row, mm.
-    #[arg(long, default_value_t = ShadowLutSpec::default().w_min_mm, value_name = "MM")]
+    /// Penumbra width of the first (top) row, mm (0 to 1000).
+    #[arg(long, value_parser = flags::penumbra_mm, default_value_t = ShadowLutSpec::default().w_min_mm, value_name = "MM")]
     pub w_min_mm: f32,
-    /// Penumbra width of the last row, mm.
-    #[arg(long, default_value_t = ShadowLutSpec::default().w_max_mm, value_name = "MM")]
+    /// Penumbra width of the last row, mm (0 to 1000).
+    #[arg(long, value_parser = flags::penumbra_mm, default_value_t = ShadowLutSpec::default().w_max_mm, value_name = "MM")]
     pub w_max_mm: f32,
     /// Width of the new, sharper penumbra as a fraction of the shadow filter's, in (0, 1].
     #[arg(long, default_value_t = ShadowLutSpec::default().new_penumbra, value_name = "F")]

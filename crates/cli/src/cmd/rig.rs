@@ -98,11 +98,13 @@ fn import_rig(args: ImportArgs, out: &Output) -> Result<i32> {
         _ => Vec::new(),
     };
     guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
-    let rig = match (&args.diligent, &args.uw) {
-        (Some(dir), _) => import::diligent(dir)?,
-        (_, Some(path)) => import::uw_lights(path)?,
+    let (rig, source) = match (&args.diligent, &args.uw) {
+        (Some(dir), _) => (import::diligent(dir)?, dir),
+        (_, Some(path)) => (import::uw_lights(path)?, path),
         _ => unreachable!("clap requires one source"),
     };
+    // The check `capture` and `rig check` make (issue 42, D13): no rig is written that they refuse.
+    session::check_rig(source, &rig, None, &SolveConfig::default())?;
     save(&rig, &args.out, out)
 }
 

@@ -144,3 +144,50 @@ fn d4_a_rerun_removes_what_killed_runs_left_and_says_so() {
     assert_eq!(swept, [dead, temp]);
     assert!(alive.is_dir() && foreign.is_file());
 }
+
+/// Issue 42, D12: an existing output folder (a mount point, say) holds its own staging folder,
+/// so the commit renames within its filesystem; nothing is left inside it or beside it.
+#[test]
+fn d12_an_existing_folder_is_staged_inside_itself() {
+    let tmp = tempfile::tempdir().unwrap();
+    let target = tmp.path().join("mnt");
+    std::fs::create_dir(&target).unwrap();
+    std::fs::write(target.join("mine.txt"), "kept").unwrap();
+    let set = folder_set(&target, "1", "r1");
+    let staged = set.path("a.txt").unwrap();
+    assert!(staged.starts_with(&target) && staged.parent().unwrap() != target, "{}", staged.display());
+    assert_eq!(names(tmp.path()), ["mnt"], "a staging folder beside the target");
+    set.commit().unwrap();
+    assert_eq!(names(&target), ["a.txt", "mine.txt", "report.json", "sub"]);
+    assert_eq!(read(&target.join("report.json")), "r1");
+}
+
+/// Issue 42, D12: a move across filesystems copies to a temporary file beside the destination
+/// and renames it (the fallback of a rename that fails with `EXDEV`).
+#[test]
+fn d12_a_copy_across_filesystems_replaces_the_destination_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (from, to) = (tmp.path().join("staged.txt"), tmp.path().join("out.txt"));
+    std::fs::write(&from, "new").unwrap();
+    std::fs::write(&to, "old").unwrap();
+    copy_across(&from, &to).unwrap();
+    assert_eq!(read(&to), "new");
+    assert_eq!(names(tmp.path()), ["out.txt"], "the source or a temporary file left");
+}
+
+/// Issue 42, D15: names that are not UTF-8 are valid file and folder names: written, not refused
+/// at the commit after the work.
+#[cfg(unix)]
+#[test]
+fn d15_names_that_are_not_utf8_are_written() {
+    use std::os::unix::ffi::OsStrExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let name = std::ffi::OsStr::from_bytes(b"o\xff");
+    let mut files = OutputSet::files();
+    files.write_file(&tmp.path().join(name), |p| write(p, "file")).unwrap();
+    files.commit().unwrap();
+    assert_eq!(read(&tmp.path().join(name)), "file");
+    let target = tmp.path().join("d").join(name);
+    folder_set(&target, "1", "r1").commit().unwrap();
+    assert_eq!(read(&target.join("report.json")), "r1");
+}

@@ -38,6 +38,9 @@ pub enum MeshError {
     /// The file could not be read.
     #[error("{file}: {error}")]
     Io { file: String, error: std::io::Error },
+    /// The input gate refused the file or could not read it ([`skinkit_maps::input`]).
+    #[error(transparent)]
+    Input(#[from] skinkit_maps::input::InputError),
     /// The extension names no supported format.
     #[error("{file}: unsupported mesh format (expected .obj, .gltf or .glb)")]
     UnsupportedFormat { file: String },
@@ -104,7 +107,7 @@ impl Mesh {
     pub fn load(path: &Path) -> Result<LoadedMesh> {
         let file = path.display().to_string();
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        let bytes = std::fs::read(path).map_err(|error| MeshError::Io { file: file.clone(), error })?;
+        let bytes = skinkit_maps::input::read(path, skinkit_maps::input::Kind::Mesh)?;
         match ext.as_deref() {
             Some("obj") => Self::parse_obj(&mut bytes.as_slice(), &file),
             Some("gltf") | Some("glb") => Self::parse_gltf(&bytes, path.parent(), &file),
@@ -143,8 +146,7 @@ impl Mesh {
         let refused = |reason: String| MeshError::Gltf { file: origin.to_owned(), reason };
         let gltf::Gltf { document, blob } = source::parse_gltf(bytes).map_err(refused)?;
         let base = base.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
-        source::check_gltf_buffer_uris(&document, &base).map_err(refused)?;
-        let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(|e| refused(e.to_string()))?;
+        let buffers = source::load_gltf_buffers(&document, &base, blob).map_err(refused)?;
         let scene = document
             .default_scene()
             .or_else(|| document.scenes().next())

@@ -173,28 +173,59 @@ pub(crate) fn parse_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     Ok(gltf::Gltf { document, blob })
 }
 
-/// Checks every external buffer URI before the `gltf` crate resolves it: its percent-encoding must
-/// decode to UTF-8 (the crate unwraps that decoding and would panic), and a path that exists must
-/// be a regular file (`/dev/zero` or a FIFO would be read without end). Data URIs and GLB blobs
-/// are left to the crate.
+/// Checks every external buffer URI before it is resolved: its percent-encoding must decode to
+/// UTF-8 (the `gltf` crate unwraps that decoding and would panic). Data URIs and GLB blobs are
+/// left to the crate; external files are read by [`load_gltf_buffers`] through the input gate.
 ///
 /// # Errors
 /// A message naming the buffer and its URI.
-pub(crate) fn check_gltf_buffer_uris(document: &gltf::Document, base: &std::path::Path) -> Result<(), String> {
+pub(crate) fn check_gltf_buffer_uris(document: &gltf::Document) -> Result<(), String> {
     for buffer in document.buffers() {
         let gltf::buffer::Source::Uri(uri) = buffer.source() else { continue };
         if uri.starts_with("data:") {
             continue;
         }
         let named = |why: &str| format!("buffer {} (uri `{uri}`): {why}", buffer.index());
-        let decoded = percent_decode(uri).ok_or_else(|| named("its percent-encoding is not UTF-8"))?;
-        let path = decoded.strip_prefix("file://").or_else(|| decoded.strip_prefix("file:")).unwrap_or(&decoded);
-        let full = base.join(path);
-        if full.exists() && !full.is_file() {
-            return Err(named(&format!("{} is not a regular file", full.display())));
-        }
+        percent_decode(uri).ok_or_else(|| named("its percent-encoding is not UTF-8"))?;
     }
     Ok(())
+}
+
+/// The data of every buffer of `document`: external files through the input gate
+/// ([`skinkit_maps::input`], [`skinkit_maps::input::Kind::GltfBuffer`]), so a FIFO, a device or
+/// an oversized file is refused unread; the GLB blob and data URIs through the `gltf` crate.
+///
+/// # Errors
+/// A message naming the buffer: the gate's refusal, a short buffer, or the crate's error.
+pub(crate) fn load_gltf_buffers(
+    document: &gltf::Document,
+    base: &std::path::Path,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<gltf::buffer::Data>, String> {
+    check_gltf_buffer_uris(document)?;
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let named = |why: String| format!("buffer {}: {why}", buffer.index());
+        let data = match buffer.source() {
+            gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") => {
+                let decoded = percent_decode(uri).unwrap_or_default();
+                let path =
+                    decoded.strip_prefix("file://").or_else(|| decoded.strip_prefix("file:")).unwrap_or(&decoded);
+                let mut bytes = skinkit_maps::input::read(&base.join(path), skinkit_maps::input::Kind::GltfBuffer)
+                    .map_err(|e| format!("buffer {} (uri `{uri}`): {e}", buffer.index()))?;
+                bytes.resize(bytes.len().next_multiple_of(4), 0);
+                gltf::buffer::Data(bytes)
+            }
+            source => {
+                gltf::buffer::Data::from_source_and_blob(source, None, &mut blob).map_err(|e| named(e.to_string()))?
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(named(format!("{} bytes, but the file declares {}", data.len(), buffer.length())));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
 }
 
 /// `%XX` escapes decoded, or `None` when an escape is malformed or the bytes are not UTF-8.

@@ -45,6 +45,9 @@ pub enum LutFileError {
     /// The file could not be read.
     #[error("{path}: {error}")]
     Io { path: String, error: std::io::Error },
+    /// The input gate refused the file or could not read it ([`skinkit_maps::input`]).
+    #[error(transparent)]
+    Input(#[from] skinkit_maps::input::InputError),
     /// Not an RGB float EXR this module can read.
     #[error("{path}: not a readable table: {reason}")]
     Decode { path: String, reason: String },
@@ -277,7 +280,7 @@ fn exr_text(s: &str) -> Text {
 /// When the file cannot be read, is not an RGB EXR, or is larger than [`MAX_SIDE`] per side.
 pub fn read(path: &Path) -> Result<LutImage, LutFileError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|error| LutFileError::Io { path: name.clone(), error })?;
+    let bytes = skinkit_maps::input::read(path, skinkit_maps::input::Kind::SkinTable)?;
     decode(&bytes, &name)
 }
 

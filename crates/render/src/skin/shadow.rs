@@ -58,6 +58,11 @@ pub(crate) const SHADOW_LUT_SIDE: u32 = 64;
 use super::lut::{SpecError, bilinear, column_coordinate, row_value, saturate, v_for_range, validate_size};
 use super::profile::{VARIANCES_MM2, WEIGHTS};
 
+/// Widest penumbra a shadow table may cover, in mm (a metre, the range of every millimetre flag):
+/// far wider than any skin's, and small enough that the convolution's quadrature still resolves
+/// the profile (at `1e30` the fully lit column of the lower rows read 0, issue 42, D14).
+pub const MAX_PENUMBRA_MM: f32 = 1000.0;
+
 /// What a shadow table covers and how it is defined.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ShadowLutSpec {
@@ -86,10 +91,14 @@ impl ShadowLutSpec {
     ///
     /// # Errors
     /// A zero side or one above [`super::lut::MAX_SIDE`]; a negative or non-finite width; `w_max`
-    /// not above `w_min`; `new_penumbra` outside `(0, 1]`.
+    /// not above `w_min` or above [`MAX_PENUMBRA_MM`]; `new_penumbra` outside `(0, 1]`.
     pub fn validate(&self) -> Result<(), SpecError> {
         validate_size("shadow", self.width, self.height)?;
         super::lut::validate_range("shadow", ("w_min_mm", self.w_min_mm), ("w_max_mm", self.w_max_mm))?;
+        if self.w_max_mm > MAX_PENUMBRA_MM {
+            let reason = "must be at most 1000 mm (skinkit_render::skin::shadow::MAX_PENUMBRA_MM)";
+            return Err(SpecError::Parameter { table: "shadow", name: "w_max_mm", value: self.w_max_mm, reason });
+        }
         let p = self.new_penumbra;
         if !(p > 0.0 && p <= 1.0) {
             let reason = "must be in (0, 1] (a fraction of the filtered penumbra)";

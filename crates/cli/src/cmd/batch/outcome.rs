@@ -38,6 +38,10 @@ pub struct SessionOutcome {
     /// What flags a bad capture (for the review page); absent when the session wrote no maps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signs: Option<Signs>,
+    /// Entries of the session folder that looked like inputs but were not regular files, each
+    /// with the reason (issue 42, D17); also printed as notes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub skipped_files: Vec<String>,
 }
 
 /// How a batch captures each session.
@@ -59,6 +63,7 @@ struct SessionRun {
     skipped: bool,
     signs: Signs,
     swept: Vec<PathBuf>,
+    skipped_files: Vec<String>,
 }
 
 /// Captures one session once its memory estimate fits beside the sessions running (`gate`); a
@@ -67,6 +72,7 @@ struct SessionRun {
 fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let (dir, out_dir, options) = (&job.dir, &job.out, settings.options);
     let files = Session::from_dir(dir)?;
+    let skipped_files: Vec<String> = files.skipped.iter().map(ToString::to_string).collect();
     // The rig's own ambient frame counts too; a rig that does not load is reported by `capture`.
     let rig = Rig::load(&files.rig).ok();
     let ambient = files.ambient.clone().or_else(|| rig.as_ref().and_then(|r| r.ambient().map(Path::to_path_buf)));
@@ -79,7 +85,7 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
         let swept = skinkit_maps::output_set::sweep_folder(out_dir);
         let signs = review::signs_of_skipped(out_dir, &previews, &done)?;
         let (invalid_pixels, pixels, seconds) = (done.invalid_pixels, done.pixels, done.seconds);
-        return Ok(SessionRun { invalid_pixels, pixels, seconds, skipped: true, signs, swept });
+        return Ok(SessionRun { invalid_pixels, pixels, seconds, skipped: true, signs, swept, skipped_files });
     }
     let estimate = session::memory_estimate(&files, ambient.as_deref(), options)?;
     limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, settings.gate.budget())?;
@@ -99,6 +105,7 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
         skipped: false,
         signs,
         swept,
+        skipped_files,
     })
 }
 
@@ -131,6 +138,7 @@ pub fn outcome(job: &Job, settings: &Settings, swept: &Mutex<Vec<PathBuf>>) -> S
                 seconds: Some(run.seconds),
                 skipped: run.skipped,
                 signs: Some(run.signs),
+                skipped_files: run.skipped_files,
             }
         }
         Err(e) => SessionOutcome {
@@ -141,6 +149,7 @@ pub fn outcome(job: &Job, settings: &Settings, swept: &Mutex<Vec<PathBuf>>) -> S
             seconds: None,
             skipped: false,
             signs: None,
+            skipped_files: Vec::new(),
         },
     }
 }

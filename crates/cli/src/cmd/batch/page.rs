@@ -174,6 +174,7 @@ mod tests {
                 residual,
                 condition_number: Some(1.5),
             }),
+            skipped_files: Vec::new(),
         }
     }
 

@@ -17,6 +17,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use skinkit_capture::session::{CaptureOptions, Session};
+use skinkit_maps::input::{self, Kind};
 
 /// The file of a session's output folder that says what its outputs were made from.
 pub const MADE_FROM: &str = "made-from.json";
@@ -149,16 +150,28 @@ pub fn made_from(
     Ok(MadeFrom { skinkit: env!("CARGO_PKG_VERSION").to_owned(), options: format!("{shaping:?}"), inputs: stamps })
 }
 
+/// The blake3 hash of an input, read through the input gate as the kind of file it is.
 fn hash(path: &Path) -> Result<String> {
-    let file = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let file = input::open(path, input_kind(path))?;
     let mut hasher = blake3::Hasher::new();
     hasher.update_reader(file).with_context(|| format!("cannot read {}", path.display()))?;
     Ok(hasher.finalize().to_hex().to_string())
 }
 
+/// The kind of a session's input file for the input gate: the rig and the photo listing are
+/// text, camera RAW photos have their own limit, everything else is an image.
+fn input_kind(path: &Path) -> Kind {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("toml") => Kind::Toml,
+        Some("txt") => Kind::Listing,
+        _ if skinkit_maps::raw::is_raw(path) => Kind::RawPhoto,
+        _ => Kind::Image,
+    }
+}
+
 /// The record in `out_dir`, if it parses.
 pub fn recorded(out_dir: &Path) -> Option<MadeFrom> {
-    serde_json::from_str(&std::fs::read_to_string(out_dir.join(MADE_FROM)).ok()?).ok()
+    serde_json::from_str(&input::read_to_string(&out_dir.join(MADE_FROM), Kind::Report).ok()?).ok()
 }
 
 /// The session's previous result in `out_dir`, when it is complete and made from `now`.
@@ -167,7 +180,7 @@ pub fn up_to_date(out_dir: &Path, previous: Option<&MadeFrom>, now: &MadeFrom) -
         return None;
     }
     let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("report.json")).ok()?).ok()?;
+        serde_json::from_str(&input::read_to_string(&out_dir.join("report.json"), Kind::Report).ok()?).ok()?;
     Some(Done {
         invalid_pixels: report["invalid_pixels"].as_u64()? as usize,
         pixels: (report["width"].as_u64()? * report["height"].as_u64()?) as usize,

@@ -131,7 +131,9 @@ fn confidence_picture(confidence: &ScalarMap) -> Picture {
 /// When the previews cannot be drawn from the session's files.
 pub fn signs_of_skipped(out_dir: &Path, dir: &Path, done: &Done) -> Result<Signs> {
     let earlier: Option<Signs> =
-        std::fs::read_to_string(dir.join(SIGNS)).ok().and_then(|t| serde_json::from_str(&t).ok());
+        skinkit_maps::input::read_to_string(&dir.join(SIGNS), skinkit_maps::input::Kind::Report)
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok());
     if let Some(signs) = earlier.filter(|_| PREVIEWS.iter().all(|p| dir.join(p).is_file())) {
         return Ok(signs);
     }

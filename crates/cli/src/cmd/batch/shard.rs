@@ -103,7 +103,7 @@ fn part_reports(dir: &Path) -> Result<Vec<PathBuf>> {
 }
 
 fn read_report(path: &Path) -> Result<BatchReport> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = skinkit_maps::input::read_to_string(path, skinkit_maps::input::Kind::Report)?;
     serde_json::from_str(&text).with_context(|| format!("{}: not a batch report", path.display()))
 }
 

@@ -208,7 +208,7 @@ fn up_to_date(subject: &Subject, dir: &Path) -> bool {
 
 fn previous_seconds(dir: &Path) -> Result<f64> {
     let path = dir.join("report.json");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = skinkit_maps::input::read_to_string(&path, skinkit_maps::input::Kind::Report)?;
     let report: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
     report["seconds"]["total"].as_f64().with_context(|| format!("{}: no seconds.total", path.display()))

@@ -241,6 +241,10 @@ fn capture_and_grow(args: &Args, samples: &Path, out: &Output, seconds: &mut Dem
         .filter(|p| p.is_dir())
         .collect();
     regions.sort();
+    // A demo of nothing is not a success (issue 42, D14): an empty report page would say it was.
+    if regions.is_empty() {
+        anyhow::bail!("{}: no sample molds in this folder (run `skinkit samples` to make them)", samples.display());
+    }
     let (mut molds, mut captured_maps) = (Vec::new(), Vec::new());
     let t = Instant::now();
     let bar = out.progress(regions.len() as u64 * 2, "capture");
