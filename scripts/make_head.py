@@ -338,6 +338,29 @@ def add_eyes(positions, normals, eye_centres):
     return positions, normals, faces
 
 
+def eye_uvs(uv, positions, eye_centres, first, faces, pockets):
+    """Each eyeball's UVs: a disc about its front pole (distance from the pole to radius, turning
+    like the skin's u and v), inside the socket's relaxed pocket so that no eyeball texel is a
+    skin texel (texture-space passes would otherwise spread the dark back of the ball over the
+    lids)."""
+    uv = uv.copy()
+    skin = np.zeros(len(positions), bool)
+    skin[[i for f, p in zip(faces, pockets) if not p for i in f]] = True
+    socket = np.zeros(len(positions), bool)
+    socket[[i for f, p in zip(faces, pockets) if p for i in f]] = True
+    count = (len(positions) - first) // len(eye_centres)
+    for k, centre in enumerate(eye_centres):
+        ball = np.arange(first + k * count, first + (k + 1) * count)
+        near = socket & ~skin & (np.linalg.norm(positions - centre, axis=1) < 25.0)
+        middle = uv[near].mean(0)
+        reach = 0.8 * np.linalg.norm(uv[skin] - middle, axis=1).min()
+        d = (positions[ball] - centre) / np.linalg.norm(positions[ball] - centre, axis=1, keepdims=True)
+        angle = np.arccos(np.clip(d[:, 2], -1.0, 1.0)) / np.pi
+        turn = np.arctan2(d[:, 1], d[:, 0])
+        uv[ball] = middle + reach * angle[:, None] * np.stack([np.cos(turn), -np.sin(turn)], axis=1)
+    return uv
+
+
 def main(source, target):
     positions, quads, eyes = read_obj(source)
     positions, faces = head_and_neck(positions, quads)
@@ -350,6 +373,7 @@ def main(source, target):
     skin_vertices = len(positions)
     positions, normals, eye_faces = add_eyes(positions, normals, eyes)
     uv, relaxed, pockets = relax_folds(unwrap(positions), faces)
+    uv = eye_uvs(uv, positions, eyes, skin_vertices, faces, pockets)
     uv, corner_uv = split_seam(uv, faces + eye_faces)
     skin = [(f, c) for f, c, p in zip(faces, corner_uv, pockets) if not p]
     inner = [(f, c) for f, c, p in zip(faces, corner_uv, pockets) if p]
