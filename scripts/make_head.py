@@ -14,7 +14,9 @@ What it does, in order:
 7. lays out UVs for a face map (`unwrap`): a spherical projection about the head's centre, the
    seam at the back (u = 0 = 1), the crown at v = 0 (top of the image); the azimuth and polar
    angle are warped so the face (forehead to chin, ear to ear) takes the middle of the map, where
-   samples/face/layout.toml puts its regions.
+   samples/face/layout.toml puts its regions; the pockets (which fold over in the projection)
+   relaxed into discs inside their rims, then moved with the eyeballs one map width to the right
+   (u + 1), so texture-space passes give them no texel of the skin's.
 
 Needs numpy. Prints the counts and the face's texel density; `crates/render/tests/head.rs`
 checks the committed result.
@@ -295,6 +297,27 @@ def split_seam(uv, faces):
     return np.array(uvs), corner_uv
 
 
+def off_the_map(uv, corner_uv, hidden):
+    """The `hidden` faces (pockets, eyeballs) get their own copies of their UVs one map width to
+    the right (u + 1): a UV seam along the lips and the lids, where it is out of sight. Sampled
+    with a repeating sampler they read the same texels as before, but texture-space passes
+    (diffusion, the reference), which draw into the map, leave them out, so their squeezed
+    triangles no longer share texels with the lips and lids."""
+    uvs, copies, rows = list(uv), {}, []
+    for row, hide in zip(corner_uv, hidden):
+        if not hide:
+            rows.append(row)
+            continue
+        moved = []
+        for t in row:
+            if t not in copies:
+                copies[t] = len(uvs)
+                uvs.append(uv[t] + np.array([1.0, 0.0]))
+            moved.append(copies[t])
+        rows.append(moved)
+    return np.array(uvs), rows
+
+
 def density(positions, uv, corner_uv, faces, size=(2048, 1024)):
     """Millimetres of surface per texel of a `size` map, per triangle (sqrt of the area ratio)."""
     tris = triangles(faces)
@@ -375,6 +398,7 @@ def main(source, target):
     uv, relaxed, pockets = relax_folds(unwrap(positions), faces)
     uv = eye_uvs(uv, positions, eyes, skin_vertices, faces, pockets)
     uv, corner_uv = split_seam(uv, faces + eye_faces)
+    uv, corner_uv = off_the_map(uv, corner_uv, list(pockets) + [True] * len(eye_faces))
     skin = [(f, c) for f, c, p in zip(faces, corner_uv, pockets) if not p]
     inner = [(f, c) for f, c, p in zip(faces, corner_uv, pockets) if p]
     eye = list(zip(eye_faces, corner_uv[len(faces):]))

@@ -17,7 +17,9 @@
 //! `u = 1`). Ear to ear takes `u` in `[0.1, 0.9]`, hairline to chin most of `v`, so the face is
 //! one island in the middle of the map with the subject's right on the left, where
 //! `samples/face/layout.toml` puts its regions. The pockets, which fold over in the projection,
-//! are relaxed (each an averaged disc inside its rim). `crates/render/tests/head.rs` measures the
+//! are relaxed (each an averaged disc inside its rim) and, with the eyeballs (each a disc about
+//! its front pole), moved one map width to the right (`u + 1`): a repeating sampler reads the
+//! same texels, and texture-space passes, which draw into the map, leave them out. `crates/render/tests/head.rs` measures the
 //! layout: no flipped or zero-area face triangle, the face's texel density in a stated range.
 
 use std::io::Write;

@@ -49,12 +49,10 @@ fn self_difference(scene: &str, size: u32) -> (f64, f64) {
 fn reference_at_512_agrees_with_1024() {
     // Measured: sphere rms 6.2e-5 (worst 1.0e-3 of the peak): about twice the 1024-against-2048
     // difference below, as a first-order convergence gives. The head (MakeHuman's since issue
-    // 41) measures rms 2.7e-2 (worst 0.79 of the peak), ten times the procedural head's 2.5e-3:
-    // the comparison is over every covered texel, and the head's pockets (mouth, sockets,
-    // nostrils; group `pockets` of head.obj) are squeezed into small UV discs inside the lips
-    // and lids, many triangles to a texel, so their light maps change with the size. Not yet
-    // confirmed texel by texel (moving the eyeballs' UVs off the map changed nothing); until the
-    // pockets get room of their own, the head's bound is 4e-2.
+    // 41) measures rms 2.7e-2 (worst 0.79 of the peak), ten times the procedural head's 2.5e-3.
+    // Where is not yet known: the comparison covers every texel, but moving the eyeballs' and
+    // the pockets' UVs off the map (head.obj's groups `eyes` and `pockets`) changed it by under
+    // 1 %. Until it is found, the head's bound is 4e-2.
     check(512, [("skin-sphere.toml", 5e-4), ("skin-compare.toml", 4e-2)]);
 }
 
