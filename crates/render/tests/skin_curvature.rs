@@ -265,8 +265,11 @@ fn sample_head_curvature_is_finite_and_head_sized() {
         at(0.95),
         at(1.0)
     );
-    // The head is an ellipsoid of semi-axes 75-105 mm before its features: most of it has
-    // 1/r between 1/150 and 1/50 per mm, and no feature is sharper than a 1 mm radius.
-    assert!((1.0 / 150.0..1.0 / 50.0).contains(&at(0.5)), "{}", at(0.5));
-    assert!(at(1.0) < 1.0, "{}", at(1.0));
+    // A head (MakeHuman's, issue 41) is curved like a 75-105 mm ball over the skull and more
+    // tightly over the face, ears and neck: measured median 1/21 mm, 95th percentile 1/3 mm. Its
+    // sharpest places are where the lips meet and the folds of the eyelids, ears and pockets
+    // (measured maximum 4.9 per mm, a 0.2 mm radius), still finite and wider than 0.1 mm.
+    assert!((1.0 / 150.0..1.0 / 10.0).contains(&at(0.5)), "{}", at(0.5));
+    assert!(at(0.95) < 0.5, "{}", at(0.95));
+    assert!(at(1.0) < 10.0, "{}", at(1.0));
 }

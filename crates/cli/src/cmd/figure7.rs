@@ -2,21 +2,22 @@
 //! and with the grown map, side by side, under the same light and camera, with a label per panel.
 //!
 //! # Framing
-//! The camera looks from the subject's left front at the right brow, eye socket, temple and the
-//! side of the nose, about 96 mm across 1024 pixels (0.09 mm a pixel at the brow): a texel of the
-//! demo's 2048 x 1024 face map (about 0.1 x 0.2 mm on the sample head) is one to two pixels, so
-//! pores (0.1-0.3 mm across) and the temple's furrows (0.5-1 mm apart) are a few pixels wide. A
-//! whole head at this scale would need panels about 2500 pixels tall.
+//! The camera looks from a little to the subject's left (216 mm away, 24 degrees) at the right brow,
+//! eye and temple and the nose, 92 mm across 1024 pixels (0.09 mm a pixel at the point between
+//! eye and nose): a texel of the demo's 2048 x 1024 face map (0.22 mm on the sample head's face,
+//! median) is two to three pixels, so the map's pores and the temple's furrows are a few pixels
+//! wide. A whole head at this scale would need panels about 2500 pixels tall.
 //!
 //! # Light
 //! The default skin lobes (pbrt-v1's skin set; see
 //! `skinkit_render::brdf` and the test `skin_lobes_reflect_like_the_skin_surface`) are weak
 //! where light and view are both near the normal (their albedo is about a 1.4-index surface's
 //! Fresnel reflectance there, 2-3 %) and strong toward grazing, as skin is (Marschner et al.
-//! 1999). So the sheen comes from a light above and behind the subject's right, which meets the
-//! temple, the brow and the side of the nose obliquely where the camera also sees them
-//! obliquely; a warm light from the subject's left front draws the rest of the face. Section 6
-//! of the paper notes that highlights look more real with fine detail under them.
+//! 1999). So the sheen comes from a rim light above and behind the subject's right, which meets
+//! the temple, the brow and the side of the nose obliquely where the camera also sees them
+//! obliquely; a warm key from the subject's left front and a dim cool fill from below the camera
+//! draw the rest of the face. Section 6 of the paper notes that highlights look more real with fine
+//! detail under them.
 //!
 //! # Measured
 //! The skin panel is also drawn to linear EXR with the lobes and without (`lobes = []`), and the
@@ -41,20 +42,31 @@ use crate::output::Output;
 pub const PANEL: usize = 1024;
 
 /// The camera and lights of figure 7 (and of `samples/scenes/head.toml`, which repeats them).
-const LIGHTS_AND_CAMERA: &str = r#"[[light]]
+const LIGHTS_AND_CAMERA: &str = r#"# Rim: above and behind the subject's right, grazing the temple, the brow and the nose (the sheen).
+[[light]]
 kind = "directional"
 direction = [-0.45, 0.77, -0.45]
-intensity = 4.0
+intensity = 6.0
 
+# Key: warm, from the subject's left front.
 [[light]]
 kind = "directional"
 direction = [0.85, 0.45, 0.25]
 colour = [1.0, 0.93, 0.85]
-intensity = 2.5
+intensity = 2.0
 
+# Fill: cool and dim, from below the camera on the subject's right (into the eye socket).
+[[light]]
+kind = "directional"
+direction = [-0.3, -0.1, 0.95]
+colour = [0.85, 0.9, 1.0]
+intensity = 0.3
+
+# The right brow, eye and the nose, seen from a little to the subject's left: 216 mm from the
+# point between them, 24 degrees across 1024 pixels (92 mm, 0.09 mm a pixel there).
 [[camera]]
-position = [40.0, 30.0, 300.0]
-target = [-12.0, 28.0, 80.0]
+position = [26.2, 15.0, 229.5]
+target = [-22.0, -6.0, 20.0]
 fov_deg = 24.0
 "#;
 

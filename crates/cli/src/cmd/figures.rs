@@ -187,7 +187,7 @@ pub fn figures(normal_map: &Path, mm_per_texel: Option<f64>, dir: &Path, out: &O
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let map = std::path::absolute(normal_map).unwrap_or_else(|_| normal_map.to_owned());
     let map = map.to_string_lossy().replace('\\', "/");
-    head::write_obj(&head::sample_head(), &dir.join("head.obj"))?;
+    head::write_sample_head(&dir.join("head.obj"))?;
     // The middle of the forehead: 0.06 of the map's width and as many texels down (12 mm on the
     // sample layout's 0.05 mm texels).
     head::write_obj(&patch(20.0, [0.47, 0.53], [0.12, 0.24]), &dir.join("patch.obj"))?;

@@ -34,8 +34,8 @@ pub struct Args {
     /// Seed of the heightfields and the sensor noise.
     #[arg(long, default_value_t = 2001)]
     pub seed: u64,
-    /// Also write the sample head (OBJ, millimetres, cylindrical UVs laid out like
-    /// samples/face/layout.toml) to this file; `--head-only` skips the molds.
+    /// Also write the sample head (OBJ, millimetres, derived from MakeHuman's base mesh, UVs laid
+    /// out like samples/face/layout.toml) to this file; `--head-only` skips the molds.
     #[arg(long, value_name = "FILE")]
     pub head: Option<PathBuf>,
     /// Write only the head (needs `--head`).
@@ -127,7 +127,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         }
         let mesh = skinkit_render::head::sample_head();
-        skinkit_render::head::write_obj(&mesh, path)?;
+        skinkit_render::head::write_sample_head(path)?;
         written.push(Written {
             region: "head".into(),
             folder: path.display().to_string(),
