@@ -336,6 +336,7 @@ fn d5_shards_that_saw_different_sessions_do_not_merge() {
     got.sort();
     assert_eq!(got, ["a-late", "s000", "s001", "s002"], "every session once");
     assert_eq!(merged["sessions"], 4);
+}
 
 /// Issue 42, D15: a session folder named as the batch's own report is refused before any
 /// capture, not after all of them.

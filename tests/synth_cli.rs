@@ -284,6 +284,7 @@ fn d6_a_grown_map_mostly_invalid_is_a_failure_with_its_count() {
     synth(&good, &out, &["--report", s(&report)]);
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     assert_eq!(json["invalid_texels"], 0);
+}
 
 /// Issue 42, D15: `--out` a name that is not UTF-8 (a valid Linux name) is written, not refused
 /// after the synthesis.
