@@ -8,7 +8,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use skinkit_render::skin::lut::{DiffuseLut, DiffuseLutSpec, SpecError};
 use skinkit_render::skin::lut_file::{self, LutAttribute, LutFileError};
 use skinkit_render::skin::profile::{Domain, Normalisation, Profile, VARIANCES_MM2, WEIGHTS};
-use skinkit_render::skin::shadow::{ShadowLut, ShadowLutSpec};
+use skinkit_render::skin::shadow::{MAX_PENUMBRA_MM, ShadowLut, ShadowLutSpec};
 
 // ---------------------------------------------------------------------------------------------
 // The oracle: adaptive Simpson on vector integrands.
@@ -543,7 +543,8 @@ fn shadow_rows_are_monotonic_in_s() {
 
 #[test]
 fn shadow_stays_finite_at_the_extremes() {
-    let spec = ShadowLutSpec { width: 32, height: 32, w_min_mm: 0.0, w_max_mm: 1e6, new_penumbra: 0.25 };
+    // The widest table the spec allows; samples beyond it (below) are clamped.
+    let spec = ShadowLutSpec { width: 32, height: 32, w_min_mm: 0.0, w_max_mm: MAX_PENUMBRA_MM, new_penumbra: 0.25 };
     let lut = ShadowLut::build(&spec).unwrap();
     for t in &lut.texels {
         assert_unit_range(*t, "texel");
