@@ -10,7 +10,7 @@ mod support;
 use support::{mold, repo, s, skinkit, stderr};
 
 /// A writer's temporary file (`.NAME.XXXXXX.tmp`) or an output set's staging folder
-/// (`.NAME.staging.PID.N`) in `line`. The tests' own scratch folders (`/tmp/.tmpXXXXXX/`) are not.
+/// (`.NAME.staging.OWNER.PID.N`) in `line`. The tests' own scratch folders (`/tmp/.tmpXXXXXX/`) are not.
 fn names_a_temporary(line: &str) -> bool {
     let temp_file = line
         .match_indices(".tmp")

@@ -39,7 +39,8 @@ use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use crate::{Error, Result};
 
-/// Middle part of a staging folder's name: `.<label>.staging.<pid>.<n>`.
+/// Middle part of a staging folder's name: `.<label>.staging.<owner>.<pid>.<n>`, where `owner`
+/// says which machine and process namespace the writer runs in ([`owner`]).
 const STAGING: &str = ".staging.";
 /// Label of the staging folders of loose files.
 const FILES_LABEL: &str = "skinkit";
@@ -279,9 +280,9 @@ impl OutputSet {
         Ok(())
     }
 
-    /// Creates `.<label>.staging.<pid>.<n>` in `parent` for the destination `dest`.
+    /// Creates `.<label>.staging.<owner>.<pid>.<n>` in `parent` for the destination `dest`.
     fn new_staging(&mut self, parent: &Path, label: &str, dest: &Path) -> Result<PathBuf> {
-        let pid = std::process::id();
+        let pid = format!("{}.{}", owner(), std::process::id());
         // Created and registered under the registry's lock, so an interrupt (which takes the
         // lock for good) either removes it or comes before it exists.
         let mut live = live();
@@ -459,7 +460,11 @@ pub fn sweep_folder(target: &Path) -> Vec<PathBuf> {
     swept
 }
 
-/// Removes `.<label>.staging.<pid>.<n>` folders in `parent` whose process is gone.
+/// Removes the staging folders in `parent` of writers that are gone: ours
+/// (`.<label>.staging.<owner>.<pid>.<n>` with this [`owner`]) whose process no longer runs, and
+/// those of versions before owners (`.<label>.staging.<pid>.<n>`) likewise. A folder of another
+/// owner (another host on a shared folder, another container) is never touched: its process is
+/// not in this machine's `/proc` however alive it is.
 fn sweep_staging(parent: &Path, label: &str) -> Vec<PathBuf> {
     let prefix = format!(".{label}{STAGING}");
     let mut swept = Vec::new();
@@ -467,12 +472,37 @@ fn sweep_staging(parent: &Path, label: &str) -> Vec<PathBuf> {
         let Some(rest) = path.file_name().and_then(|n| n.to_str()).and_then(|n| n.strip_prefix(&prefix)) else {
             continue;
         };
-        let pid = rest.split('.').next().and_then(|p| p.parse::<u32>().ok());
+        let parts: Vec<&str> = rest.split('.').collect();
+        let pid = match parts[..] {
+            [who, pid, _] if who == owner() => pid.parse::<u32>().ok(),
+            [pid, _] => pid.parse::<u32>().ok(),
+            _ => None,
+        };
         if path.is_dir() && pid.is_some_and(|pid| !process_alive(pid)) && std::fs::remove_dir_all(&path).is_ok() {
             swept.push(path);
         }
     }
     swept
+}
+
+/// Who writes, for staging names: the kernel's boot id (different on every host and every boot)
+/// and this process's PID namespace (different in every container), as `<8 hex digits>-<inode>`,
+/// so that process ids are compared only where they mean the same process. `local` where the
+/// system says neither.
+fn owner() -> &'static str {
+    static OWNER: OnceLock<String> = OnceLock::new();
+    OWNER.get_or_init(|| {
+        let boot: String = std::fs::read_to_string("/proc/sys/kernel/random/boot_id")
+            .unwrap_or_default()
+            .chars()
+            .filter(char::is_ascii_hexdigit)
+            .take(8)
+            .collect();
+        let namespace: String = std::fs::read_link("/proc/self/ns/pid")
+            .map(|p| p.to_string_lossy().chars().filter(char::is_ascii_digit).collect())
+            .unwrap_or_default();
+        if boot.is_empty() && namespace.is_empty() { "local".to_owned() } else { format!("{boot}-{namespace}") }
+    })
 }
 
 /// Removes the temporary files of [`crate::io::write_atomic`] (`.<name>.<6 characters>.tmp`)

@@ -191,3 +191,28 @@ fn d15_names_that_are_not_utf8_are_written() {
     folder_set(&target, "1", "r1").commit().unwrap();
     assert_eq!(read(&target.join("report.json")), "r1");
 }
+
+/// Issue 42, D7: the sweep removed the live staging folder of a writer it could not see (another
+/// host on the shared folder, another container), since that writer's process id was not in this
+/// machine's `/proc`. Staging names now carry the writer's owner (boot id and PID namespace), and
+/// the sweep removes only its own owner's dead writers' folders (and those of versions before
+/// owners): another owner's folder stays, whatever its process id.
+#[test]
+fn d7_the_sweep_leaves_other_hosts_staging_folders_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dead = u32::MAX;
+    let ours = tmp.path().join(format!(".x{STAGING}{}.{dead}.1", owner()));
+    let legacy = tmp.path().join(format!(".x{STAGING}{dead}.2"));
+    let elsewhere = tmp.path().join(format!(".x{STAGING}0badc0de-4026531836.{dead}.3"));
+    let live_here = tmp.path().join(format!(".x{STAGING}{}.{}.4", owner(), std::process::id()));
+    for dir in [&ours, &legacy, &elsewhere, &live_here] {
+        std::fs::create_dir(dir).unwrap();
+    }
+    let mut swept = sweep_staging(tmp.path(), "x");
+    swept.sort();
+    let mut expected = vec![ours, legacy];
+    expected.sort();
+    assert_eq!(swept, expected);
+    assert!(elsewhere.is_dir() && live_here.is_dir(), "{:?}", names(tmp.path()));
+    assert!(owner().contains('-') || owner() == "local", "{}", owner());
+}
