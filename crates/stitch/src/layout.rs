@@ -45,6 +45,10 @@ pub const DEFAULT_SIZE: [usize; 2] = [4096, 2048];
 /// [`limits::MAX_MAP_TEXELS`]).
 pub const MAX_TEXELS: usize = limits::MAX_MAP_TEXELS as usize;
 
+/// Most regions a layout may have. Each region is grown over its own box (about a second each
+/// on a small map), so a few thousand would run for hours; a face has about ten.
+pub const MAX_REGIONS: usize = 256;
+
 /// Where a region's exemplar comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ExemplarSource {
@@ -160,6 +164,12 @@ impl Layout {
             coverage: raw.coverage.map(|p| ctx.base.join(p)),
             regions,
         };
+        if layout.regions.len() > MAX_REGIONS {
+            return Err(ctx.err(
+                "region",
+                format!("{} regions: at most {MAX_REGIONS} (each is grown on its own)", layout.regions.len()),
+            ));
+        }
         layout.check_names()?;
         layout.check_coincident()?;
         let points: usize = layout.regions.iter().map(|r| r.points.len()).sum();

@@ -243,3 +243,25 @@ fn the_sample_face_layout_loads_and_partitions() {
         assert!(area.texels > 512 * 256 / 30, "region {} has {} texels", layout.regions[r].name, area.texels);
     }
 }
+
+/// Issue 42: a layout of thousands of tiny regions ran for hours (each region is grown on its
+/// own); more than `MAX_REGIONS` is refused at load, naming the file, the field and the limit.
+#[test]
+fn too_many_regions_are_refused_at_load() {
+    let region = |i: usize| {
+        format!(
+            "[[region]]\nname = \"r{i}\"\nexemplar = \"e.png\"\nexemplar_mm_per_texel = 0.02\npoints = [[{}, {}]]\n",
+            (i % 64) as f64 / 64.0 + 0.005,
+            (i / 64) as f64 / 64.0 + 0.005
+        )
+    };
+    let many: String = (0..=layout::MAX_REGIONS).map(region).collect();
+    let msg = error(&format!("mm_per_texel = 0.05\n{many}"));
+    assert!(
+        msg.contains("region")
+            && msg.contains(&format!("{} regions: at most {}", layout::MAX_REGIONS + 1, layout::MAX_REGIONS)),
+        "{msg}"
+    );
+    let enough: String = (0..layout::MAX_REGIONS).map(region).collect();
+    assert!(parse(&format!("mm_per_texel = 0.05\n{enough}")).is_ok());
+}
