@@ -539,6 +539,17 @@ fn a_subject_folder_gets_its_face_map_from_the_batch_captures() {
     let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&out)]);
     let report = batch_report(&o);
     assert_eq!((report["skipped"].as_u64(), report["faces"][0]["skipped"].as_bool()), (Some(3), Some(true)));
+    // Issue 42: the face, too, goes by what it was made from, not by times: a layout changed (a
+    // region's seed) but given back its old time stamp is stitched again.
+    let layout_path = sessions.join("ann/layout.toml");
+    let stamp = std::fs::metadata(&layout_path).unwrap().modified().unwrap();
+    std::fs::write(&layout_path, layout.replace("seed = 2", "seed = 3")).unwrap();
+    std::fs::File::options().write(true).open(&layout_path).unwrap().set_modified(stamp).unwrap();
+    let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&out)]);
+    let report = batch_report(&o);
+    assert_eq!((report["skipped"].as_u64(), report["faces"][0]["skipped"].as_bool()), (Some(3), None));
+    assert_eq!(report["faces"][0]["ok"], true, "{report}");
+    assert!(out.join("ann/face/made-from.json").is_file());
     std::fs::remove_file(sessions.join("ann/nose/08.png")).unwrap();
     let o = skinkit(&["batch", "--json", &s(&sessions), "--out", &s(&tmp.path().join("out2"))]);
     assert_eq!(o.status.code(), Some(1));

@@ -242,6 +242,21 @@ impl Layout {
     /// When the image cannot be read or is not `width x height`.
     /// The size is compared from the file's header, before anything is decoded (a small PNG can
     /// claim 32768 x 32768 pixels).
+    /// The files a face from this layout reads: the layout itself, its coverage mask and its
+    /// normal-map exemplars (a session exemplar is a folder, captured first; its files are the
+    /// capture's inputs).
+    pub fn input_files(&self) -> Vec<PathBuf> {
+        let exemplars = self.regions.iter().filter_map(|r| match &r.exemplar {
+            ExemplarSource::NormalMap(p) => Some(p.clone()),
+            ExemplarSource::Session(_) => None,
+        });
+        let mut files: Vec<PathBuf> =
+            std::iter::once(self.origin.clone()).chain(self.coverage.clone()).chain(exemplars).collect();
+        files.sort();
+        files.dedup();
+        files
+    }
+
     pub fn load_coverage(&self) -> Result<Option<Grid<bool>>> {
         let Some(path) = &self.coverage else { return Ok(None) };
         let header = limits::image_header(path, MAX_TEXELS as u64)?;

@@ -128,6 +128,19 @@ pub fn made_from(
     options: &CaptureOptions,
     previous: Option<&MadeFrom>,
 ) -> Result<MadeFrom> {
+    let mut shaping = options.clone();
+    // Limits refuse or admit a job; they never change its bytes.
+    shaping.limits = Default::default();
+    shaping.memory_limit = 0;
+    stamped(inputs, format!("{shaping:?}"), previous)
+}
+
+/// What a job of `inputs` with the resolved `options` (their `Debug` form: every field) is made
+/// from; hashes are taken from `previous` where a file's `stat` key is unchanged.
+///
+/// # Errors
+/// When an input cannot be read.
+pub fn stamped(inputs: &[std::path::PathBuf], options: String, previous: Option<&MadeFrom>) -> Result<MadeFrom> {
     let stamps = inputs
         .iter()
         .map(|path| {
@@ -143,11 +156,7 @@ pub fn made_from(
             Ok(Stamp { file, size: stat.size, blake3, stat })
         })
         .collect::<Result<_>>()?;
-    let mut shaping = options.clone();
-    // Limits refuse or admit a job; they never change its bytes.
-    shaping.limits = Default::default();
-    shaping.memory_limit = 0;
-    Ok(MadeFrom { skinkit: env!("CARGO_PKG_VERSION").to_owned(), options: format!("{shaping:?}"), inputs: stamps })
+    Ok(MadeFrom { skinkit: env!("CARGO_PKG_VERSION").to_owned(), options, inputs: stamps })
 }
 
 /// The blake3 hash of an input, read through the input gate as the kind of file it is.

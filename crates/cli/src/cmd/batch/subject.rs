@@ -21,8 +21,10 @@ use skinkit_maps::NormalEncoding;
 use skinkit_maps::io::{self, Limits};
 use skinkit_stitch::layout::{ExemplarSource, Layout};
 
+use super::resume;
 use crate::cmd::stitch::{CaptureCache, StitchOptions, face_to_dir};
 use crate::output::Output;
+use crate::pipeline;
 
 /// The file that makes a folder a subject.
 pub const LAYOUT: &str = "layout.toml";
@@ -40,6 +42,9 @@ pub struct Job {
 pub struct Subject {
     pub name: String,
     pub layout: PathBuf,
+    /// The files the layout reads besides its sessions (the layout itself, its coverage mask and
+    /// normal-map exemplars).
+    pub inputs: Vec<PathBuf>,
     pub out: PathBuf,
     pub jobs: Vec<Job>,
 }
@@ -147,7 +152,7 @@ fn subject(dir: &Path, name: String, out: &Path, prefix: &str) -> Result<Subject
         }
         jobs.push(Job { dir: session.clone(), out: out.join(&folder), name: format!("{prefix}{folder}") });
     }
-    Ok(Subject { name, layout: layout_path, out: out.to_owned(), jobs })
+    Ok(Subject { name, layout: layout_path, inputs: layout.input_files(), out: out.to_owned(), jobs })
 }
 
 fn same_folder(a: &Path, b: &Path) -> bool {
@@ -159,10 +164,18 @@ fn same_folder(a: &Path, b: &Path) -> bool {
 pub fn face(subject: &Subject, force: bool, out: &Output) -> FaceOutcome {
     let dir = subject.out.join("face");
     let start = Instant::now();
-    let result = if !force && up_to_date(subject, &dir) {
+    let previous = resume::recorded(&dir);
+    let now = made_from(subject, previous.as_ref());
+    let current = matches!((&previous, &now), (Some(p), Ok(n)) if p == n) && dir.join("report.json").is_file();
+    let result = if !force && current {
         previous_seconds(&dir).map(|s| (s, true))
     } else {
-        stitch(subject, &dir, out).map(|s| (s, false))
+        stitch(subject, &dir, out).and_then(|seconds| {
+            // Recorded after the face is in place: a face without its record is made again.
+            let record = now?;
+            pipeline::write_json(&dir.join(resume::MADE_FROM), &record)?;
+            Ok((seconds, false))
+        })
     };
     match result {
         Ok((seconds, skipped)) => {
@@ -197,13 +210,13 @@ fn stitch(subject: &Subject, dir: &Path, out: &Output) -> Result<f64> {
     Ok(report.seconds.total)
 }
 
-/// The face's `report.json` is newer than the layout and every session's `report.json`.
-fn up_to_date(subject: &Subject, dir: &Path) -> bool {
-    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    let Some(made) = modified(&dir.join("report.json")) else { return false };
-    std::iter::once(subject.layout.clone())
-        .chain(subject.jobs.iter().map(|j| j.out.join("report.json")))
-        .all(|input| modified(&input).is_some_and(|t| t < made))
+/// What the face is made from: the layout's files and every session's captured normal map (their
+/// sizes and hashes), and the stitch's options.
+fn made_from(subject: &Subject, previous: Option<&resume::MadeFrom>) -> Result<resume::MadeFrom> {
+    let inputs: Vec<PathBuf> =
+        subject.inputs.iter().cloned().chain(subject.jobs.iter().map(|j| j.out.join("normal.exr"))).collect();
+    let options = StitchOptions::for_layout(subject.layout.clone());
+    resume::stamped(&inputs, format!("{options:?}"), previous)
 }
 
 fn previous_seconds(dir: &Path) -> Result<f64> {
