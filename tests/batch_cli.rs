@@ -373,3 +373,116 @@ fn d17_a_fifo_among_a_sessions_photos_is_named() {
     let skipped = first["skipped_files"].as_array().expect("skipped_files in the session's line");
     assert!(skipped.len() == 1 && skipped[0].as_str().unwrap().contains("99.png: a FIFO"), "{first}");
 }
+
+/// Issue 42: batch resume and sharding against a model. Random sequences of adding a session,
+/// removing one, replacing a photo but keeping its time stamp, changing an option, running the
+/// shards (all of them, or some before a session appears and the rest after) and merging. After
+/// each merge that succeeds, every session present has exactly one outcome and its maps are
+/// byte for byte those of a fresh batch of the current photos with the current options; a merge
+/// that fails names the sessions the shards disagreed on. `SKINKIT_MODEL_CASES` sets the number
+/// of sequences (300 by default, about a minute in a debug build; more in the long property run).
+#[test]
+fn model_based_resume_and_sharding_match_fresh_captures() {
+    let cases: u64 = std::env::var("SKINKIT_MODEL_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(300);
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 32);
+    for case in 0..cases {
+        model_case(&tmp.path().join(format!("case-{case}")), &molds, case);
+    }
+}
+
+/// One random sequence of the model test (xorshift from `seed`).
+fn model_case(root: &Path, molds: &Path, seed: u64) {
+    let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    let mut next = |n: u64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state % n
+    };
+    let (dir, out) = (root.join("sessions"), root.join("out"));
+    let mut present: Vec<String> = Vec::new();
+    let mut made = 0;
+    let add = |present: &mut Vec<String>, made: &mut usize, region: u64| {
+        let name = format!("s{made:02}");
+        *made += 1;
+        sessions::copy_dir(&molds.join(sessions::REGIONS[region as usize % 4]), &dir.join(&name));
+        present.push(name);
+    };
+    for _ in 0..3 {
+        add(&mut present, &mut made, next(4));
+    }
+    let mut green = "up";
+    let count = 2 + next(2) as usize;
+    for step in 0..8 {
+        let context = format!("case {seed} step {step}");
+        match next(6) {
+            0 => add(&mut present, &mut made, next(4)),
+            1 if present.len() > 1 => {
+                let gone = present.remove(next(present.len() as u64) as usize);
+                std::fs::remove_dir_all(dir.join(gone)).unwrap();
+            }
+            2 if !present.is_empty() => {
+                let session = dir.join(&present[next(present.len() as u64) as usize]);
+                let stamp = std::fs::metadata(session.join("03.png")).unwrap().modified().unwrap();
+                std::fs::copy(session.join("05.png"), session.join("03.png")).unwrap();
+                let photo = std::fs::File::options().write(true).open(session.join("03.png")).unwrap();
+                photo.set_modified(stamp).unwrap();
+            }
+            3 => green = if green == "up" { "down" } else { "up" },
+            4 => {
+                // Some shards, then a session appears, then the rest: the merge must refuse.
+                let first = 1 + next(count as u64 - 1) as usize;
+                run_shards(&dir, &out, green, count, 1..=first);
+                add(&mut present, &mut made, next(4));
+                run_shards(&dir, &out, green, count, first + 1..=count);
+                let o = skinkit(&["batch", "--merge", "--out", s(&out)]);
+                assert_eq!(o.status.code(), Some(1), "{context}: {}", stderr(&o));
+                assert!(stderr(&o).contains("saw different sessions"), "{context}: {}", stderr(&o));
+                run_shards(&dir, &out, green, count, 1..=count);
+                check_merge(&dir, &out, root, green, &present, &context);
+            }
+            _ => {
+                run_shards(&dir, &out, green, count, 1..=count);
+                check_merge(&dir, &out, root, green, &present, &context);
+            }
+        }
+    }
+}
+
+/// Runs shards `which` of `count` of the batch of `dir` into `out`.
+fn run_shards(dir: &Path, out: &Path, green: &str, count: usize, which: std::ops::RangeInclusive<usize>) {
+    for k in which {
+        let shard = format!("{k}/{count}");
+        let o = skinkit(&["batch", "--quiet", s(dir), "--out", s(out), "--green", green, "--shard", &shard]);
+        assert!(o.status.success(), "shard {shard}: {}", stderr(&o));
+    }
+}
+
+/// Merges `out` and checks it against the model: one outcome per present session, each ok, and
+/// maps equal to a fresh batch's.
+fn check_merge(dir: &Path, out: &Path, root: &Path, green: &str, present: &[String], context: &str) {
+    let o = skinkit(&["batch", "--merge", "--json", "--out", s(out)]);
+    assert!(o.status.success(), "{context}: {}", stderr(&o));
+    let merged: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut got: Vec<String> =
+        merged["outcomes"].as_array().unwrap().iter().map(|o| o["session"].as_str().unwrap().to_owned()).collect();
+    got.sort();
+    let mut want = present.to_vec();
+    want.sort();
+    assert_eq!(got, want, "{context}: one outcome per session present");
+    assert_eq!(merged["failed"], 0, "{context}: {merged}");
+    let fresh = root.join("fresh");
+    let _ = std::fs::remove_dir_all(&fresh);
+    let o = skinkit(&["batch", "--quiet", s(dir), "--out", s(&fresh), "--green", green]);
+    assert!(o.status.success(), "{context}: {}", stderr(&o));
+    for name in present {
+        for file in ["normal.png", "albedo.png"] {
+            let (a, b) = (
+                std::fs::read(out.join(name).join(file)).unwrap(),
+                std::fs::read(fresh.join(name).join(file)).unwrap(),
+            );
+            assert!(a == b, "{context}: {name}/{file} differs from a fresh capture");
+        }
+    }
+}
