@@ -486,3 +486,37 @@ fn check_merge(dir: &Path, out: &Path, root: &Path, green: &str, present: &[Stri
         }
     }
 }
+
+/// Issue 42: two shards of one batch in separate PID namespaces (as two containers, or two hosts
+/// on a shared folder, see each other's processes as absent) writing into one `--out` at once:
+/// neither sweeps the other's live staging folders (D7), and every round merges whole. Needs
+/// `unshare --pid` (root or user namespaces); skipped with a message where it is refused.
+#[test]
+fn shards_in_separate_pid_namespaces_write_one_out_at_once() {
+    let unshare = |args: &[&str]| std::process::Command::new("unshare").args(["--pid", "--fork"]).args(args).output();
+    if !unshare(&["true"]).is_ok_and(|o| o.status.success()) {
+        eprintln!("skipped: `unshare --pid --fork` is not allowed here");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let molds = molds(tmp.path(), 48);
+    let dir = sessions::sessions(&tmp.path().join("sessions"), &molds, &names(8), &[]);
+    let binary = env!("CARGO_BIN_EXE_skinkit");
+    for round in 0..4 {
+        let out = tmp.path().join(format!("out-{round}"));
+        let shard = |k: &str| {
+            let args =
+                ["unshare", "--pid", "--fork", binary, "batch", "--quiet", s(&dir), "--out", s(&out), "--shard", k];
+            std::process::Command::new(args[0]).args(&args[1..]).spawn().expect("unshare runs")
+        };
+        let (mut one, mut two) = (shard("1/2"), shard("2/2"));
+        assert!(one.wait().unwrap().success() && two.wait().unwrap().success(), "round {round}: a shard failed");
+        let o = skinkit(&["batch", "--merge", "--json", "--out", s(&out)]);
+        assert!(o.status.success(), "round {round}: {}", stderr(&o));
+        let merged: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!((merged["sessions"].as_u64(), merged["failed"].as_u64()), (Some(8), Some(0)), "round {round}");
+        for name in names(8) {
+            assert!(out.join(&name).join("report.json").is_file(), "round {round}: {name} incomplete");
+        }
+    }
+}
