@@ -69,6 +69,15 @@ fn a_session_of_blank_photos_fails_with_its_maps_written() {
     let why = blank["error"].as_str().unwrap();
     assert!(why.contains("only 0 of 1024 pixels") && why.contains("--min-valid 0.01"), "{why}");
     assert_eq!(blank["signs"]["invalid_share"], 1.0);
+    // The good session's height is on the page: its span in mm (the sample rig's scale) and its
+    // false-colour preview; the blank one has no height to span.
+    let range = &first["outcomes"][0]["signs"]["height_range"];
+    assert_eq!(range["unit"], "mm", "{range}");
+    assert!(range["span"].as_f64().is_some_and(|s| s > 0.0 && s < 1.0), "a mold's relief is under a mm: {range}");
+    assert!(blank["signs"].get("height_range").is_none(), "{}", blank["signs"]);
+    assert!(out.join("batch-review/s000/height.png").is_file() && out.join("batch-review/s001/height.png").is_file());
+    let page = std::fs::read_to_string(out.join("batch-review.html")).unwrap();
+    assert!(page.contains("<th>height</th>") && page.contains(" µm</td>"), "{page}");
     for file in ["normal.exr", "normal.png", "albedo.png", "confidence.png", "report.json"] {
         assert!(out.join("s001").join(file).is_file(), "{file}: the maps are kept for inspection");
     }
@@ -80,6 +89,7 @@ fn a_session_of_blank_photos_fails_with_its_maps_written() {
     std::fs::remove_dir_all(out.join("batch-review/s000")).unwrap();
     let (_, redrawn) = batch(&[]);
     assert!(out.join("batch-review/s000/relief.png").is_file() && out.join("batch-review/s000/signs.json").is_file());
+    assert!(out.join("batch-review/s000/height.png").is_file(), "the height preview redrawn from height.exr");
     let signs = &redrawn["outcomes"][0]["signs"];
     assert_eq!((signs["invalid_share"].as_f64(), signs.get("residual")), (Some(0.0), None), "{signs}");
     let (code, accepted) = batch(&["--min-valid", "0"]);
@@ -236,7 +246,7 @@ fn the_review_page_of_300_sessions_puts_the_bad_ones_first_and_opens_in_chromium
         html.contains("s005 &lt;b&gt;&amp;&quot;#%")
             && html.contains("batch-review/s005%20%3Cb%3E%26%22%23%25/relief.png")
     );
-    assert_eq!(html.matches("loading=\"lazy\"").count(), 3 * 300);
+    assert_eq!(html.matches("loading=\"lazy\"").count(), 4 * 300);
     let bad: Vec<&str> = faults.iter().map(|(i, _)| all[*i].as_str()).collect();
     // The rows in the page's order: the bad sessions first (the blank ones failed: at the top).
     let rows: Vec<&str> = html.lines().filter_map(|l| l.split("<tr class=\"").nth(1)).collect();
@@ -261,7 +271,7 @@ fn the_review_page_of_300_sessions_puts_the_bad_ones_first_and_opens_in_chromium
         assert_eq!(seen[list].as_array().map(Vec::len), Some(0), "{list}: {}", seen[list]);
     }
     let images = seen["images"].as_array().unwrap();
-    assert_eq!(images.len(), 3 * 300);
+    assert_eq!(images.len(), 4 * 300);
     for image in images {
         assert!(image["decoded"] == true && image["natural_width"].as_u64() > Some(0), "did not decode: {image}");
     }

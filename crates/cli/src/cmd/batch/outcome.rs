@@ -95,7 +95,7 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     pipeline::write_json_in(&set, resume::MADE_FROM, &out_dir.join(resume::MADE_FROM), &made)?;
     let mut captured = session::capture(&files, options, &|_| {})?;
     let signs = review::signs(&captured);
-    review::write_previews(&previews, &captured.solution, &signs)?;
+    review::write_previews(&previews, &captured, &signs)?;
     let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
     let report = &captured.report;
     Ok(SessionRun {

@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 
 use percent_encoding::{AsciiSet, NON_ALPHANUMERIC, utf8_percent_encode};
 
-use super::review::{PREVIEW_SIDE, PREVIEWS, Signs};
+use super::review::{HeightRange, PREVIEW_SIDE, PREVIEWS, Signs};
 use super::{BatchReport, SessionOutcome};
 
 /// The page's file name, beside `batch-report.json`.
@@ -97,7 +97,7 @@ fn head(html: &mut String, report: &BatchReport, rows: &[&SessionOutcome]) {
     );
     html.push_str(
         "<table><thead><tr><th>#</th><th>session</th><th>relief</th><th>albedo</th><th>confidence</th>\
-         <th>unsolved</th><th>lights dropped</th><th>fit residual</th><th>rig condition</th><th>time</th>\
+         <th>height</th><th>unsolved</th><th>lights dropped</th><th>fit residual</th><th>rig condition</th><th>height range</th><th>time</th>\
          <th>status</th><th>files</th></tr></thead><tbody>",
     );
 }
@@ -137,6 +137,7 @@ fn session_row(html: &mut String, rank: usize, o: &SessionOutcome) {
         percent(signs.and_then(|s| s.dropped_share)),
         percent(signs.and_then(|s| s.residual)),
         signs.and_then(|s| s.condition_number).map_or_else(|| "–".to_owned(), |c| format!("{c:.2}")),
+        signs.and_then(|s| s.height_range.as_ref()).map_or_else(|| "–".to_owned(), HeightRange::text),
         o.seconds.map_or_else(|| "–".to_owned(), |s| format!("{s:.2} s")),
     ] {
         let _ = write!(html, "<td class=\"n\">{}</td>", esc(&cell));
@@ -149,7 +150,7 @@ fn session_row(html: &mut String, rank: usize, o: &SessionOutcome) {
     };
     let _ = write!(html, "<td class=\"why\">{}</td><td>", esc(&status));
     if o.signs.is_some() {
-        for file in ["normal.png", "albedo.png", "confidence.png", "report.json"] {
+        for file in ["normal.png", "albedo.png", "confidence.png", "height.exr", "report.json"] {
             let _ = write!(html, "<a href=\"{}\">{}</a> ", link(&[&o.session, file]), file);
         }
     }
@@ -173,6 +174,7 @@ mod tests {
                 dropped_share: Some(0.01),
                 residual,
                 condition_number: Some(1.5),
+                height_range: Some(HeightRange { span: 0.0425, unit: "mm".to_owned() }),
             }),
             skipped_files: Vec::new(),
         }
@@ -180,10 +182,21 @@ mod tests {
 
     #[test]
     fn badness_is_the_worst_sign_over_its_level() {
-        let signs =
-            Signs { invalid_share: 0.05, dropped_share: Some(0.6), residual: Some(0.01), condition_number: None };
+        let signs = Signs {
+            invalid_share: 0.05,
+            dropped_share: Some(0.6),
+            residual: Some(0.01),
+            condition_number: None,
+            height_range: None,
+        };
         assert!((badness(&signs) - 2.0).abs() < 1e-12, "dropped 0.6 / 0.3 is the worst");
-        let none = Signs { invalid_share: 0.0, dropped_share: None, residual: None, condition_number: None };
+        let none = Signs {
+            invalid_share: 0.0,
+            dropped_share: None,
+            residual: None,
+            condition_number: None,
+            height_range: None,
+        };
         assert_eq!(badness(&none), 0.0);
     }
 
@@ -222,7 +235,8 @@ mod tests {
         assert!(page.contains("&lt;b&gt;&amp;&quot;mold&quot;") && !page.contains("<b>&"), "{page}");
         assert!(page.contains("too few &lt;valid&gt; pixels"));
         assert!(page.contains("src=\"batch-review/%3Cb%3E%26%22mold%22/relief.png\""), "{page}");
-        assert_eq!(page.matches("loading=\"lazy\"").count(), 3);
+        assert_eq!(page.matches("loading=\"lazy\"").count(), PREVIEWS.len());
+        assert!(page.contains("42.5 µm"), "the height range in micrometres: {page}");
         assert!(!page.contains("<script") && !page.contains("http"));
         assert!(page.contains("class=\"failed\""));
     }

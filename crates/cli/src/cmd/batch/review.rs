@@ -1,6 +1,6 @@
 //! What a person looks at first after a batch: per session, the numbers that flag a bad capture
-//! ([`Signs`]) and three small previews (the normals' relief under a raking light, the albedo,
-//! the confidence), written to `OUT/batch-review/SESSION/` for the review page ([`page`](super::page)).
+//! ([`Signs`]) and four small previews (the normals' relief under a raking light, the albedo,
+//! the confidence, the integrated height in false colour), written to `OUT/batch-review/SESSION/` for the review page ([`page`](super::page)).
 //!
 //! The numbers come from the capture in memory. A session skipped as up to date keeps the ones
 //! its earlier run wrote (`signs.json` beside the previews); when those are gone, the previews
@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use skinkit_capture::session::Captured;
-use skinkit_capture::solve::{AlbedoMap, Solution};
+use skinkit_capture::solve::AlbedoMap;
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::preview::{self, Picture};
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, OutputSet, ScalarMap};
@@ -24,7 +24,7 @@ pub const FOLDER: &str = "batch-review";
 /// Longest side of a preview, pixels: small enough for 500 rows of three on one page.
 pub const PREVIEW_SIDE: usize = 96;
 /// The previews of a session, in the order the page shows them.
-pub const PREVIEWS: [&str; 3] = ["relief.png", "albedo.png", "confidence.png"];
+pub const PREVIEWS: [&str; 4] = ["relief.png", "albedo.png", "confidence.png", "height.png"];
 /// The numbers of a session, beside its previews.
 const SIGNS: &str = "signs.json";
 
@@ -49,6 +49,31 @@ pub struct Signs {
     /// Condition number of the rig's light directions.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub condition_number: Option<f64>,
+    /// Lowest to highest integrated height over the solved pixels (`height.exr`): a mold's relief
+    /// is tens of micrometres; millimetres mean a bowl the detrend left or a wrong scale.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_range: Option<HeightRange>,
+}
+
+/// The span of a session's height map and its unit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeightRange {
+    /// Highest minus lowest height, in `unit`.
+    pub span: f64,
+    /// `"mm"` (the rig gave `mm_per_pixel`) or `"texel"`.
+    pub unit: String,
+}
+
+impl HeightRange {
+    /// The span of `report`'s height.
+    pub fn of(report: &skinkit_height::HeightReport) -> Self {
+        HeightRange { span: f64::from(report.max - report.min), unit: report.unit.to_owned() }
+    }
+
+    /// The span as the page shows it: micrometres for a height in millimetres.
+    pub fn text(&self) -> String {
+        if self.unit == "mm" { format!("{:.1} µm", 1000.0 * self.span) } else { format!("{:.2} texels", self.span) }
+    }
 }
 
 /// The signs of a capture in memory.
@@ -63,6 +88,7 @@ pub fn signs(captured: &Captured) -> Signs {
         dropped_share: (solved > 0).then(|| partial as f64 / solved as f64),
         residual: median_residual(&solution.confidence),
         condition_number: Some(report.condition_number).filter(|c| c.is_finite()),
+        height_range: report.height_map.as_ref().map(HeightRange::of),
     }
 }
 
@@ -83,28 +109,46 @@ fn median_residual(confidence: &ScalarMap) -> Option<f64> {
     Some(residual_of(f64::from(c)))
 }
 
-/// Writes the previews of `solution` and its `signs` into `dir`, as one output set (all or
+/// The maps a session's previews are drawn from.
+struct Maps<'a> {
+    normals: &'a NormalMap,
+    albedo: &'a ScalarMap,
+    confidence: &'a ScalarMap,
+    /// The integrated height, non-finite where no pixel was solved; none when none was.
+    height: Option<&'a ScalarMap>,
+}
+
+/// Writes the previews of `captured` and its `signs` into `dir`, as one output set (all or
 /// nothing, `signs.json` last; an interrupt leaves no half folder).
 ///
 /// # Errors
 /// When the folder or a file cannot be written.
-pub fn write_previews(dir: &Path, solution: &Solution, signs: &Signs) -> Result<()> {
+pub fn write_previews(dir: &Path, captured: &Captured, signs: &Signs) -> Result<()> {
+    let solution = &captured.solution;
     let albedo = match &solution.albedo {
         AlbedoMap::Gray(map) => map.clone(),
         AlbedoMap::Rgb(map) => map.map(|c| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z),
     };
-    write_set(dir, &solution.normals, &albedo, &solution.confidence, signs)
+    let height = captured.height.as_ref().map(|h| {
+        let mut map = h.map.clone();
+        map.as_mut_slice().iter_mut().zip(&h.valid).filter(|(_, ok)| !**ok).for_each(|(v, _)| *v = f32::NAN);
+        map
+    });
+    let maps =
+        Maps { normals: &solution.normals, albedo: &albedo, confidence: &solution.confidence, height: height.as_ref() };
+    write_set(dir, &maps, signs)
 }
 
-fn write_set(dir: &Path, normals: &NormalMap, albedo: &ScalarMap, confidence: &ScalarMap, signs: &Signs) -> Result<()> {
+fn write_set(dir: &Path, maps: &Maps, signs: &Signs) -> Result<()> {
     if let Some(parent) = dir.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
     }
     let set = OutputSet::folder(dir, SIGNS).with_context(|| format!("cannot write {}", dir.display()))?;
     let pictures = [
-        preview::shade_normals(normals, preview::raking_light()),
-        preview::gray(albedo),
-        confidence_picture(confidence),
+        preview::shade_normals(maps.normals, preview::raking_light()),
+        preview::gray(maps.albedo),
+        confidence_picture(maps.confidence),
+        height_picture(maps.height, maps.normals.size()),
     ];
     for (name, picture) in PREVIEWS.iter().zip(&pictures) {
         set.write(name, |p| preview::write_png(p, &preview::shrink(picture, PREVIEW_SIDE)))
@@ -113,6 +157,18 @@ fn write_set(dir: &Path, normals: &NormalMap, albedo: &ScalarMap, confidence: &S
     crate::pipeline::write_json_in(&set, SIGNS, &dir.join(SIGNS), signs)?;
     set.commit().with_context(|| format!("cannot write {}", dir.display()))?;
     Ok(())
+}
+
+/// The height in false colour over its robust range (unsolved pixels in the invalid colour); a
+/// session with no height is all invalid.
+fn height_picture(height: Option<&ScalarMap>, (width, rows): (usize, usize)) -> Picture {
+    match height {
+        Some(map) => {
+            let (lo, hi) = preview::value_range(map.as_slice());
+            preview::false_colour(map, lo, hi)
+        }
+        None => Grid::filled(width, rows, preview::INVALID),
+    }
 }
 
 /// Confidence drawn as it is, 0 black and 1 white (a stretch would hide a low confidence).
@@ -142,12 +198,14 @@ pub fn signs_of_skipped(out_dir: &Path, dir: &Path, done: &Done) -> Result<Signs
         dropped_share: None,
         residual: None,
         condition_number: done.condition_number,
+        height_range: None,
     };
     redraw(out_dir, dir, &signs)?;
     Ok(signs)
 }
 
-/// The previews drawn from a capture folder's `normal.exr`, `albedo.png` and `confidence.png`.
+/// The previews drawn from a capture folder's `normal.exr`, `albedo.png`, `confidence.png` and
+/// `height.exr` (when it has one: a capture with no solved pixel writes none).
 fn redraw(out_dir: &Path, dir: &Path, signs: &Signs) -> Result<()> {
     let limits = Limits::default();
     let normal = out_dir.join("normal.exr");
@@ -158,7 +216,17 @@ fn redraw(out_dir: &Path, dir: &Path, signs: &Signs) -> Result<()> {
         let photo = io::read_photo(&path, &limits).with_context(|| format!("cannot read {}", path.display()))?;
         Ok(Grid::from_vec(photo.width(), photo.height(), photo.luminance())?)
     };
-    write_set(dir, &normals, &gray("albedo.png")?, &gray("confidence.png")?, signs)
+    let height_path = out_dir.join("height.exr");
+    let height = match height_path.is_file() {
+        true => Some(
+            io::read_exr_channel(&height_path, "Y", &limits)
+                .with_context(|| format!("cannot read {}", height_path.display()))?,
+        ),
+        false => None,
+    };
+    let (albedo, confidence) = (gray("albedo.png")?, gray("confidence.png")?);
+    let maps = Maps { normals: &normals, albedo: &albedo, confidence: &confidence, height: height.as_ref() };
+    write_set(dir, &maps, signs)
 }
 
 #[cfg(test)]
