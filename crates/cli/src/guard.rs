@@ -5,6 +5,7 @@
 //! Paths are compared canonicalized (symbolic links, `..` and relative forms resolved); an output
 //! that does not exist yet is resolved through its deepest existing ancestor.
 
+use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 
 use anyhow::Result;
@@ -53,10 +54,17 @@ pub fn out_folder(flag: &str, path: &Path) -> Result<()> {
 
 /// Refuses an output (`flag`, path) equal to an input (what it is, path). Inputs name what they
 /// are: `the exemplar`, `the scene's normal map`.
+///
+/// Each path is resolved once and looked up in a map, so a render of thousands of frames is
+/// checked in linear time (issue 42, D11: pairwise resolving took minutes at 3600 frames).
 pub fn not_an_input(outputs: &[(&str, &Path)], inputs: &[(String, PathBuf)]) -> Result<()> {
-    for (flag, out) in outputs {
-        let resolved = resolve(out);
-        if let Some((what, input)) = inputs.iter().find(|(_, input)| resolve(input) == resolved) {
+    let mut by_path: HashMap<PathBuf, (&str, &Path)> = HashMap::with_capacity(inputs.len());
+    for (what, input) in inputs {
+        by_path.entry(resolve(input)).or_insert((what.as_str(), input.as_path()));
+    }
+    let resolved: Vec<PathBuf> = outputs.iter().map(|(_, out)| resolve(out)).collect();
+    for ((flag, out), path) in outputs.iter().zip(&resolved) {
+        if let Some((what, input)) = by_path.get(path) {
             // The input's own spelling only where it differs (a link, a relative path): the
             // file is named once.
             let spelled = if input == out { String::new() } else { format!(" {}", input.display()) };
@@ -66,7 +74,7 @@ pub fn not_an_input(outputs: &[(&str, &Path)], inputs: &[(String, PathBuf)]) -> 
             )));
         }
     }
-    distinct(outputs)
+    distinct_resolved(outputs, &resolved)
 }
 
 /// The checks of output files: none is an existing folder ([`out_file`]), an input
@@ -83,10 +91,12 @@ pub fn given<'a>(outputs: &[(&'a str, Option<&'a PathBuf>)]) -> Vec<(&'a str, &'
     outputs.iter().filter_map(|(flag, path)| path.map(|p| (*flag, p.as_path()))).collect()
 }
 
-/// Refuses two outputs at one path.
-pub fn distinct(outputs: &[(&str, &Path)]) -> Result<()> {
-    for (i, (flag, out)) in outputs.iter().enumerate() {
-        if let Some((other, _)) = outputs[..i].iter().find(|(_, o)| resolve(o) == resolve(out)) {
+/// Refuses two outputs at one path, each output's path already resolved (`resolved[i]` is
+/// `outputs[i]`'s).
+fn distinct_resolved(outputs: &[(&str, &Path)], resolved: &[PathBuf]) -> Result<()> {
+    let mut seen: HashMap<&Path, &str> = HashMap::with_capacity(outputs.len());
+    for ((flag, out), path) in outputs.iter().zip(resolved) {
+        if let Some(other) = seen.insert(path, flag) {
             return Err(usage(format!("{other} and {flag} are both {}: give each output its own path", out.display())));
         }
     }
@@ -130,8 +140,17 @@ mod tests {
             assert_eq!(resolve(&link.join("new/x.png")), resolve(&tmp.path().join("sub/new/x.png")));
         }
         assert!(not_an_input(&[("--out", &tmp.path().join("other.png"))], &inputs).is_ok());
-        let e = distinct(&[("--out", &tmp.path().join("a.png")), ("--report", &tmp.path().join("sub/../a.png"))]);
+        let e =
+            not_an_input(&[("--out", &tmp.path().join("a.png")), ("--report", &tmp.path().join("sub/../a.png"))], &[]);
         assert!(e.unwrap_err().to_string().contains("--out and --report"));
+        // Among many outputs (a long orbit), the one repeated is named with the first that had it.
+        let frames: Vec<PathBuf> = (0..3000).map(|f| tmp.path().join(format!("f{f:04}.png"))).collect();
+        let mut outputs: Vec<(&str, &Path)> = frames.iter().map(|p| ("--out", p.as_path())).collect();
+        assert!(not_an_input(&outputs, &inputs).is_ok());
+        let report = tmp.path().join("sub/../f2999.png");
+        outputs.push(("--report", &report));
+        let text = not_an_input(&outputs, &inputs).unwrap_err().to_string();
+        assert!(text.contains("--out and --report") && text.contains("f2999.png"), "{text}");
     }
 
     #[test]

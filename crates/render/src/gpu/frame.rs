@@ -163,6 +163,7 @@ impl Gpu {
         Ok(Target {
             color: self.texture("base pass colour target", width, height, format.texture_format()),
             depth: self.texture("base pass depth", width, height, DEPTH_FORMAT),
+            readback: super::readback::readback_buffer(&self.device, width, height, format),
             width,
             height,
             format,

@@ -172,6 +172,8 @@ impl OutputFormat {
 pub struct Target {
     pub(crate) color: wgpu::Texture,
     pub(crate) depth: wgpu::Texture,
+    /// Where [`Gpu::read`] copies the colour to map it, reused frame after frame.
+    pub(crate) readback: wgpu::Buffer,
     pub(crate) width: u32,
     pub(crate) height: u32,
     pub(crate) format: OutputFormat,

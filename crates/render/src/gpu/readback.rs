@@ -22,47 +22,19 @@ impl Gpu {
     /// # Errors
     /// A wgpu validation error or a failed map.
     pub fn read(&self, target: &Target) -> Result<Rendered> {
-        let (width, height, format) = (target.width, target.height, target.format);
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback encoder") });
-        let readback = self.copy_to_buffer(&mut encoder, &target.color, width, height, format);
+        copy_to_buffer(&mut encoder, target);
         self.queue.submit([encoder.finish()]);
         self.pop_scope(scope, "readback")?;
-        let bytes = self.read_buffer(&readback)?;
-        Ok(unpack(&bytes, width, height, format))
+        self.unpack_readback(target)
     }
 
-    /// Copy the target into a mappable buffer whose rows are padded to
-    /// `COPY_BYTES_PER_ROW_ALIGNMENT` (256 bytes).
-    fn copy_to_buffer(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &wgpu::Texture,
-        width: u32,
-        height: u32,
-        format: OutputFormat,
-    ) -> wgpu::Buffer {
-        let padded = padded_row_bytes(width, format);
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: padded as u64 * height as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        encoder.copy_texture_to_buffer(
-            target.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded),
-                    rows_per_image: Some(height),
-                },
-            },
-            extent(width, height),
-        );
-        buffer
+    /// Maps the target's readback buffer (already filled by a submitted copy) and unpacks it.
+    pub(crate) fn unpack_readback(&self, target: &Target) -> Result<Rendered> {
+        let bytes = self.read_buffer(&target.readback)?;
+        Ok(unpack(&bytes, target.width, target.height, target.format))
     }
 
     /// Map `buffer`, wait, and copy its bytes out.
@@ -78,6 +50,34 @@ impl Gpu {
         buffer.unmap();
         Ok(bytes)
     }
+}
+
+/// A mappable buffer that holds one `width` x `height` image of `format`, its rows padded to
+/// `COPY_BYTES_PER_ROW_ALIGNMENT` (256 bytes). A target owns one, so reading frames back
+/// allocates nothing per frame.
+pub(crate) fn readback_buffer(device: &wgpu::Device, width: u32, height: u32, format: OutputFormat) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: padded_row_bytes(width, format) as u64 * height as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// Copies the target's colour into its readback buffer.
+fn copy_to_buffer(encoder: &mut wgpu::CommandEncoder, target: &Target) {
+    encoder.copy_texture_to_buffer(
+        target.color.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &target.readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row_bytes(target.width, target.format)),
+                rows_per_image: Some(target.height),
+            },
+        },
+        extent(target.width, target.height),
+    );
 }
 
 /// Bytes per row of a readback buffer: the tight row rounded up to the copy alignment.
