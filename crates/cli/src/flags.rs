@@ -22,19 +22,35 @@ pub fn odd_in(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + 
     }
 }
 
-/// A parser of finite numbers of at least zero.
-pub fn non_negative(text: &str) -> Result<f32, String> {
-    match text.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("`{text}` is not a finite number of at least 0")),
+/// A parser of finite numbers in `lo..=hi` (`what` says what they are in the message).
+pub fn f32_in(
+    lo: f32,
+    hi: f32,
+    what: &'static str,
+) -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}` is not {what} from {lo} to {hi}")),
     }
 }
 
-/// [`non_negative`] in f64.
-pub fn non_negative_f64(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("`{text}` is not a finite number of at least 0")),
+/// [`f32_in`] in f64.
+pub fn f64_in(
+    lo: f64,
+    hi: f64,
+    what: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}` is not {what} from {lo} to {hi}")),
+    }
+}
+
+/// A share in `(0, 1]`: a fraction of something that must keep part of it.
+pub fn share(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!("`{text}` is not a share above 0 and at most 1")),
     }
 }
 
@@ -112,8 +128,12 @@ mod tests {
         let o = odd_in(3, 31);
         assert_eq!((o("3"), o("31")), (Ok(3), Ok(31)));
         assert!(o("4").is_err() && o("1").is_err() && o("33").is_err());
-        assert!(non_negative("-0.5").is_err() && non_negative("NaN").is_err() && non_negative("inf").is_err());
-        assert_eq!(non_negative("0"), Ok(0.0));
+        let w = f32_in(0.0, 10.0, "a weight");
+        assert!(w("-0.5").is_err() && w("NaN").is_err() && w("inf").is_err() && w("10.5").is_err());
+        assert_eq!((w("0"), w("10")), (Ok(0.0), Ok(10.0)));
+        assert!(f64_in(0.0, 1.0, "x")("1e30").unwrap_err().contains("from 0 to 1"));
+        assert!(share("0").is_err() && share("1.01").is_err() && share("nan").is_err());
+        assert_eq!(share("1"), Ok(1.0));
         assert_eq!(map_size("32768x32768"), Ok((32768, 32768)));
         assert!(map_size("32768x32769").unwrap_err().contains("larger than a face map"));
         assert!(map_size("18446744073709551615x3").is_err(), "no overflow");

@@ -107,4 +107,53 @@ mod tests {
     fn cli_definition_is_consistent() {
         super::Cli::command().debug_assert();
     }
+
+    /// Every value-taking flag of every subcommand, with the command it belongs to.
+    fn flags(command: &clap::Command, path: &str, found: &mut Vec<(String, clap::Arg)>) {
+        for arg in command.get_arguments().filter(|a| a.get_action().takes_values()) {
+            found.push((format!("{path} --{}", arg.get_id()), arg.clone()));
+        }
+        for sub in command.get_subcommands() {
+            flags(sub, &format!("{path} {}", sub.get_name()), found);
+        }
+    }
+
+    /// Issue 42: no numeric flag takes a value it cannot mean. A number that is not finite, or
+    /// one beyond any size a run can have, is a usage error for every flag, found here by
+    /// walking the whole command line (a new flag is checked without being listed).
+    #[test]
+    fn no_flag_accepts_a_number_it_cannot_mean() {
+        let mut all = Vec::new();
+        flags(&super::Cli::command(), "skinkit", &mut all);
+        assert!(all.len() > 50, "only {} flags found", all.len());
+        let absurd = ["nan", "inf", "-inf", "1e30", "-1e30", "18446744073709551615"];
+        let mut accepted = Vec::new();
+        for (name, arg) in &all {
+            let parser = arg.get_value_parser();
+            // A seed is any 64-bit number.
+            if takes_text(parser) || arg.get_id() == "seed" {
+                continue;
+            }
+            // The flag alone, with its parser, so that no other flag's rules interfere.
+            let alone = clap::Command::new("t")
+                .arg(clap::Arg::new("v").long("v").value_parser(parser.clone()).action(clap::ArgAction::Set));
+            for value in absurd {
+                if alone.clone().try_get_matches_from(["t", "--v", value]).is_ok() {
+                    accepted.push(format!("{name} {value}"));
+                }
+            }
+        }
+        assert!(accepted.is_empty(), "flags accept numbers they cannot mean:\n{}", accepted.join("\n"));
+    }
+
+    /// Whether a flag's values are text or paths (any spelling is a valid value of those).
+    fn takes_text(parser: &clap::builder::ValueParser) -> bool {
+        let id = parser.type_id();
+        [
+            clap::builder::ValueParser::string().type_id(),
+            clap::builder::ValueParser::path_buf().type_id(),
+            clap::builder::ValueParser::os_string().type_id(),
+        ]
+        .contains(&id)
+    }
 }

@@ -254,6 +254,19 @@ pub const MAX_JITTER: usize = 16;
 /// Most correction passes [`SynthConfig::validate`] accepts.
 pub const MAX_CORRECTIONS: usize = 16;
 
+/// Most levels a configuration may ask for (an exemplar within the image limit, 16384 a side,
+/// halves at most 12 times before a neighbourhood no longer fits; [`SynthConfig::validate`]
+/// clamps to the exemplar's own number with a warning).
+pub const MAX_LEVELS: usize = 32;
+
+/// Most tree candidates re-scored per texel ([`Search`]'s `rerank`).
+pub const MAX_RERANK: usize = 1024;
+
+/// Largest penalty, weight or robust scale [`SynthConfig::validate`] accepts. They are ratios to
+/// a level's typical squared distance, whose useful values are under 10; far above this the
+/// weighted distances of a 16-bit exemplar overflow f32.
+pub const MAX_WEIGHT: f32 = 1000.0;
+
 /// Bytes per finest output texel the copy cap holds while it finds the verbatim blocks: the
 /// union-find's parent (then label) and size, `u32` each, and a flag.
 const CAP_BYTES_PER_TEXEL: u64 = 4 + 4 + 1;
@@ -377,8 +390,15 @@ impl SynthConfig {
         if self.corrections > MAX_CORRECTIONS {
             return Err(Error::config("corrections", self.corrections, format!("at most {MAX_CORRECTIONS} passes")));
         }
-        if !(self.occurrence_penalty.is_finite() && self.occurrence_penalty >= 0.0) {
-            return Err(Error::config("occurrence_penalty", self.occurrence_penalty, "must be finite and >= 0"));
+        for (field, weight) in [
+            ("occurrence_penalty", self.occurrence_penalty),
+            ("layout_penalty", self.layout_penalty),
+            ("robust_scale", self.robust_scale),
+            ("detail_weight", self.detail_weight),
+        ] {
+            if !(weight.is_finite() && (0.0..=MAX_WEIGHT).contains(&weight)) {
+                return Err(Error::config(field, weight, format!("must be finite, from 0 to {MAX_WEIGHT}")));
+            }
         }
         if let Some(p) = self.finest_penalty.filter(|p| !(p.is_finite() && *p >= 0.0)) {
             return Err(Error::config("finest_penalty", p, "must be finite and >= 0"));
@@ -386,21 +406,12 @@ impl SynthConfig {
         if let Some(p) = self.correction_penalty.filter(|p| !(p.is_finite() && *p >= 0.0)) {
             return Err(Error::config("correction_penalty", p, "must be finite and >= 0"));
         }
-        if !(self.layout_penalty.is_finite() && self.layout_penalty >= 0.0) {
-            return Err(Error::config("layout_penalty", self.layout_penalty, "must be finite and >= 0"));
-        }
-        if !(self.robust_scale.is_finite() && self.robust_scale >= 0.0) {
-            return Err(Error::config("robust_scale", self.robust_scale, "must be finite and >= 0"));
-        }
         for (field, bias) in
             [("coherence_bias", Some(self.coherence_bias)), ("finest_coherence_bias", self.finest_coherence_bias)]
         {
             if let Some(b) = bias.filter(|b| !(b.is_finite() && *b >= 0.0)) {
                 return Err(Error::config(field, b, "must be finite and >= 0"));
             }
-        }
-        if !(self.detail_weight.is_finite() && self.detail_weight >= 0.0) {
-            return Err(Error::config("detail_weight", self.detail_weight, "must be finite and >= 0"));
         }
         if let Some(r) = self.finest_fallback.filter(|r| !(r.is_finite() && *r > 0.0)) {
             return Err(Error::config("finest_fallback", r, "must be a finite ratio > 0"));
@@ -433,8 +444,8 @@ impl SynthConfig {
             if !(1..=32).contains(&dims) {
                 return Err(Error::config("dims", dims, "must be between 1 and 32"));
             }
-            if rerank == 0 {
-                return Err(Error::config("rerank", 0, "at least one candidate is needed"));
+            if !(1..=MAX_RERANK).contains(&rerank) {
+                return Err(Error::config("rerank", rerank, format!("must be between 1 and {MAX_RERANK} candidates")));
             }
         }
         if ew < self.neighbourhood || eh < self.neighbourhood || ew > u32::MAX as usize || eh > u32::MAX as usize {
@@ -561,6 +572,9 @@ mod tests {
         assert!(bad(|c| c.layout_penalty = f32::INFINITY).contains("layout_penalty = inf"));
         assert!(bad(|c| c.robust_scale = -1.0).contains("robust_scale"));
         assert!(bad(|c| c.robust_scale = f32::NAN).contains("robust_scale"));
+        assert!(bad(|c| c.detail_weight = 1e30).contains("detail_weight"));
+        assert!(bad(|c| c.occurrence_penalty = MAX_WEIGHT * 1.01).contains("occurrence_penalty"));
+        assert!(bad(|c| c.search = Search::Approximate { dims: 8, rerank: MAX_RERANK + 1 }).contains("rerank"));
         assert!(bad(|c| c.finest_penalty = Some(-1.0)).contains("finest_penalty = -1"));
         assert!(bad(|c| c.coherence_bias = f32::INFINITY).contains("coherence_bias = inf"));
         assert!(bad(|c| c.detail_weight = f32::NAN).contains("detail_weight = NaN"));

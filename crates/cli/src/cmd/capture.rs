@@ -50,7 +50,7 @@ pub struct SolveArgs {
     #[arg(long, default_value = "robust", value_parser = ["ls", "robust", "threshold"])]
     pub solver: String,
     /// Side of the low-frequency removal block in pixels (the paper's 50); 0 turns it off.
-    #[arg(long, default_value_t = 50, value_name = "PIXELS")]
+    #[arg(long, default_value_t = 50, value_name = "PIXELS", value_parser = crate::flags::usize_in(0, 16384))]
     pub detrend_block: usize,
     /// Robust and threshold solvers: readings below this fraction of full scale count as shadow.
     #[arg(long, value_name = "FRACTION", value_parser = shadow_fraction)]
@@ -153,10 +153,14 @@ pub fn check_out(out: &Path, photos_from: Option<&Path>, files: &Session) -> Res
 }
 
 /// A `--max-condition` value: a finite number of at least 1 (a condition number's least).
+/// The loosest condition limit a flag takes: beyond it a float32 photo's rounding alone (about
+/// 1e-7) is amplified past the normals' own size, so no limit above it means anything.
+pub const MAX_CONDITION_LIMIT: f64 = 1e7;
+
 pub fn condition_limit(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
-        _ => Err(format!("`{text}` is not a condition number limit: give a finite number of at least 1")),
+        Ok(v) if v.is_finite() && (1.0..=MAX_CONDITION_LIMIT).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}` is not a condition number limit: give a number from 1 to {MAX_CONDITION_LIMIT:e}")),
     }
 }
 
@@ -221,4 +225,51 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         s
     });
     Ok(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::{Args, FromArgMatches};
+
+    use super::SolveArgs;
+    use crate::output::{GlobalArgs, Output};
+
+    /// The options `SolveArgs` resolves to from `argv` (the flags alone).
+    fn resolved(argv: &[&str]) -> Option<String> {
+        let command = SolveArgs::augment_args(clap::Command::new("t"));
+        let matches = command.try_get_matches_from([&["t"], argv].concat()).ok()?;
+        let args = SolveArgs::from_arg_matches(&matches).ok()?;
+        let globals = GlobalArgs { quiet: true, json: false, threads: None, memory_limit: Some(1 << 30) };
+        let options = args.options(&Output::new(&globals)).ok()?;
+        Some(format!("{options:?}"))
+    }
+
+    /// Issue 42, D4: a batch knows a session is up to date from the resolved `CaptureOptions`
+    /// it was made with, so every solver flag must change them. Each flag (found by walking the
+    /// flags, so a new one is checked without being listed) is given a value other than its
+    /// default; one that changes nothing would let a batch keep maps made with another value.
+    #[test]
+    fn every_solver_flag_reaches_the_options_a_batch_compares() {
+        let base = resolved(&[]).expect("the defaults resolve");
+        let command = SolveArgs::augment_args(clap::Command::new("t"));
+        let flags: Vec<_> = command.get_arguments().filter(|a| a.get_action().takes_values()).collect();
+        assert!(flags.len() >= 8, "{} flags", flags.len());
+        for arg in flags {
+            let long = format!("--{}", arg.get_long().expect("solver flags are long flags"));
+            let defaults: Vec<String> =
+                arg.get_default_values().iter().map(|v| v.to_string_lossy().into_owned()).collect();
+            let named: Vec<String> = arg.get_possible_values().iter().map(|v| v.get_name().to_owned()).collect();
+            let tries: Vec<String> = if named.is_empty() {
+                ["0.3", "7", "0.05", "100", "0"].iter().map(|v| (*v).to_owned()).collect()
+            } else {
+                named
+            };
+            let changed = tries
+                .iter()
+                .filter(|v| !defaults.contains(v))
+                .filter_map(|v| resolved(&[&long, v]))
+                .any(|options| options != base);
+            assert!(changed, "{long}: no value changes the resolved CaptureOptions");
+        }
+    }
 }

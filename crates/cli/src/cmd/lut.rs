@@ -64,10 +64,10 @@ pub struct DiffuseArgs {
     #[arg(long, value_enum, default_value = "2d")]
     pub normalisation: ProfileNormalisation,
     /// Curvature of the first (top) row, 1/mm.
-    #[arg(long, default_value_t = 0.0, value_name = "F")]
+    #[arg(long, default_value_t = 0.0, value_name = "F", value_parser = curvature)]
     pub inv_r_min: f32,
     /// Curvature of the last row, 1/mm (1 = a 1 mm radius; a head is about 0.01).
-    #[arg(long, default_value_t = 1.0, value_name = "F")]
+    #[arg(long, default_value_t = 1.0, value_name = "F", value_parser = curvature)]
     pub inv_r_max: f32,
 }
 
@@ -86,8 +86,13 @@ pub struct ShadowArgs {
     #[arg(long, value_parser = flags::penumbra_mm, default_value_t = ShadowLutSpec::default().w_max_mm, value_name = "MM")]
     pub w_max_mm: f32,
     /// Width of the new, sharper penumbra as a fraction of the shadow filter's, in (0, 1].
-    #[arg(long, default_value_t = ShadowLutSpec::default().new_penumbra, value_name = "F")]
+    #[arg(long, default_value_t = ShadowLutSpec::default().new_penumbra, value_name = "F", value_parser = flags::share)]
     pub new_penumbra: f32,
+}
+
+/// A curvature in 1/mm: from 0 (flat) to 1000 (a radius of one micrometre, far under a pore).
+fn curvature(text: &str) -> Result<f32, String> {
+    flags::f32_in(0.0, 1000.0, "a curvature in 1/mm")(text)
 }
 
 /// What `--json` prints.

@@ -46,7 +46,7 @@ pub struct StitchOptions {
     pub levels: Option<usize>,
     /// Largest displacement of the random boundary curves, texels (default 64 at 4096 wide,
     /// scaled with the map).
-    #[arg(long, value_name = "A", conflicts_with = "straight", value_parser = flags::non_negative_f64)]
+    #[arg(long, value_name = "A", conflicts_with = "straight", value_parser = flags::f64_in(0.0, 32768.0, "an amplitude in texels"))]
     pub curve_amplitude: Option<f64>,
     /// Straight boundaries (the nearest-point partition as it is).
     #[arg(long)]
@@ -54,8 +54,8 @@ pub struct StitchOptions {
     /// No spline: every texel from its own region (hard boundaries).
     #[arg(long)]
     pub no_blend: bool,
-    /// Band width of the seam metric, texels.
-    #[arg(long, default_value_t = 4, value_name = "W")]
+    /// Band width of the seam metric, texels (1 to 256).
+    #[arg(long, default_value_t = 4, value_name = "W", value_parser = flags::usize_in(1, 256))]
     pub seam_band: usize,
     /// Grow every region with the scanline start (`skinkit synth --scanline`: sequential, slower,
     /// higher in energy) instead of the default's upsampled coordinates.

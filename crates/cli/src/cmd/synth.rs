@@ -46,7 +46,7 @@ pub struct Args {
     pub size: Option<(usize, usize)>,
     /// Pyramid levels (1 = single resolution; default 5, 3 with `--scanline`); clamped, with a
     /// warning, to what the exemplar allows.
-    #[arg(long, value_name = "L", value_parser = flags::usize_in(1, usize::MAX))]
+    #[arg(long, value_name = "L", value_parser = flags::usize_in(1, skinkit_synth::config::MAX_LEVELS))]
     pub levels: Option<usize>,
     /// Side of the causal neighbourhood at each level (odd, 3 to 99).
     #[arg(long, default_value_t = 5, value_name = "N", alias = "neighbourhood", value_parser = flags::odd_in(3, 99))]
@@ -74,25 +74,25 @@ pub struct Args {
     pub upsampled: bool,
     /// Largest verbatim copy, as a share of the exemplar's area (0 < SHARE <= 1; default 0.09,
     /// none with `--scanline`): the last correction pass cuts bigger copied blocks apart.
-    #[arg(long, value_name = "SHARE", value_parser = flags::non_negative)]
+    #[arg(long, value_name = "SHARE", value_parser = flags::share)]
     pub copy_cap: Option<f32>,
     /// Normal maps: weight of the detail channel the coarser levels match in place of z, so that
     /// pores, which averaging cancels, still steer where the output grows from (default 1.5, 0
     /// with `--scanline`; 0 = plain normals).
-    #[arg(long, value_name = "W", value_parser = flags::non_negative)]
+    #[arg(long, value_name = "W", value_parser = weight)]
     pub detail_weight: Option<f32>,
     /// Scale of the robust (Cauchy) distance the coarser levels' correction passes match with, in
     /// the level's typical squared distance per float (default 0.5, 0 with `--scanline`; 0 =
     /// squared L2, as the finest level always is).
-    #[arg(long, value_name = "S", value_parser = flags::non_negative)]
+    #[arg(long, value_name = "S", value_parser = weight)]
     pub robust_scale: Option<f32>,
     /// Occurrence penalty lambda (0 = off; default 0, 4 with `--scanline`).
-    #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
+    #[arg(long, value_name = "LAMBDA", value_parser = weight)]
     pub occurrence_penalty: Option<f32>,
     /// Occurrence penalty of the two coarsest levels, which lay out where in the exemplar the
     /// output grows from, so that it draws on all of it (default 0.05, 0 with `--scanline`; the
     /// larger of it and `--occurrence-penalty` applies there).
-    #[arg(long, value_name = "LAMBDA", value_parser = flags::non_negative)]
+    #[arg(long, value_name = "LAMBDA", value_parser = weight)]
     pub layout_penalty: Option<f32>,
     /// k-coherence search (the default): candidates per source texel (Tong et al. 2002; default
     /// 2, 4 with `--scanline`).
@@ -105,7 +105,7 @@ pub struct Args {
     #[arg(long, default_value_t = 8, value_name = "D", conflicts_with = "exact", value_parser = flags::usize_in(1, 32))]
     pub dims: usize,
     /// Approximate search: tree candidates re-scored in the full neighbourhood space.
-    #[arg(long, default_value_t = 8, value_name = "K", conflicts_with = "exact", value_parser = flags::usize_in(1, usize::MAX))]
+    #[arg(long, default_value_t = 8, value_name = "K", conflicts_with = "exact", value_parser = flags::usize_in(1, skinkit_synth::config::MAX_RERANK))]
     pub rerank: usize,
     /// Exhaustive search over every exemplar neighbourhood (slow; the reference).
     #[arg(long)]
@@ -172,6 +172,12 @@ pub struct ReplayArgs {
 }
 
 /// Parses `WIDTHxHEIGHT` (`512x512`; `X` works too) into two positive sides.
+/// A penalty, weight or scale of the matching: finite, from 0 to the library's
+/// [`skinkit_synth::config::MAX_WEIGHT`].
+fn weight(text: &str) -> Result<f32, String> {
+    flags::f32_in(0.0, skinkit_synth::config::MAX_WEIGHT, "a weight")(text)
+}
+
 pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
     let bad = || format!("`{text}` is not a size: expected WIDTHxHEIGHT with positive integers, e.g. 512x512");
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
