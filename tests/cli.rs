@@ -9,6 +9,9 @@ use std::process::Output;
 mod gate_cli;
 #[path = "height_cli.rs"]
 mod height_cli;
+#[cfg(unix)]
+#[path = "probe2_cli.rs"]
+mod probe2_cli;
 #[path = "support/mod.rs"]
 mod support;
 use support::{mold, skinkit, stderr};
