@@ -49,6 +49,10 @@ pub const MAX_TEXELS: usize = limits::MAX_MAP_TEXELS as usize;
 /// on a small map), so a few thousand would run for hours; a face has about ten.
 pub const MAX_REGIONS: usize = 256;
 
+/// What a layout without `mm_per_texel` is told.
+const MISSING_MM_PER_TEXEL: &str =
+    "missing: the physical size of one map texel, in millimetres (pores are grown at this scale)";
+
 /// Where a region's exemplar comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ExemplarSource {
@@ -100,7 +104,9 @@ pub struct Layout {
 #[serde(deny_unknown_fields)]
 struct RawLayout {
     size: Option<[i64; 2]>,
-    mm_per_texel: f64,
+    /// Optional here so that its absence is named as such (serde's "missing field" points at
+    /// line 1, column 1, issue 41).
+    mm_per_texel: Option<f64>,
     coverage: Option<PathBuf>,
     #[serde(default)]
     region: Vec<RawRegion>,
@@ -146,7 +152,8 @@ impl Layout {
             toml::from_str(text).map_err(|e| Error::Toml { origin: origin.to_owned(), message: e.to_string() })?;
         let ctx = Ctx { origin, base: origin.parent().unwrap_or(Path::new("")) };
         let [width, height] = ctx.size(raw.size)?;
-        ctx.positive("mm_per_texel", raw.mm_per_texel)?;
+        let mm_per_texel = raw.mm_per_texel.ok_or_else(|| ctx.err("mm_per_texel", MISSING_MM_PER_TEXEL.into()))?;
+        ctx.positive("mm_per_texel", mm_per_texel)?;
         if raw.region.is_empty() {
             return Err(ctx.err("region", "the layout has no [[region]] entries".into()));
         }
@@ -160,7 +167,7 @@ impl Layout {
             origin: origin.to_owned(),
             width,
             height,
-            mm_per_texel: raw.mm_per_texel,
+            mm_per_texel,
             coverage: raw.coverage.map(|p| ctx.base.join(p)),
             regions,
         };

@@ -143,6 +143,8 @@ fn refusals_name_the_file_and_the_field() {
             "unknown field `pointz`",
         ),
         ("mm_per_texel = \n".into(), "line 1"),
+        // Issue 41: a missing scale is named, not "TOML parse error at line 1, column 1".
+        (format!("size = [64, 32]\n{REGION}"), "mm_per_texel: missing: the physical size of one map texel"),
     ];
     for (text, expected) in cases {
         let msg = error(&text);
