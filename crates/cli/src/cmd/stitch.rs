@@ -64,6 +64,15 @@ pub struct StitchOptions {
     /// The default since the upsampled start became it; accepted so older scripts still run.
     #[arg(long, hide = true, conflicts_with = "scanline")]
     pub upsampled: bool,
+    /// The user's own head mesh (.obj, .gltf, .glb; overrides the layout's `mesh`): seed points
+    /// may be 3-D `positions` on it, and each region's mm per texel is measured from its surface
+    /// area against its UV area.
+    #[arg(long, value_name = "FILE")]
+    pub mesh: Option<PathBuf>,
+    /// Millimetres per mesh unit (overrides the layout's `mm_per_unit`): 10 for centimetres,
+    /// 1000 for metres.
+    #[arg(long, value_name = "MM", value_parser = flags::positive_mm)]
+    pub mm_per_unit: Option<f64>,
 }
 
 impl StitchOptions {
@@ -81,6 +90,8 @@ impl StitchOptions {
             seam_band: 4,
             scanline: false,
             upsampled: false,
+            mesh: None,
+            mm_per_unit: None,
         }
     }
 }
@@ -331,6 +342,8 @@ pub fn build(
     if let Some((w, h)) = options.size {
         layout = layout.with_size(w, h)?;
     }
+    layout = on_mesh(layout, options, out)?;
+    layout.check_placed()?;
     let amplitude = if options.straight {
         0.0
     } else {
@@ -369,6 +382,31 @@ pub fn build(
         out.note(format!("regions {}: {message}", names.join(", ")));
     }
     Ok(Face { layout, exemplars, composed, amplitude, seconds_exemplars })
+}
+
+/// The layout on its mesh (`--mesh`, else the layout's `mesh`), if it has one: loaded with the
+/// renderer's loaders (OBJ's v flipped to the map's rows, split corners welded), scaled by
+/// `--mm-per-unit` or the layout's `mm_per_unit`.
+fn on_mesh(layout: Layout, options: &StitchOptions, out: &Output) -> Result<Layout> {
+    let Some(path) = options.mesh.clone().or_else(|| layout.mesh.clone()) else { return Ok(layout) };
+    let Some(mm_per_unit) = options.mm_per_unit.or(layout.mm_per_unit) else {
+        bail!(
+            "{}: mm_per_unit: missing: how long one unit of {} is, in millimetres (1 for mm, 10 for cm, \
+             1000 for metres); give `mm_per_unit` in the layout or --mm-per-unit",
+            layout.origin.display(),
+            path.display()
+        );
+    };
+    let loaded = skinkit_render::mesh::Mesh::load(&path)?;
+    for w in &loaded.warnings {
+        out.note(w.clone());
+    }
+    let m = &loaded.mesh;
+    let positions: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
+    let uvs: Vec<[f32; 2]> = m.uvs.iter().map(|t| t.to_array()).collect();
+    let name = path.display().to_string();
+    let surface = skinkit_stitch::surface::Surface::new(&name, &positions, &uvs, &m.indices, mm_per_unit)?;
+    Ok(layout.on_surface(surface)?)
 }
 
 /// Each region's exemplar: a normal map read from disk, or a session captured (once per folder).
