@@ -66,3 +66,31 @@ fn the_mesh_flag_and_a_missing_mm_per_unit() {
     let o = skinkit(&["face", "--layout", s(&layout), "--out", s(&out), "--mesh", s(&mesh), "--mm-per-unit", "10"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+#[test]
+fn a_udim_mesh_gets_one_normal_map_per_tile() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut obj = String::new();
+    for k in 0..4 {
+        obj += &format!("v {k} 0 0\nv {} 0 0\nv {} 1 0\nv {k} 1 0\n", k + 1, k + 1);
+        obj += &format!("vt {k} 0\nvt {} 0\nvt {} 1\nvt {k} 1\n", k + 1, k + 1);
+        let b = 4 * k;
+        obj += &format!("f {0}/{0} {1}/{1} {2}/{2} {3}/{3}\n", b + 1, b + 2, b + 3, b + 4);
+    }
+    let layout = layout(tmp.path(), "mesh = \"strip.obj\"\nmm_per_unit = 1.0");
+    std::fs::write(tmp.path().join("strip.obj"), obj).unwrap();
+    let text = std::fs::read_to_string(&layout).unwrap().replace("size = [256, 128]", "size = [32, 32]");
+    let text = text.replace("[[1.5, 0.25, -0.3]]", "[[3.5, 0.5, 0.0]]");
+    std::fs::write(&layout, text).unwrap();
+    let out = tmp.path().join("face");
+    let o = skinkit(&["face", "--layout", s(&layout), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["udim_tiles"], serde_json::json!([1001, 1002, 1003, 1004]));
+    for tile in 1001..=1004 {
+        let png = image::open(out.join(format!("normal.{tile}.png"))).unwrap();
+        assert_eq!((png.width(), png.height()), (32, 32));
+        assert!(out.join(format!("normal.{tile}.exr")).is_file());
+    }
+    assert!(!out.join("normal.png").exists());
+}

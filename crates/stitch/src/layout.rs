@@ -54,6 +54,7 @@ use skinkit_maps::{Grid, limits};
 
 use crate::partition::SeedPoint;
 use crate::surface::Surface;
+use crate::udim::Atlas;
 use crate::{Error, Result};
 
 /// The paper's map size.
@@ -126,6 +127,8 @@ pub struct Layout {
     pub mm_per_unit: Option<f64>,
     /// The mesh the map is laid out on, once [`Layout::on_surface`] placed it.
     pub surface: Option<Arc<Surface>>,
+    /// The mesh's UDIM tiles: the map is their atlas (`width x height` is then the atlas's size).
+    pub atlas: Option<Atlas>,
 }
 
 #[derive(Deserialize)]
@@ -212,6 +215,7 @@ impl Layout {
             mesh: raw.mesh.map(|p| ctx.base.join(p)),
             mm_per_unit: raw.mm_per_unit,
             surface: None,
+            atlas: None,
         };
         if layout.regions.len() > MAX_REGIONS {
             return Err(ctx.err(
@@ -277,20 +281,33 @@ impl Layout {
     /// ratio (each region's own is measured in [`crate::compose()`]).
     ///
     /// # Errors
-    /// [`Error::Layout`] for a point whose UV lies outside the map (UDIM tiles beyond 1001 are
-    /// not laid out yet); [`Error::CoincidentPoints`] as in [`Layout::parse`].
-    pub fn on_surface(&self, surface: Surface) -> Result<Layout> {
+    /// When the mesh's UVs span several UDIM tiles ([`crate::udim`]), the map becomes their atlas:
+    /// `width x height` are then the atlas's, the layout's size one tile's, and UV `points` address
+    /// tile 1001.
+    ///
+    /// # Errors
+    /// [`Error::Layout`] for a position with no nearest UV or an atlas over the size limit;
+    /// UVs outside tiles 1001 to 1999; [`Error::CoincidentPoints`] as in [`Layout::parse`].
+    pub fn on_surface(&self, mut surface: Surface) -> Result<Layout> {
         let mut layout = self.clone();
+        let atlas = Atlas::new(&surface.origin, &surface.uv_centroids(), self.width, self.height)?;
+        if !atlas.is_single_1001() {
+            // Several tiles (or another one): the map becomes their atlas, UVs follow.
+            let [width, height] = Ctx { origin: &self.origin, base: Path::new("") }
+                .size(Some([atlas.size().0 as i64, atlas.size().1 as i64]))
+                .map_err(|e| {
+                    self.err("mesh", format!("{} UDIM tiles of {}x{}: {e}", atlas.tiles.len(), self.width, self.height))
+                })?;
+            (layout.width, layout.height) = (width, height);
+            surface.uvs.iter_mut().for_each(|uv| *uv = atlas.to_atlas(*uv));
+            layout.regions.iter_mut().flat_map(|r| r.points.iter_mut()).for_each(|uv| *uv = atlas.to_atlas(*uv));
+        }
         for r in &mut layout.regions {
             for (i, &p) in r.positions.iter().enumerate() {
                 let uv = surface.nearest_uv(p).filter(|uv| uv.iter().all(|t| (0.0..=1.0).contains(t)));
                 let Some(uv) = uv else {
-                    let message = format!("position {} {p:?} lands outside the map's UVs (0..1)", i + 1);
-                    return Err(Error::Layout {
-                        origin: self.origin.clone(),
-                        field: format!("region `{}`: positions", r.name),
-                        message,
-                    });
+                    let message = format!("position {} {p:?} has no point of the mesh with a UV", i + 1);
+                    return Err(self.err(&format!("region `{}`: positions", r.name), message));
                 };
                 r.points.push(uv);
             }
@@ -298,13 +315,17 @@ impl Layout {
         }
         // One label for the whole map: every triangle counts; on a 1x1 map a texel is the UV square.
         let Some(all) = surface.region_scales(&Grid::filled(1, 1, 0u16), 1)[0] else {
-            let message = "the mesh has no surface area on its UVs: no scale can be measured".into();
-            return Err(Error::Layout { origin: self.origin.clone(), field: "mesh".into(), message });
+            return Err(self.err("mesh", "the mesh has no surface area on its UVs: no scale can be measured".into()));
         };
-        layout.mm_per_texel = all.mm_per_texel / ((self.width * self.height) as f64).sqrt();
+        layout.mm_per_texel = all.mm_per_texel / ((layout.width * layout.height) as f64).sqrt();
         layout.surface = Some(Arc::new(surface));
+        layout.atlas = Some(atlas);
         layout.check_coincident()?;
         Ok(layout)
+    }
+
+    fn err(&self, field: &str, message: String) -> Error {
+        Error::Layout { origin: self.origin.clone(), field: field.into(), message }
     }
 
     /// Refuses 3-D points that no mesh placed ([`Layout::on_surface`]), and a layout with neither

@@ -32,6 +32,8 @@ const MIN_UV_AREA: f64 = 1e-18;
 /// A mesh in millimetres with its UV layout.
 #[derive(Clone, PartialEq)]
 pub struct Surface {
+    /// The mesh file, for messages.
+    pub origin: String,
     /// Vertex positions in mm (mesh units times `mm_per_unit`).
     pub positions_mm: Vec<DVec3>,
     /// Vertex UVs, `v = 0` at the top row.
@@ -100,6 +102,7 @@ impl Surface {
             return bad(format!("vertex {v} has a non-finite position or uv"));
         }
         let surface = Surface {
+            origin: origin.to_owned(),
             positions_mm: positions.iter().map(|p| DVec3::from(p.map(f64::from)) * mm_per_unit).collect(),
             uvs: uvs.iter().map(|t| t.map(f64::from)).collect(),
             triangles: indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
@@ -115,6 +118,17 @@ impl Surface {
     fn uv_area(&self, t: usize) -> f64 {
         let [a, b, c] = self.triangles[t].map(|i| self.uvs[i as usize]);
         0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+    }
+
+    /// The UV centroids of the triangles with UV area (where their texels are).
+    pub fn uv_centroids(&self) -> Vec<[f64; 2]> {
+        (0..self.triangles.len())
+            .filter(|&t| self.uv_area(t) > MIN_UV_AREA)
+            .map(|t| {
+                let [a, b, c] = self.triangles[t].map(|i| self.uvs[i as usize]);
+                [0, 1].map(|k| (a[k] + b[k] + c[k]) / 3.0)
+            })
+            .collect()
     }
 
     /// The UV of the surface point nearest `point` (in mesh units); `None` when it is not finite.

@@ -80,7 +80,62 @@ fn a_point_off_the_map_and_a_missing_scale_are_named() {
     assert!(e.to_string().contains("mm_per_texel: missing"), "{e}");
     let layout = Layout::parse(LAYOUT, Path::new("/v/l.toml")).unwrap();
     let mut off = plane();
-    off.uvs.iter_mut().for_each(|uv| uv[0] += 1.0);
+    off.uvs.iter_mut().for_each(|uv| uv[0] += 20.0);
     let e = layout.on_surface(off).unwrap_err().to_string();
-    assert!(e.contains("region `a`: positions") && e.contains("outside"), "{e}");
+    assert!(e.contains("plane.obj") && e.contains("1001 to 1999"), "{e}");
+}
+
+/// A 4 x 1 strip over UDIM tiles 1001 to 1004: quad k on u in [k, k + 1].
+fn strip() -> Surface {
+    let mut p = Vec::new();
+    let mut uvs = Vec::new();
+    let mut indices = Vec::new();
+    for k in 0..4u32 {
+        let x = k as f32;
+        let base = p.len() as u32;
+        for (dx, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            p.push([x + dx, y, 0.0]);
+            uvs.push([x + dx, 1.0 - y]);
+        }
+        indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
+    }
+    Surface::new("strip.obj", &p, &uvs, &indices, 5.0).unwrap()
+}
+
+#[test]
+fn udim_tiles_are_one_continuous_map() {
+    let text = LAYOUT.replace("size = [64, 32]", "size = [32, 32]").replace("[[0.5, 0.5, 1.0]]", "[[0.5, 0.5, 0.0]]");
+    let text = text.replace("points = [[0.375, 0.5]]", "positions = [[3.5, 0.5, 0.0]]");
+    let placed = Layout::parse(&text, Path::new("/v/l.toml")).unwrap().on_surface(strip()).unwrap();
+    let atlas = placed.atlas.clone().unwrap();
+    assert_eq!(atlas.tiles, vec![1001, 1002, 1003, 1004]);
+    assert_eq!((placed.width, placed.height), (128, 32));
+    // Each tile: 5 x 5 mm on 32 x 32 texels.
+    assert!((placed.mm_per_texel - 5.0 / 32.0).abs() < 1e-9, "{}", placed.mm_per_texel);
+    let ex = vec![SkinParams::forehead(64, 64, 1).generate().unwrap().normals; 2];
+    let options =
+        ComposeOptions { synth: SynthConfig { levels: 2, ..SynthConfig::default() }, ..ComposeOptions::default() };
+    let c = compose(&placed, &ex, &options, &|_| {}).unwrap();
+    let tiles = atlas.split(c.normals.grid()).unwrap();
+    assert_eq!(tiles.iter().map(|t| t.0).collect::<Vec<_>>(), atlas.tiles);
+    // Across a tile boundary neighbouring texels differ as much as neighbours within a tile.
+    let angle = |a: glam::Vec3, b: glam::Vec3| a.angle_between(b) as f64;
+    let column_step = |a: &skinkit_maps::Grid<glam::Vec3>, xa: usize, b: &skinkit_maps::Grid<glam::Vec3>, xb: usize| {
+        (0..32).map(|y| angle(*a.get(xa, y), *b.get(xb, y))).sum::<f64>() / 32.0
+    };
+    let inside: f64 = tiles
+        .iter()
+        .flat_map(|(_, t)| (0..31).map(move |x| (t, x)))
+        .map(|(t, x)| column_step(t, x, t, x + 1))
+        .sum::<f64>()
+        / (4.0 * 31.0);
+    for k in 0..3 {
+        let across = column_step(&tiles[k].1, 31, &tiles[k + 1].1, 0);
+        assert!(
+            across < 1.5 * inside,
+            "tiles {} | {}: {across} rad across against {inside} inside",
+            tiles[k].0,
+            tiles[k + 1].0
+        );
+    }
 }

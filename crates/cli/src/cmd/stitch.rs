@@ -148,6 +148,9 @@ pub struct FaceReport {
     pub start: String,
     pub seed: u64,
     pub regions: Vec<RegionReport>,
+    /// On a mesh over several UDIM tiles: their numbers (one `normal.<tile>.png` each; `width x
+    /// height` and the height files are then the tiles' atlas, side by side, higher v on top).
+    pub udim_tiles: Option<Vec<u32>>,
     /// Regions grown at once: all, or 1 when their estimates do not fit `--memory-limit` together.
     pub regions_at_once: usize,
     pub seams: SeamReport,
@@ -255,17 +258,11 @@ pub fn face_to_dir(
     let face = build(options, cache, out, &|layout: &Layout| check_face_out(dir, layout))?;
     let t = Instant::now();
     let map = &face.composed.normals;
-    let ((png, exr), height) = rayon::join(
-        || {
-            rayon::join(
-                || write_in(&set, dir, "normal.png", |p| encode_map(p, map)),
-                || write_in(&set, dir, "normal.exr", |p| encode_map(p, map)),
-            )
-        },
+    let (normals, height) = rayon::join(
+        || write_normals(&set, dir, &face.layout, map),
         || write_height(&set, dir, map, face.layout.mm_per_texel, &face.composed.labels),
     );
-    png?;
-    exr?;
+    normals?;
     let (height, height_seconds) = height?;
     write_in(&set, dir, "labels.png", |p| encode_labels(p, &face.composed.labels))?;
     for (region, ex) in face.layout.regions.iter().zip(&face.exemplars) {
@@ -277,6 +274,22 @@ pub fn face_to_dir(
     pipeline::write_json_in(&set, "report.json", &dir.join("report.json"), &report)?;
     out.swept(&set.commit().with_context(|| format!("cannot write {}", dir.display()))?);
     Ok(report)
+}
+
+/// The face's normal map as normal.png (16-bit) and normal.exr, or on a mesh over several UDIM
+/// tiles one pair per tile, `normal.<tile>.png` and `.exr` ([`skinkit_stitch::udim`]).
+fn write_normals(set: &OutputSet, dir: &Path, layout: &Layout, map: &NormalMap) -> Result<()> {
+    let Some(atlas) = layout.atlas.as_ref().filter(|a| !a.is_single_1001()) else {
+        write_in(set, dir, "normal.png", |p| encode_map(p, map))?;
+        return write_in(set, dir, "normal.exr", |p| encode_map(p, map));
+    };
+    for (tile, grid) in atlas.split(map.grid())? {
+        let tile_map = NormalMap::from_unit_grid(grid)?;
+        for ext in ["png", "exr"] {
+            write_in(set, dir, &format!("normal.{tile}.{ext}"), |p| encode_map(p, &tile_map))?;
+        }
+    }
+    Ok(())
 }
 
 /// What a face's height files hold: the integration's report and how to load height.png.
@@ -460,6 +473,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
         start: if options.scanline { "scanline" } else { "upsampled" }.to_owned(),
         seed: options.seed,
         regions: c.regions.clone(),
+        udim_tiles: face.layout.atlas.as_ref().filter(|a| !a.is_single_1001()).map(|a| a.tiles.clone()),
         regions_at_once: c.regions_at_once,
         seams: c.seams.clone(),
         seconds: FaceSeconds {
