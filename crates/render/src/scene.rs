@@ -67,6 +67,12 @@ use crate::skin::options::{
 /// Largest output side accepted, in pixels.
 pub const MAX_OUTPUT_SIDE: u32 = 16384;
 
+/// What a scene without `mm_per_unit` is told: the mesh's units are not in the file (OBJ has
+/// none; glTF says metres, but face-mesh exports often are not).
+pub const MISSING_MM_PER_UNIT: &str = "missing: how long one mesh unit is, in millimetres (1 for a \
+     mesh in mm, 10 in cm, 1000 in metres, as glTF and Blender's default are); skinkit cannot tell \
+     from the mesh, and pores, curvature and scattering are sized by it";
+
 /// Errors from reading a scene file.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -263,7 +269,9 @@ impl Scene {
 #[serde(deny_unknown_fields)]
 struct RawScene {
     mesh: PathBuf,
-    mm_per_unit: f32,
+    /// Optional here so that its absence is named as such (serde's "missing field" points at
+    /// line 1, column 1 of the file, issue 41).
+    mm_per_unit: Option<f32>,
     albedo: Option<RawAlbedo>,
     normal_map: Option<RawNormalMap>,
     brdf: Option<RawBrdf>,
@@ -368,7 +376,8 @@ struct Checker<'a> {
 
 impl Checker<'_> {
     fn scene(&self, raw: RawScene, origin: &Path) -> Result<Scene> {
-        let mm_per_unit = self.positive("mm_per_unit", raw.mm_per_unit)?;
+        let mm_per_unit = raw.mm_per_unit.ok_or_else(|| self.invalid("mm_per_unit", MISSING_MM_PER_UNIT))?;
+        let mm_per_unit = self.positive("mm_per_unit", mm_per_unit)?;
         let effects = self.effects(&raw.effects)?;
         let skin = RawSkin {
             preintegrated: raw.preintegrated,

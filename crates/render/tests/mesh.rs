@@ -396,3 +396,76 @@ fn gltf_buffer_uris_that_are_not_files_are_refused() {
         assert!(err.contains(&format!("buffer 0 (uri `{uri}`)")) && err.contains(want), "{uri}: {err}");
     }
 }
+
+/// A 4 x 4 cell patch of the paraboloid z = (x^2 + y^2) / 8 without normals, quads as two
+/// triangles. Cells right of x = 2 take their UVs from a second island (u + 0.5), so the column
+/// x = 2 is a UV seam. `split`: every face corner gets its own `v` and `vt` line, as exporters of
+/// face meshes write them; else vertices are shared.
+fn paraboloid_obj(split: bool) -> String {
+    use std::collections::HashMap;
+    let (mut text, mut faces) = (String::new(), String::new());
+    let (mut vs, mut vts) = (HashMap::new(), HashMap::new());
+    // The OBJ index of `key`'s line: a new line every time when `split`, else the first one.
+    let index = |map: &mut HashMap<(i32, i32, bool), usize>, key, line: String, text: &mut String| {
+        let count = text.lines().filter(|l| l.split(' ').next() == line.split(' ').next()).count();
+        match map.get(&key) {
+            Some(&i) if !split => i,
+            _ => {
+                *text += &line;
+                map.insert(key, count + 1);
+                count + 1
+            }
+        }
+    };
+    for y in 0..4 {
+        for x in 0..4 {
+            let right = x >= 2;
+            let quad = [(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)];
+            let corners: Vec<(usize, usize)> = quad
+                .iter()
+                .map(|&(a, b)| {
+                    let z = f64::from(a * a + b * b) / 8.0;
+                    let v = index(&mut vs, (a, b, false), format!("v {a} {b} {z}\n"), &mut text);
+                    let u = f64::from(a) / 8.0 + if right { 0.5 } else { 0.0 };
+                    let t = index(&mut vts, (a, b, right), format!("vt {u} {}\n", f64::from(b) / 4.0), &mut text);
+                    (v, t)
+                })
+                .collect();
+            for tri in [[0, 1, 2], [0, 2, 3]] {
+                let f: Vec<String> = tri.iter().map(|&k| format!("{}/{}", corners[k].0, corners[k].1)).collect();
+                faces += &format!("f {}\n", f.join(" "));
+            }
+        }
+    }
+    text + &faces
+}
+
+#[test]
+fn a_mesh_split_per_face_corner_is_welded_before_its_normals() {
+    let split = obj(&paraboloid_obj(true)).unwrap().mesh;
+    let shared = obj(&paraboloid_obj(false)).unwrap().mesh;
+    // 25 grid positions plus 5 more on the seam column (its second UV): the same in both.
+    assert_eq!(shared.positions.len(), 30);
+    assert_eq!(split.positions.len(), shared.positions.len());
+    assert_eq!(split.triangle_count(), 32);
+    for (i, p) in split.positions.iter().enumerate() {
+        let j = (0..shared.positions.len())
+            .find(|&j| shared.positions[j] == *p && shared.uvs[j] == split.uvs[i])
+            .unwrap_or_else(|| panic!("{p} {} is not in the shared mesh", split.uvs[i]));
+        let (a, b) = (split.normals[i], shared.normals[j]);
+        assert!(a.angle_between(b) < 1e-5, "{p}: split {a} against shared {b}");
+        // Smooth: the analytic normal of the paraboloid, not a face normal (within the
+        // discretisation of 1-unit cells).
+        let analytic = Vec3::new(-p.x / 4.0, -p.y / 4.0, 1.0).normalize();
+        let interior = (1.0..=3.0).contains(&p.x) && (1.0..=3.0).contains(&p.y);
+        assert!(!interior || a.angle_between(analytic) < 0.05, "{p}: {a} against {analytic}");
+    }
+    // The seam's two copies of a position share one normal.
+    let seam: Vec<usize> = (0..split.positions.len()).filter(|&i| split.positions[i].x == 2.0).collect();
+    assert_eq!(seam.len(), 10);
+    for &i in &seam {
+        let twin = seam.iter().find(|&&j| j != i && split.positions[j] == split.positions[i]).unwrap();
+        assert_ne!(split.uvs[i], split.uvs[*twin]);
+        assert!(split.normals[i].angle_between(split.normals[*twin]) < 1e-6);
+    }
+}

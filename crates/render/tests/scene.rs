@@ -203,6 +203,9 @@ fn bad_values_are_refused_with_file_and_field() {
         "camera[0].up",
     );
     invalid(&MINIMAL.replace("mm_per_unit = 1.0", "mm_per_unit = -1.0"), "mm_per_unit");
+    // Issue 41: named as missing, not "TOML parse error at line 1, column 1".
+    let missing = invalid(&MINIMAL.replace("mm_per_unit = 1.0", ""), "mm_per_unit");
+    assert!(missing.contains("missing") && missing.contains("millimetres") && !missing.contains("line 1"), "{missing}");
     invalid(&MINIMAL.replace("kind = \"directional\"", "kind = \"point\""), "light[0].position");
     invalid(
         &MINIMAL.replace("direction = [0.0, 0.0, 2.0]", "direction = [0.0, 0.0, 2.0]\nintensity = -1.0"),

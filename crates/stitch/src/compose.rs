@@ -30,6 +30,7 @@ use crate::layout::Layout;
 use crate::partition::Partition;
 use crate::seam::{self, SeamReport};
 use crate::spline::{self, Blend, Piece, Rect, SplineConfig};
+use crate::surface::RegionScale;
 use crate::{Error, Result};
 
 /// The most spline levels chosen automatically (a transition about 2^7 texels wide).
@@ -84,8 +85,13 @@ pub struct RegionReport {
     pub texels: usize,
     /// The rectangle synthesised for it (`None`: the region has no texels).
     pub piece: Option<Rect>,
-    /// Exemplar size after resampling to the map's scale.
+    /// Exemplar size after resampling to the region's scale.
     pub exemplar_size: (usize, usize),
+    /// The scale the region was grown at: the layout's, or measured on its mesh.
+    pub mm_per_texel: f64,
+    /// On a mesh: the region's surface and UV areas the scale was measured from (`None` without
+    /// a mesh, or when no triangle with UV area lies in the region: then the whole mesh's).
+    pub mesh_scale: Option<RegionScale>,
     pub seed: u64,
     pub synthesis_seconds: f64,
     pub warnings: Vec<String>,
@@ -152,6 +158,7 @@ pub fn compose(
     let (w, h) = (layout.width, layout.height);
     let mut seconds = ComposeSeconds::default();
     check_memory(layout, options)?;
+    layout.check_placed()?;
 
     let t = Instant::now();
     // The coverage mask first: its size is checked from its header before it is decoded, and
@@ -180,8 +187,9 @@ pub fn compose(
         .collect();
     let levels = spline_levels(&bboxes, options)?;
     let texels: Vec<usize> = partition.areas().iter().map(|a| a.texels).collect();
+    let scales = region_scales(layout, &labels);
     let (grown, regions_at_once) =
-        grow_regions(layout, exemplars, &bboxes, &texels, levels, options, progress, &mut seconds)?;
+        grow_regions(layout, exemplars, &bboxes, &texels, &scales, levels, options, progress, &mut seconds)?;
     let (pieces, reports): (Vec<Piece>, Vec<RegionReport>) = grown.into_iter().unzip();
 
     let t = Instant::now();
@@ -195,6 +203,20 @@ pub fn compose(
     let seams = seam::measure(&labels, normals.grid(), regions, options.seam_band.max(1))?;
     seconds.seams = t.elapsed().as_secs_f64();
     Ok(Composed { normals, labels, levels, regions: reports, seams, seconds, regions_at_once })
+}
+
+/// Each region's scale: measured over its triangles on the layout's mesh (issue 41), else the
+/// layout's `mm_per_texel`.
+fn region_scales(layout: &Layout, labels: &Grid<u16>) -> Vec<(f64, Option<RegionScale>)> {
+    let n = layout.regions.len();
+    match &layout.surface {
+        Some(surface) => surface
+            .region_scales(labels, n)
+            .into_iter()
+            .map(|s| (s.map_or(layout.mm_per_texel, |s| s.mm_per_texel), s))
+            .collect(),
+        None => vec![(layout.mm_per_texel, None); n],
+    }
 }
 
 /// Bytes per face-map texel [`compose`] holds at least at once: the partition's cells and the
@@ -245,6 +267,7 @@ fn grow_regions(
     exemplars: &[NormalMap],
     bboxes: &[Option<Rect>],
     texels: &[usize],
+    scales: &[(f64, Option<RegionScale>)],
     levels: usize,
     options: &ComposeOptions,
     progress: &(dyn Fn(&str) + Sync),
@@ -254,8 +277,8 @@ fn grow_regions(
     // Every resampled size and synthesis estimate is checked before any exemplar is resampled.
     let (sizes, estimates): (Vec<(usize, usize)>, Vec<u64>) = (0..regions)
         .map(|i| {
-            let size = resampled_size(layout, i, exemplars[i].size())?;
-            Ok((size, check_region_synthesis(layout, i, size, bboxes[i], levels, options)?))
+            let size = resampled_size(layout, i, scales[i].0, exemplars[i].size())?;
+            Ok((size, check_region_synthesis(layout, i, scales[i].0, size, bboxes[i], levels, options)?))
         })
         .collect::<Result<Vec<_>>>()?
         .into_iter()
@@ -275,7 +298,7 @@ fn grow_regions(
 
     let t = Instant::now();
     let grow = |i: usize| {
-        let grown = grow_region(layout, i, &resampled[i], bboxes[i], levels, texels[i], options);
+        let grown = grow_region(layout, i, &resampled[i], bboxes[i], levels, texels[i], scales[i], options);
         if let Ok((_, report)) = &grown {
             progress(&report.name);
         }
@@ -292,9 +315,9 @@ fn grow_regions(
 
 /// Region `i`'s exemplar size at the map's scale, refused above
 /// [`limits::MAX_EXEMPLAR_TEXELS`] (the arithmetic in f64, so no size overflows).
-fn resampled_size(layout: &Layout, i: usize, (ew, eh): (usize, usize)) -> Result<(usize, usize)> {
+fn resampled_size(layout: &Layout, i: usize, mm: f64, (ew, eh): (usize, usize)) -> Result<(usize, usize)> {
     let region = &layout.regions[i];
-    let scale = region.exemplar_mm_per_texel / layout.mm_per_texel;
+    let scale = region.exemplar_mm_per_texel / mm;
     let side = |n: usize| (n as f64 * scale).round().max(1.0);
     let (rw, rh) = (side(ew), side(eh));
     // In f64 no product overflows: a huge scale gives a huge (or infinite) count, never a wrap.
@@ -305,12 +328,12 @@ fn resampled_size(layout: &Layout, i: usize, (ew, eh): (usize, usize)) -> Result
             message: format!(
                 "{} mm against the map's {} mm per texel resamples the {ew}x{eh} exemplar to {rw:.0}x{rh:.0} texels, over the limit of {} texels",
                 region.exemplar_mm_per_texel,
-                layout.mm_per_texel,
+                mm,
                 limits::MAX_EXEMPLAR_TEXELS
             ),
         });
     }
-    let size = scaled_size(ew, eh, region.exemplar_mm_per_texel, layout.mm_per_texel);
+    let size = scaled_size(ew, eh, region.exemplar_mm_per_texel, mm);
     debug_assert_eq!(size, (rw as usize, rh as usize));
     Ok(size)
 }
@@ -320,6 +343,7 @@ fn resampled_size(layout: &Layout, i: usize, (ew, eh): (usize, usize)) -> Result
 fn check_region_synthesis(
     layout: &Layout,
     i: usize,
+    mm: f64,
     (rw, rh): (usize, usize),
     bbox: Option<Rect>,
     levels: usize,
@@ -328,12 +352,19 @@ fn check_region_synthesis(
     let Some(bbox) = bbox else { return Ok(0) };
     let rect = spline::piece_rect(bbox, levels, layout.width, layout.height);
     let config = SynthConfig { width: rect.width, height: rect.height, ..options.synth.clone() };
-    let (validated, _) = config.validate(rw, rh).map_err(|e| synthesis_error(layout, i, rect, (rw, rh), e))?;
+    let (validated, _) = config.validate(rw, rh).map_err(|e| synthesis_error(layout, i, mm, rect, (rw, rh), e))?;
     Ok(validated.memory_estimate(rw, rh))
 }
 
 /// Region `i`'s synthesis failure, naming the layout, the region and the sizes.
-fn synthesis_error(layout: &Layout, i: usize, rect: Rect, (ew, eh): (usize, usize), e: skinkit_synth::Error) -> Error {
+fn synthesis_error(
+    layout: &Layout,
+    i: usize,
+    mm: f64,
+    rect: Rect,
+    (ew, eh): (usize, usize),
+    e: skinkit_synth::Error,
+) -> Error {
     let region = &layout.regions[i];
     Error::InvalidParameter(format!(
         "{}: region `{}`: cannot synthesise {}x{} from its {ew}x{eh} exemplar (after resampling to {} mm per texel; exemplar_mm_per_texel = {}): {e}",
@@ -341,12 +372,13 @@ fn synthesis_error(layout: &Layout, i: usize, rect: Rect, (ew, eh): (usize, usiz
         region.name,
         rect.width,
         rect.height,
-        layout.mm_per_texel,
+        mm,
         region.exemplar_mm_per_texel
     ))
 }
 
 /// Synthesises region `i` over its piece rectangle (an empty piece for a region without texels).
+#[allow(clippy::too_many_arguments)] // the region, its inputs and its scale, by name
 fn grow_region(
     layout: &Layout,
     i: usize,
@@ -354,6 +386,7 @@ fn grow_region(
     bbox: Option<Rect>,
     levels: usize,
     texels: usize,
+    (mm_per_texel, mesh_scale): (f64, Option<RegionScale>),
     options: &ComposeOptions,
 ) -> Result<(Piece, RegionReport)> {
     let region = &layout.regions[i];
@@ -363,6 +396,8 @@ fn grow_region(
         texels,
         piece: None,
         exemplar_size: exemplar.size(),
+        mm_per_texel,
+        mesh_scale,
         seed,
         synthesis_seconds: 0.0,
         warnings: Vec::new(),
@@ -374,7 +409,7 @@ fn grow_region(
     let t = Instant::now();
     let config = SynthConfig { width: rect.width, height: rect.height, seed, ..options.synth.clone() };
     let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {})
-        .map_err(|e| synthesis_error(layout, i, rect, exemplar.size(), e))?;
+        .map_err(|e| synthesis_error(layout, i, mm_per_texel, rect, exemplar.size(), e))?;
     report.synthesis_seconds = t.elapsed().as_secs_f64();
     report.warnings = grown.warnings;
     report.piece = Some(rect);

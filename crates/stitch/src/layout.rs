@@ -25,18 +25,36 @@
 //! Pixel points are stored as the UV of their texel's centre, so [`Layout::with_size`] moves them
 //! with the map.
 //!
+//! On the user's own mesh (issue 41), the layout names it and its scale, and `mm_per_texel` is
+//! measured per region from the mesh instead ([`crate::surface`]); seed points may then also be
+//! 3-D points on the mesh, in mesh units as picked in Blender:
+//!
+//! ```toml
+//! mesh = "head.obj"                  # or .glb/.gltf; `skinkit face --mesh` overrides it
+//! mm_per_unit = 10.0                 # mesh units are centimetres
+//!
+//! [[region]]
+//! name = "cheek"
+//! exemplar = "cheek.png"
+//! exemplar_mm_per_texel = 0.02
+//! positions = [[4.1, 2.3, 8.0]]      # nearest surface point, through its triangle's UVs
+//! ```
+//!
 //! Relative paths are resolved against the layout file's folder. Parsing checks everything that
 //! needs no file system (sizes, scales, names, points); [`Layout::check_exemplars`] checks that
 //! the named exemplars exist, and [`Layout::load`] does both.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::Deserialize;
 use skinkit_maps::io::{Limits, read_scalar_map};
 use skinkit_maps::{Grid, limits};
 
 use crate::partition::SeedPoint;
+use crate::surface::Surface;
+use crate::udim::Atlas;
 use crate::{Error, Result};
 
 /// The paper's map size.
@@ -48,6 +66,11 @@ pub const MAX_TEXELS: usize = limits::MAX_MAP_TEXELS as usize;
 /// Most regions a layout may have. Each region is grown over its own box (about a second each
 /// on a small map), so a few thousand would run for hours; a face has about ten.
 pub const MAX_REGIONS: usize = 256;
+
+/// What a layout without `mm_per_texel` is told.
+const MISSING_MM_PER_TEXEL: &str = "missing: the physical size of one map texel, in millimetres (pores are \
+     grown at this scale); or name the mesh the map goes on (`mesh` and `mm_per_unit`, or `skinkit face \
+     --mesh`) to measure it per region";
 
 /// Where a region's exemplar comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -76,8 +99,11 @@ pub struct Region {
     pub exemplar: ExemplarSource,
     /// Physical size of an exemplar texel; exemplars are resampled to the map's scale.
     pub exemplar_mm_per_texel: f64,
-    /// Seed points as UV, `v = 0` at the top row (pixel points converted to their texel centre).
+    /// Seed points as UV, `v = 0` at the top row (pixel points converted to their texel centre;
+    /// 3-D points appended by [`Layout::on_surface`]).
     pub points: Vec<[f64; 2]>,
+    /// Seed points on the mesh, in mesh units, not yet mapped to UV.
+    pub positions: Vec<[f64; 3]>,
     /// Synthesis seed of the region, if the layout fixes one.
     pub seed: Option<u64>,
 }
@@ -89,19 +115,32 @@ pub struct Layout {
     pub origin: PathBuf,
     pub width: usize,
     pub height: usize,
-    /// Physical size of a map texel.
+    /// Physical size of a map texel: the layout's, or on a mesh the whole mesh's area ratio (0
+    /// until [`Layout::on_surface`] measures it; each region's own is measured in `compose`).
     pub mm_per_texel: f64,
     /// Optional coverage mask (resolved path).
     pub coverage: Option<PathBuf>,
     pub regions: Vec<Region>,
+    /// The user's mesh (resolved path), if the layout names one.
+    pub mesh: Option<PathBuf>,
+    /// Millimetres per mesh unit, if the layout gives it.
+    pub mm_per_unit: Option<f64>,
+    /// The mesh the map is laid out on, once [`Layout::on_surface`] placed it.
+    pub surface: Option<Arc<Surface>>,
+    /// The mesh's UDIM tiles: the map is their atlas (`width x height` is then the atlas's size).
+    pub atlas: Option<Atlas>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawLayout {
     size: Option<[i64; 2]>,
-    mm_per_texel: f64,
+    /// Optional here so that its absence is named as such (serde's "missing field" points at
+    /// line 1, column 1, issue 41).
+    mm_per_texel: Option<f64>,
     coverage: Option<PathBuf>,
+    mesh: Option<PathBuf>,
+    mm_per_unit: Option<f64>,
     #[serde(default)]
     region: Vec<RawRegion>,
 }
@@ -117,6 +156,8 @@ struct RawRegion {
     points: Vec<[f64; 2]>,
     #[serde(default)]
     pixels: Vec<[i64; 2]>,
+    #[serde(default)]
+    positions: Vec<[f64; 3]>,
     seed: Option<u64>,
 }
 
@@ -146,7 +187,15 @@ impl Layout {
             toml::from_str(text).map_err(|e| Error::Toml { origin: origin.to_owned(), message: e.to_string() })?;
         let ctx = Ctx { origin, base: origin.parent().unwrap_or(Path::new("")) };
         let [width, height] = ctx.size(raw.size)?;
-        ctx.positive("mm_per_texel", raw.mm_per_texel)?;
+        // On a mesh the scale is measured, so `mm_per_texel` may be left out (0 until then; the
+        // mesh may come from `skinkit face --mesh`, so its absence is refused by `check_placed`).
+        let mm_per_texel = match raw.mm_per_texel {
+            Some(mm) => ctx.positive("mm_per_texel", mm).map(|()| mm)?,
+            None => 0.0,
+        };
+        if let Some(mm) = raw.mm_per_unit {
+            ctx.positive("mm_per_unit", mm)?;
+        }
         if raw.region.is_empty() {
             return Err(ctx.err("region", "the layout has no [[region]] entries".into()));
         }
@@ -160,9 +209,13 @@ impl Layout {
             origin: origin.to_owned(),
             width,
             height,
-            mm_per_texel: raw.mm_per_texel,
+            mm_per_texel,
             coverage: raw.coverage.map(|p| ctx.base.join(p)),
             regions,
+            mesh: raw.mesh.map(|p| ctx.base.join(p)),
+            mm_per_unit: raw.mm_per_unit,
+            surface: None,
+            atlas: None,
         };
         if layout.regions.len() > MAX_REGIONS {
             return Err(ctx.err(
@@ -223,6 +276,77 @@ impl Layout {
         Ok(layout)
     }
 
+    /// The layout on `surface`: every region's 3-D `positions` mapped to the UV of their nearest
+    /// surface point and added to its points, and `mm_per_texel` set to the whole mesh's area
+    /// ratio (each region's own is measured in [`crate::compose()`]).
+    ///
+    /// # Errors
+    /// When the mesh's UVs span several UDIM tiles ([`crate::udim`]), the map becomes their atlas:
+    /// `width x height` are then the atlas's, the layout's size one tile's, and UV `points` address
+    /// tile 1001.
+    ///
+    /// # Errors
+    /// [`Error::Layout`] for a position with no nearest UV or an atlas over the size limit;
+    /// UVs outside tiles 1001 to 1999; [`Error::CoincidentPoints`] as in [`Layout::parse`].
+    pub fn on_surface(&self, mut surface: Surface) -> Result<Layout> {
+        let mut layout = self.clone();
+        let atlas = Atlas::new(&surface.origin, &surface.uv_centroids(), self.width, self.height)?;
+        if !atlas.is_single_1001() {
+            // Several tiles (or another one): the map becomes their atlas, UVs follow.
+            let [width, height] = Ctx { origin: &self.origin, base: Path::new("") }
+                .size(Some([atlas.size().0 as i64, atlas.size().1 as i64]))
+                .map_err(|e| {
+                    self.err("mesh", format!("{} UDIM tiles of {}x{}: {e}", atlas.tiles.len(), self.width, self.height))
+                })?;
+            (layout.width, layout.height) = (width, height);
+            surface.uvs.iter_mut().for_each(|uv| *uv = atlas.to_atlas(*uv));
+            layout.regions.iter_mut().flat_map(|r| r.points.iter_mut()).for_each(|uv| *uv = atlas.to_atlas(*uv));
+        }
+        for r in &mut layout.regions {
+            for (i, &p) in r.positions.iter().enumerate() {
+                let uv = surface.nearest_uv(p).filter(|uv| uv.iter().all(|t| (0.0..=1.0).contains(t)));
+                let Some(uv) = uv else {
+                    let message = format!("position {} {p:?} has no point of the mesh with a UV", i + 1);
+                    return Err(self.err(&format!("region `{}`: positions", r.name), message));
+                };
+                r.points.push(uv);
+            }
+            r.positions.clear();
+        }
+        // One label for the whole map: every triangle counts; on a 1x1 map a texel is the UV square.
+        let Some(all) = surface.region_scales(&Grid::filled(1, 1, 0u16), 1)[0] else {
+            return Err(self.err("mesh", "the mesh has no surface area on its UVs: no scale can be measured".into()));
+        };
+        layout.mm_per_texel = all.mm_per_texel / ((layout.width * layout.height) as f64).sqrt();
+        layout.surface = Some(Arc::new(surface));
+        layout.atlas = Some(atlas);
+        layout.check_coincident()?;
+        Ok(layout)
+    }
+
+    fn err(&self, field: &str, message: String) -> Error {
+        Error::Layout { origin: self.origin.clone(), field: field.into(), message }
+    }
+
+    /// Refuses 3-D points that no mesh placed ([`Layout::on_surface`]), and a layout with neither
+    /// `mm_per_texel` nor a mesh to measure it on.
+    ///
+    /// # Errors
+    /// [`Error::Layout`] naming the region or `mm_per_texel`.
+    pub fn check_placed(&self) -> Result<()> {
+        if let Some(r) = self.regions.iter().find(|r| !r.positions.is_empty()) {
+            let message =
+                "3-D points need the mesh they lie on: give `mesh` and `mm_per_unit`, or `skinkit face --mesh`";
+            let field = format!("region `{}`: positions", r.name);
+            return Err(Error::Layout { origin: self.origin.clone(), field, message: message.into() });
+        }
+        if self.surface.is_none() && self.mm_per_texel <= 0.0 {
+            let (origin, message) = (self.origin.clone(), MISSING_MM_PER_TEXEL.into());
+            return Err(Error::Layout { origin, field: "mm_per_texel".into(), message });
+        }
+        Ok(())
+    }
+
     /// The seed points as texels, in layout order (region by region, point by point).
     pub fn seed_points(&self) -> Vec<SeedPoint> {
         self.regions
@@ -250,8 +374,11 @@ impl Layout {
             ExemplarSource::NormalMap(p) => Some(p.clone()),
             ExemplarSource::Session(_) => None,
         });
-        let mut files: Vec<PathBuf> =
-            std::iter::once(self.origin.clone()).chain(self.coverage.clone()).chain(exemplars).collect();
+        let mut files: Vec<PathBuf> = std::iter::once(self.origin.clone())
+            .chain(self.coverage.clone())
+            .chain(self.mesh.clone())
+            .chain(exemplars)
+            .collect();
         files.sort();
         files.dedup();
         files
@@ -395,14 +522,19 @@ impl Ctx<'_> {
             }
             points.push(texel_to_uv(x as u32, y as u32, width, height));
         }
-        if points.is_empty() {
-            return Err(self.err(&field("points"), "no seed points: give `points` (UV) or `pixels`".into()));
+        if let Some(i) = raw.positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+            return Err(self.err(&field("positions"), format!("position {} is not finite", i + 1)));
+        }
+        if points.is_empty() && raw.positions.is_empty() {
+            let message = "no seed points: give `points` (UV), `pixels` or `positions` (3-D, on a mesh)";
+            return Err(self.err(&field("points"), message.into()));
         }
         Ok(Region {
             name: raw.name,
             exemplar,
             exemplar_mm_per_texel: raw.exemplar_mm_per_texel,
             points,
+            positions: raw.positions,
             seed: raw.seed,
         })
     }

@@ -13,6 +13,8 @@ pub mod layout;
 pub mod partition;
 pub mod seam;
 pub mod spline;
+pub mod surface;
+pub mod udim;
 
 pub use compose::{ComposeOptions, Composed, compose};
 pub use error::{Error, Result};

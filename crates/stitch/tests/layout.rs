@@ -90,6 +90,18 @@ fn with_size_keeps_the_face_and_rescales_the_map() {
 }
 
 #[test]
+fn a_missing_scale_is_named_not_a_parse_error() {
+    // Issue 41: not "TOML parse error at line 1, column 1"; refused once it is clear no mesh
+    // (from the layout or `face --mesh`) will measure it.
+    let l = parse(&format!("size = [64, 32]\n{REGION}")).unwrap();
+    let msg = l.check_placed().unwrap_err().to_string();
+    assert!(
+        msg.contains("mm_per_texel: missing: the physical size of one map texel") && !msg.contains("line 1"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn refusals_name_the_file_and_the_field() {
     let cases: Vec<(String, &str)> = vec![
         ("mm_per_texel = 0.05\n".into(), "region: the layout has no [[region]] entries"),

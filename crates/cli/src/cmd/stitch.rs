@@ -64,6 +64,15 @@ pub struct StitchOptions {
     /// The default since the upsampled start became it; accepted so older scripts still run.
     #[arg(long, hide = true, conflicts_with = "scanline")]
     pub upsampled: bool,
+    /// The user's own head mesh (.obj, .gltf, .glb; overrides the layout's `mesh`): seed points
+    /// may be 3-D `positions` on it, and each region's mm per texel is measured from its surface
+    /// area against its UV area.
+    #[arg(long, value_name = "FILE")]
+    pub mesh: Option<PathBuf>,
+    /// Millimetres per mesh unit (overrides the layout's `mm_per_unit`): 10 for centimetres,
+    /// 1000 for metres.
+    #[arg(long, value_name = "MM", value_parser = flags::positive_mm)]
+    pub mm_per_unit: Option<f64>,
 }
 
 impl StitchOptions {
@@ -81,6 +90,8 @@ impl StitchOptions {
             seam_band: 4,
             scanline: false,
             upsampled: false,
+            mesh: None,
+            mm_per_unit: None,
         }
     }
 }
@@ -137,6 +148,9 @@ pub struct FaceReport {
     pub start: String,
     pub seed: u64,
     pub regions: Vec<RegionReport>,
+    /// On a mesh over several UDIM tiles: their numbers (one `normal.<tile>.png` each; `width x
+    /// height` and the height files are then the tiles' atlas, side by side, higher v on top).
+    pub udim_tiles: Option<Vec<u32>>,
     /// Regions grown at once: all, or 1 when their estimates do not fit `--memory-limit` together.
     pub regions_at_once: usize,
     pub seams: SeamReport,
@@ -244,17 +258,11 @@ pub fn face_to_dir(
     let face = build(options, cache, out, &|layout: &Layout| check_face_out(dir, layout))?;
     let t = Instant::now();
     let map = &face.composed.normals;
-    let ((png, exr), height) = rayon::join(
-        || {
-            rayon::join(
-                || write_in(&set, dir, "normal.png", |p| encode_map(p, map)),
-                || write_in(&set, dir, "normal.exr", |p| encode_map(p, map)),
-            )
-        },
+    let (normals, height) = rayon::join(
+        || write_normals(&set, dir, &face.layout, map),
         || write_height(&set, dir, map, face.layout.mm_per_texel, &face.composed.labels),
     );
-    png?;
-    exr?;
+    normals?;
     let (height, height_seconds) = height?;
     write_in(&set, dir, "labels.png", |p| encode_labels(p, &face.composed.labels))?;
     for (region, ex) in face.layout.regions.iter().zip(&face.exemplars) {
@@ -266,6 +274,22 @@ pub fn face_to_dir(
     pipeline::write_json_in(&set, "report.json", &dir.join("report.json"), &report)?;
     out.swept(&set.commit().with_context(|| format!("cannot write {}", dir.display()))?);
     Ok(report)
+}
+
+/// The face's normal map as normal.png (16-bit) and normal.exr, or on a mesh over several UDIM
+/// tiles one pair per tile, `normal.<tile>.png` and `.exr` ([`skinkit_stitch::udim`]).
+fn write_normals(set: &OutputSet, dir: &Path, layout: &Layout, map: &NormalMap) -> Result<()> {
+    let Some(atlas) = layout.atlas.as_ref().filter(|a| !a.is_single_1001()) else {
+        write_in(set, dir, "normal.png", |p| encode_map(p, map))?;
+        return write_in(set, dir, "normal.exr", |p| encode_map(p, map));
+    };
+    for (tile, grid) in atlas.split(map.grid())? {
+        let tile_map = NormalMap::from_unit_grid(grid)?;
+        for ext in ["png", "exr"] {
+            write_in(set, dir, &format!("normal.{tile}.{ext}"), |p| encode_map(p, &tile_map))?;
+        }
+    }
+    Ok(())
 }
 
 /// What a face's height files hold: the integration's report and how to load height.png.
@@ -331,6 +355,8 @@ pub fn build(
     if let Some((w, h)) = options.size {
         layout = layout.with_size(w, h)?;
     }
+    layout = on_mesh(layout, options, out)?;
+    layout.check_placed()?;
     let amplitude = if options.straight {
         0.0
     } else {
@@ -369,6 +395,31 @@ pub fn build(
         out.note(format!("regions {}: {message}", names.join(", ")));
     }
     Ok(Face { layout, exemplars, composed, amplitude, seconds_exemplars })
+}
+
+/// The layout on its mesh (`--mesh`, else the layout's `mesh`), if it has one: loaded with the
+/// renderer's loaders (OBJ's v flipped to the map's rows, split corners welded), scaled by
+/// `--mm-per-unit` or the layout's `mm_per_unit`.
+fn on_mesh(layout: Layout, options: &StitchOptions, out: &Output) -> Result<Layout> {
+    let Some(path) = options.mesh.clone().or_else(|| layout.mesh.clone()) else { return Ok(layout) };
+    let Some(mm_per_unit) = options.mm_per_unit.or(layout.mm_per_unit) else {
+        bail!(
+            "{}: mm_per_unit: missing: how long one unit of {} is, in millimetres (1 for mm, 10 for cm, \
+             1000 for metres); give `mm_per_unit` in the layout or --mm-per-unit",
+            layout.origin.display(),
+            path.display()
+        );
+    };
+    let loaded = skinkit_render::mesh::Mesh::load(&path)?;
+    for w in &loaded.warnings {
+        out.note(w.clone());
+    }
+    let m = &loaded.mesh;
+    let positions: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
+    let uvs: Vec<[f32; 2]> = m.uvs.iter().map(|t| t.to_array()).collect();
+    let name = path.display().to_string();
+    let surface = skinkit_stitch::surface::Surface::new(&name, &positions, &uvs, &m.indices, mm_per_unit)?;
+    Ok(layout.on_surface(surface)?)
 }
 
 /// Each region's exemplar: a normal map read from disk, or a session captured (once per folder).
@@ -422,6 +473,7 @@ fn report(options: &StitchOptions, face: &Face, out: &Path, write: f64, start: I
         start: if options.scanline { "scanline" } else { "upsampled" }.to_owned(),
         seed: options.seed,
         regions: c.regions.clone(),
+        udim_tiles: face.layout.atlas.as_ref().filter(|a| !a.is_single_1001()).map(|a| a.tiles.clone()),
         regions_at_once: c.regions_at_once,
         seams: c.seams.clone(),
         seconds: FaceSeconds {

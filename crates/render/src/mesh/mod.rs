@@ -4,7 +4,9 @@
 //! Haro et al. 2001 (section 5) render a low-poly face mesh whose texture coordinates address the
 //! grown normal map, so a mesh without UVs cannot be rendered with fine-scale structure: loading
 //! one is an error naming the file. A mesh without normals gets area-weighted vertex normals,
-//! with a note in [`LoadedMesh::warnings`].
+//! with a note in [`LoadedMesh::warnings`]; its vertices are welded first ([`weld`]: a glTF
+//! without indices or normals, split per face corner, would otherwise shade faceted), and
+//! vertices at one position share one normal, across UV seams too.
 //!
 //! # UV convention
 //! skinkit puts `v = 0` at the TOP row of an image (as glTF and wgpu textures do; maps are stored
@@ -21,6 +23,7 @@
 //! - a vertex that no triangle with area touches gets the normal +z (deterministic, finite).
 
 pub(crate) mod source;
+pub mod weld;
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -372,15 +375,26 @@ impl Builder {
             return Err(MeshError::Empty { file: self.file });
         }
         check_finite(&self.file, "position", self.mesh.positions.iter().map(|p| p.to_array().to_vec()))?;
+        self.weld_split_vertices();
         self.repair_normals();
         self.mesh.check(&self.file)?;
         Ok(LoadedMesh { mesh: self.mesh, warnings: self.warnings })
     }
 
-    /// Fills in missing normals and replaces zero or non-finite ones (loaded normals are
-    /// renormalised).
+    /// Merges the vertices without a normal from the file that share a position and a UV
+    /// ([`Mesh::weld`]); vertices with the file's normals are left as the file has them.
+    fn weld_split_vertices(&mut self) {
+        let mergeable: Vec<bool> = self.has_normal.iter().map(|&h| !h).collect();
+        if mergeable.contains(&true) {
+            let old = self.mesh.weld(&mergeable);
+            self.has_normal = old.iter().map(|&o| self.has_normal[o]).collect();
+        }
+    }
+
+    /// Fills in missing normals (smooth over equal positions, [`Mesh::smooth_normals`]) and
+    /// replaces zero or non-finite ones (loaded normals are renormalised).
     fn repair_normals(&mut self) {
-        let computed = self.mesh.area_weighted_normals();
+        let computed = self.mesh.smooth_normals();
         let mut repaired = 0usize;
         for (i, n) in self.mesh.normals.iter_mut().enumerate() {
             match n.try_normalize() {
