@@ -85,3 +85,11 @@ probe "D6 layout at the size limit" --memory-limit 8G stitch --layout "$work/d6-
 probe "D8 --threads 100000" --threads 100000 rig check calibration/turntable-8.toml
 probe "D9 8 photos of 16384^2, limit 4G" --memory-limit 4G capture --rig calibration/turntable-8.toml \
   --out "$work/cap" "$work"/stack/0{1..8}.png
+# The second probe's D11: an orbit's memory must not grow with its frames (a Vulkan driver is
+# needed: lavapipe here).
+source scripts/lavapipe.sh
+mkdir -p "$work/orbit"
+probe "probe 2 D11 orbit, 100 frames at 8x8" render samples/scenes/head-smooth.toml --out "$work/orbit/o.png" \
+  --orbit --frames 100 --size 8x8 --quiet
+probe "probe 2 D11 orbit, 3600 frames at 8x8" render samples/scenes/head-smooth.toml --out "$work/orbit/o.png" \
+  --orbit --frames 3600 --size 8x8 --quiet

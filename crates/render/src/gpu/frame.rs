@@ -110,7 +110,7 @@ impl Gpu {
         let uniforms = self.buffer(
             "base pass globals",
             bytemuck::bytes_of(&globals),
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let textures = self.skin_textures(inputs, skin);
         let shadow = skin.shadow.as_ref().map(|s| self.shadow_resources(s, &textures, &uniforms));

@@ -54,7 +54,12 @@ struct Globals {
     light_map: LightMapUniforms,
 }
 
-@group(0) @binding(0) var<uniform> globals: Globals;
+// A read-only storage buffer, not a uniform one: lavapipe (Mesa 22.3) inlines the values of a
+// uniform buffer that control branches and loops into the shader, so every frame whose camera
+// changed the buffer compiled the vertex shader again with LLVM (most of a frame's time) and kept
+// each copy until the device went away (0.3 MiB a frame). Storage reads are never inlined; the
+// layout of `Globals` is the same in both address spaces.
+@group(0) @binding(0) var<storage, read> globals: Globals;
 @group(0) @binding(1) var normal_map: texture_2d<f32>;
 @group(0) @binding(2) var albedo_map: texture_2d<f32>;
 @group(0) @binding(3) var map_sampler: sampler;
