@@ -3,29 +3,9 @@
 //! limit (D9, D10); folder entries that are skipped are named (D17).
 
 use std::path::{Path, PathBuf};
-use std::process::{Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
 
-use super::support::{bin, mold, s, stderr};
-
-/// Runs the binary and fails the test when it has not ended after `seconds` (a hang, D10).
-fn run_within(seconds: u64, args: &[&str]) -> Output {
-    let mut child = bin().args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("skinkit runs");
-    let start = Instant::now();
-    while child.try_wait().expect("the child can be waited on").is_none() {
-        if start.elapsed() > Duration::from_secs(seconds) {
-            child.kill().ok();
-            panic!("skinkit {} still running after {seconds} s", args.join(" "));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().expect("its output")
-}
-
-fn mkfifo(path: &Path) {
-    let made = std::process::Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
-    assert!(made.success(), "mkfifo {}", path.display());
-}
+use super::support::{mkfifo, mold, run_within, s, stderr};
 
 fn refused(o: &Output, wants: &[&str]) {
     let e = stderr(o);
@@ -61,19 +41,19 @@ fn d9_a_huge_rig_is_refused_before_it_is_read() {
     let tmp = tempfile::tempdir().unwrap();
     let rig = tmp.path().join("d9.toml");
     std::fs::File::create(&rig).unwrap().set_len(3 << 30).unwrap();
-    let o = run_within(20, &["rig", "check", s(&rig)]);
+    let o = run_within(20, None, &["rig", "check", s(&rig)]);
     refused(&o, &["d9.toml: 3221225472 bytes is over the limit for a TOML file of 16 MiB"]);
 }
 
 /// D9: `/dev/zero` as a rig, or as a scene's mesh, is a device: refused without reading it.
 #[test]
 fn d9_dev_zero_as_rig_or_mesh_is_refused() {
-    let o = run_within(20, &["rig", "check", "/dev/zero"]);
+    let o = run_within(20, None, &["rig", "check", "/dev/zero"]);
     refused(&o, &["/dev/zero: a device, not a regular file (a TOML file is read only from a regular file)"]);
     let tmp = tempfile::tempdir().unwrap();
     std::os::unix::fs::symlink("/dev/zero", tmp.path().join("zero.obj")).unwrap();
     let scene = scene(tmp.path(), "zero.obj");
-    let o = run_within(20, &["export", "gltf", "--scene", s(&scene), "--out", s(&tmp.path().join("o.glb"))]);
+    let o = run_within(20, None, &["export", "gltf", "--scene", s(&scene), "--out", s(&tmp.path().join("o.glb"))]);
     refused(&o, &["zero.obj: a device, not a regular file (a mesh is read only from a regular file)"]);
 }
 
@@ -89,17 +69,17 @@ fn d10_a_fifo_as_photo_exemplar_or_mesh_is_refused_at_once() {
     let out = tmp.path().join("out");
     let mut args = vec!["capture", "--rig", s(&rig), "--out", s(&out)];
     args.extend(photos.iter().map(String::as_str));
-    let o = run_within(30, &args);
+    let o = run_within(30, None, &args);
     refused(&o, &["photo 3: ", "d10.png: a FIFO (named pipe), not a regular file (an image is read only"]);
     assert!(!out.exists(), "a refused capture writes nothing");
 
-    let o = run_within(30, &["synth", s(&fifo), "--size", "16x16", "--out", s(&tmp.path().join("s.png"))]);
+    let o = run_within(30, None, &["synth", s(&fifo), "--size", "16x16", "--out", s(&tmp.path().join("s.png"))]);
     refused(&o, &["d10.png: a FIFO (named pipe), not a regular file"]);
 
     let mesh = tmp.path().join("m.obj");
     mkfifo(&mesh);
     let scene = scene(tmp.path(), "m.obj");
-    let o = run_within(30, &["export", "gltf", "--scene", s(&scene), "--out", s(&tmp.path().join("o.glb"))]);
+    let o = run_within(30, None, &["export", "gltf", "--scene", s(&scene), "--out", s(&tmp.path().join("o.glb"))]);
     refused(&o, &["m.obj: a FIFO (named pipe), not a regular file (a mesh is read only"]);
 }
 
@@ -113,7 +93,7 @@ fn d17_skipped_photos_are_named_in_the_note_the_report_and_the_error() {
     mkfifo(&photos.join("09.png"));
     let rig = mold("cheek").join("rig.toml");
     let out = tmp.path().join("out");
-    let o = run_within(60, &["capture", "--rig", s(&rig), "--photos-from", s(&photos), "--out", s(&out)]);
+    let o = run_within(60, None, &["capture", "--rig", s(&rig), "--photos-from", s(&photos), "--out", s(&out)]);
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
     assert!(e.contains("note: skipped ") && e.contains("09.png: a FIFO (named pipe), not a regular file"), "{e}");
@@ -124,6 +104,6 @@ fn d17_skipped_photos_are_named_in_the_note_the_report_and_the_error() {
     assert!(skipped.len() == 1 && skipped[0].as_str().unwrap().contains("09.png: a FIFO"), "{report}");
 
     std::fs::remove_file(photos.join("08.png")).unwrap();
-    let o = run_within(60, &["capture", "--rig", s(&rig), "--photos-from", s(&photos), "--out", s(&out)]);
+    let o = run_within(60, None, &["capture", "--rig", s(&rig), "--photos-from", s(&photos), "--out", s(&out)]);
     refused(&o, &["7 photos", "skipped: ", "09.png: a FIFO (named pipe)"]);
 }

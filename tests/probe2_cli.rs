@@ -6,11 +6,11 @@
 //! model-based test; those that need a mount (D12) in `outputs_cli.rs`.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::{Output, Stdio};
+use std::path::PathBuf;
+use std::process::Output;
 use std::time::{Duration, Instant};
 
-use super::support::{bin, mold, s, stderr};
+use super::support::{mkfifo, mold, run_within, s, stderr};
 
 /// A scratch folder: `in/` holds the inputs, `out/` is where outputs go.
 struct Scratch {
@@ -80,7 +80,7 @@ impl Scratch {
     /// each of `words`; inputs unchanged; nothing hidden left behind. Returns the run.
     fn case(&self, want: i32, words: &[&str], args: &[&str]) -> Output {
         let before = self.inputs();
-        let o = run_within(60, self.dir.path(), args);
+        let o = run_within(60, Some(self.dir.path()), args);
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(want), "skinkit {}: {e}", args.join(" "));
         if want != 0 {
@@ -94,32 +94,6 @@ impl Scratch {
         assert_eq!(self.hidden(), Vec::<PathBuf>::new(), "left behind by skinkit {}", args.join(" "));
         o
     }
-}
-
-/// Runs the binary in `dir` and fails the test when it has not ended after `seconds`.
-fn run_within(seconds: u64, dir: &Path, args: &[&str]) -> Output {
-    let mut child = bin()
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("skinkit runs");
-    let start = Instant::now();
-    while child.try_wait().expect("the child can be waited on").is_none() {
-        if start.elapsed() > Duration::from_secs(seconds) {
-            child.kill().ok();
-            panic!("skinkit {} still running after {seconds} s", args.join(" "));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().expect("its output")
-}
-
-fn mkfifo(path: &Path) {
-    let made = std::process::Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
-    assert!(made.success(), "mkfifo {}", path.display());
 }
 
 /// The cheek's eight photos, in light order.
@@ -168,7 +142,7 @@ fn probe2_d9_a_huge_rig_is_refused_unread() {
     let rig = scratch.input("d9.toml");
     std::fs::File::create(&rig).unwrap().set_len(3 << 30).unwrap();
     let start = Instant::now();
-    let o = run_within(60, scratch.dir.path(), &["rig", "check", s(&rig)]);
+    let o = run_within(60, Some(scratch.dir.path()), &["rig", "check", s(&rig)]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("d9.toml"), "{}", stderr(&o));
     assert!(start.elapsed() < Duration::from_secs(30), "not read whole");
@@ -223,7 +197,7 @@ fn probe2_d15_a_session_named_like_the_report_fails_first() {
     std::fs::create_dir_all(&sessions).unwrap();
     std::fs::rename(scratch.input("cheek"), sessions.join("batch-report.json")).unwrap();
     std::fs::rename(scratch.input("nose"), sessions.join("nose")).unwrap();
-    let o = run_within(60, scratch.dir.path(), &["batch", "--quiet", s(&sessions), "--out", "out/maps"]);
+    let o = run_within(60, Some(scratch.dir.path()), &["batch", "--quiet", s(&sessions), "--out", "out/maps"]);
     assert_ne!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stderr(&o).contains("batch-report.json"), "{}", stderr(&o));
     assert!(!scratch.out("maps/nose/normal.png").exists(), "no session was captured first");
@@ -259,7 +233,7 @@ fn probe2_a_blank_session_fails() {
         black.save(blank.join(format!("{i:02}.png"))).unwrap();
     }
     std::fs::rename(scratch.input("nose"), sessions.join("nose")).unwrap();
-    let o = run_within(60, scratch.dir.path(), &["batch", s(&sessions), "--out", "out/maps"]);
+    let o = run_within(60, Some(scratch.dir.path()), &["batch", s(&sessions), "--out", "out/maps"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let e = stderr(&o);
     assert!(e.contains("sessions/blank:") && e.contains("could be solved"), "the failed session is named: {e}");

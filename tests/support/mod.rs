@@ -6,7 +6,8 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// The binary under test, as a command to add arguments to.
 pub fn bin() -> Command {
@@ -36,4 +37,35 @@ pub fn mold(region: &str) -> PathBuf {
 /// A path as a command-line argument (the tests' paths are UTF-8).
 pub fn s(p: &Path) -> &str {
     p.to_str().expect("a UTF-8 path")
+}
+
+/// Runs the binary with `args` (from `dir` when given, stdin closed) and fails the test when it
+/// has not ended after `seconds`: what a hang (a FIFO read, a file read whole) looks like.
+pub fn run_within(seconds: u64, dir: Option<&Path>, args: &[&str]) -> Output {
+    let mut command = bin();
+    if let Some(dir) = dir {
+        command.current_dir(dir);
+    }
+    let mut child = command
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("skinkit runs");
+    let start = Instant::now();
+    while child.try_wait().expect("the child can be waited on").is_none() {
+        if start.elapsed() > Duration::from_secs(seconds) {
+            child.kill().ok();
+            panic!("skinkit {} still running after {seconds} s", args.join(" "));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("its output")
+}
+
+/// Makes a FIFO (named pipe) at `path`.
+pub fn mkfifo(path: &Path) {
+    let made = Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
+    assert!(made.success(), "mkfifo {}", path.display());
 }

@@ -22,26 +22,18 @@ pub fn odd_in(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + 
     }
 }
 
-/// A parser of finite numbers in `lo..=hi` (`what` says what they are in the message).
-pub fn f32_in(
-    lo: f32,
-    hi: f32,
+/// A parser of finite numbers in `lo..=hi` (`what` says what they are in the message), for f32
+/// and f64 flags alike.
+pub fn number_in<T>(
+    lo: T,
+    hi: T,
     what: &'static str,
-) -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
-    move |text: &str| match text.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
-        _ => Err(format!("`{text}` is not {what} from {lo} to {hi}")),
-    }
-}
-
-/// [`f32_in`] in f64.
-pub fn f64_in(
-    lo: f64,
-    hi: f64,
-    what: &'static str,
-) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |text: &str| match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: std::str::FromStr + Into<f64> + PartialOrd + Copy + std::fmt::Display + Send + Sync + 'static,
+{
+    move |text: &str| match text.trim().parse::<T>() {
+        Ok(v) if v.into().is_finite() && (lo..=hi).contains(&v) => Ok(v),
         _ => Err(format!("`{text}` is not {what} from {lo} to {hi}")),
     }
 }
@@ -128,10 +120,10 @@ mod tests {
         let o = odd_in(3, 31);
         assert_eq!((o("3"), o("31")), (Ok(3), Ok(31)));
         assert!(o("4").is_err() && o("1").is_err() && o("33").is_err());
-        let w = f32_in(0.0, 10.0, "a weight");
+        let w = number_in::<f32>(0.0, 10.0, "a weight");
         assert!(w("-0.5").is_err() && w("NaN").is_err() && w("inf").is_err() && w("10.5").is_err());
         assert_eq!((w("0"), w("10")), (Ok(0.0), Ok(10.0)));
-        assert!(f64_in(0.0, 1.0, "x")("1e30").unwrap_err().contains("from 0 to 1"));
+        assert!(number_in::<f64>(0.0, 1.0, "x")("1e30").unwrap_err().contains("from 0 to 1"));
         assert!(share("0").is_err() && share("1.01").is_err() && share("nan").is_err());
         assert_eq!(share("1"), Ok(1.0));
         assert_eq!(map_size("32768x32768"), Ok((32768, 32768)));

@@ -92,7 +92,7 @@ pub struct ShadowArgs {
 
 /// A curvature in 1/mm: from 0 (flat) to 1000 (a radius of one micrometre, far under a pore).
 fn curvature(text: &str) -> Result<f32, String> {
-    flags::f32_in(0.0, 1000.0, "a curvature in 1/mm")(text)
+    flags::number_in::<f32>(0.0, 1000.0, "a curvature in 1/mm")(text)
 }
 
 /// What `--json` prints.

@@ -46,7 +46,7 @@ pub struct StitchOptions {
     pub levels: Option<usize>,
     /// Largest displacement of the random boundary curves, texels (default 64 at 4096 wide,
     /// scaled with the map).
-    #[arg(long, value_name = "A", conflicts_with = "straight", value_parser = flags::f64_in(0.0, 32768.0, "an amplitude in texels"))]
+    #[arg(long, value_name = "A", conflicts_with = "straight", value_parser = flags::number_in::<f64>(0.0, 32768.0, "an amplitude in texels"))]
     pub curve_amplitude: Option<f64>,
     /// Straight boundaries (the nearest-point partition as it is).
     #[arg(long)]

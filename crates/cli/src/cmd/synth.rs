@@ -175,7 +175,7 @@ pub struct ReplayArgs {
 /// A penalty, weight or scale of the matching: finite, from 0 to the library's
 /// [`skinkit_synth::config::MAX_WEIGHT`].
 fn weight(text: &str) -> Result<f32, String> {
-    flags::f32_in(0.0, skinkit_synth::config::MAX_WEIGHT, "a weight")(text)
+    flags::number_in::<f32>(0.0, skinkit_synth::config::MAX_WEIGHT, "a weight")(text)
 }
 
 pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
