@@ -299,7 +299,7 @@ fn a_session_named_like_the_batchs_own_folders_is_refused() {
 /// Such a name is refused before any work, naming the folder.
 #[cfg(unix)]
 #[test]
-fn d3_session_names_that_are_not_utf8_are_refused_before_any_work() {
+fn probe2_d3_session_names_that_are_not_utf8_are_refused_before_any_work() {
     use std::os::unix::ffi::OsStrExt;
     let tmp = tempfile::tempdir().unwrap();
     let molds = molds(tmp.path(), 32);
@@ -320,7 +320,7 @@ fn d3_session_names_that_are_not_utf8_are_refused_before_any_work() {
 /// refuses shards that saw different ones, naming the difference; once every shard runs again on
 /// the same folder, the merge covers every session exactly once.
 #[test]
-fn d5_shards_that_saw_different_sessions_do_not_merge() {
+fn probe2_d5_shards_that_saw_different_sessions_do_not_merge() {
     let tmp = tempfile::tempdir().unwrap();
     let molds = molds(tmp.path(), 32);
     let dir = sessions::sessions(&tmp.path().join("sessions"), &molds, &names(3), &[]);
@@ -384,7 +384,7 @@ fn d17_a_fifo_among_a_sessions_photos_is_named() {
     assert!(skipped.len() == 1 && skipped[0].as_str().unwrap().contains("99.png: a FIFO"), "{first}");
 }
 
-/// Issue 42: batch resume and sharding against a model. Random sequences of adding a session,
+/// Issue 42, D4, D5, D8: batch resume and sharding against a model. Random sequences of adding a session,
 /// removing one, replacing a photo but keeping its time stamp, changing an option, running the
 /// shards (all of them, or some before a session appears and the rest after) and merging. After
 /// each merge that succeeds, every session present has exactly one outcome and its maps are
@@ -392,7 +392,7 @@ fn d17_a_fifo_among_a_sessions_photos_is_named() {
 /// that fails names the sessions the shards disagreed on. `SKINKIT_MODEL_CASES` sets the number
 /// of sequences (300 by default, about a minute in a debug build; more in the long property run).
 #[test]
-fn model_based_resume_and_sharding_match_fresh_captures() {
+fn probe2_model_based_resume_and_sharding_match_fresh_captures() {
     let cases: u64 = std::env::var("SKINKIT_MODEL_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(300);
     let tmp = tempfile::tempdir().unwrap();
     let molds = molds(tmp.path(), 32);
@@ -497,12 +497,12 @@ fn check_merge(dir: &Path, out: &Path, root: &Path, green: &str, present: &[Stri
     }
 }
 
-/// Issue 42: two shards of one batch in separate PID namespaces (as two containers, or two hosts
+/// Issue 42, D7: two shards of one batch in separate PID namespaces (as two containers, or two hosts
 /// on a shared folder, see each other's processes as absent) writing into one `--out` at once:
 /// neither sweeps the other's live staging folders (D7), and every round merges whole. Needs
 /// `unshare --pid` (root or user namespaces); skipped with a message where it is refused.
 #[test]
-fn shards_in_separate_pid_namespaces_write_one_out_at_once() {
+fn probe2_d7_shards_in_separate_pid_namespaces_write_one_out_at_once() {
     let unshare = |args: &[&str]| std::process::Command::new("unshare").args(["--pid", "--fork"]).args(args).output();
     if !unshare(&["true"]).is_ok_and(|o| o.status.success()) {
         eprintln!("skipped: `unshare --pid --fork` is not allowed here");

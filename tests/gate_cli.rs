@@ -37,7 +37,7 @@ fn cheek_copy(dir: &Path) {
 
 /// D9: a 3 GiB rig (sparse) is refused from its length, in well under a second of work.
 #[test]
-fn d9_a_huge_rig_is_refused_before_it_is_read() {
+fn probe2_d9_a_huge_rig_is_refused_before_it_is_read() {
     let tmp = tempfile::tempdir().unwrap();
     let rig = tmp.path().join("d9.toml");
     std::fs::File::create(&rig).unwrap().set_len(3 << 30).unwrap();
@@ -47,7 +47,7 @@ fn d9_a_huge_rig_is_refused_before_it_is_read() {
 
 /// D9: `/dev/zero` as a rig, or as a scene's mesh, is a device: refused without reading it.
 #[test]
-fn d9_dev_zero_as_rig_or_mesh_is_refused() {
+fn probe2_d9_dev_zero_as_rig_or_mesh_is_refused() {
     let o = run_within(20, None, &["rig", "check", "/dev/zero"]);
     refused(&o, &["/dev/zero: a device, not a regular file (a TOML file is read only from a regular file)"]);
     let tmp = tempfile::tempdir().unwrap();
@@ -59,7 +59,7 @@ fn d9_dev_zero_as_rig_or_mesh_is_refused() {
 
 /// D10: a FIFO nobody writes to, as a photo, an exemplar or a mesh, is refused at once.
 #[test]
-fn d10_a_fifo_as_photo_exemplar_or_mesh_is_refused_at_once() {
+fn probe2_d10_a_fifo_as_photo_exemplar_or_mesh_is_refused_at_once() {
     let tmp = tempfile::tempdir().unwrap();
     let fifo = tmp.path().join("d10.png");
     mkfifo(&fifo);
@@ -86,7 +86,7 @@ fn d10_a_fifo_as_photo_exemplar_or_mesh_is_refused_at_once() {
 /// D17: a FIFO among a folder's photos is named: with the rig's count of photos beside it the
 /// capture succeeds with a note and the report lists it; without, the count error names it.
 #[test]
-fn d17_skipped_photos_are_named_in_the_note_the_report_and_the_error() {
+fn probe2_d17_skipped_photos_are_named_in_the_note_the_report_and_the_error() {
     let tmp = tempfile::tempdir().unwrap();
     let photos = tmp.path().join("photos");
     cheek_copy(&photos);

@@ -282,7 +282,7 @@ fn d3_failed_recapture_on_a_full_disk_keeps_the_previous_set() {
 /// Issue 42, D12: `capture --out` a mount point (a container volume, a scratch mount) writes
 /// the set there, staged inside it rather than on the parent's filesystem, and leaves no debris.
 #[test]
-fn d12_capture_into_a_mount_point_writes_the_set() {
+fn probe2_d12_capture_into_a_mount_point_writes_the_set() {
     let tmp = tempfile::tempdir().unwrap();
     let Some(disk) = SmallDisk::mount(&tmp.path().join("mnt")) else {
         eprintln!("skipped: cannot mount a tmpfs here (needs root); output_set's d12 tests cover it");

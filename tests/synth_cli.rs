@@ -261,7 +261,7 @@ fn the_upsampled_default_and_scanline_start_and_flags_still_override_them() {
 /// report now counts the grown map's invalid texels, and beyond 1 % the run fails, naming the
 /// share and what to do (the map is still written, to be looked at).
 #[test]
-fn d6_a_grown_map_mostly_invalid_is_a_failure_with_its_count() {
+fn probe2_d6_a_grown_map_mostly_invalid_is_a_failure_with_its_count() {
     let tmp = tempfile::tempdir().unwrap();
     let mut grid = truth("cheek").grid().crop(40, 60, 64, 64).unwrap();
     for y in 0..64 {
@@ -290,7 +290,7 @@ fn d6_a_grown_map_mostly_invalid_is_a_failure_with_its_count() {
 /// after the synthesis.
 #[cfg(unix)]
 #[test]
-fn d15_an_out_name_that_is_not_utf8_is_written() {
+fn probe2_d15_an_out_name_that_is_not_utf8_is_written() {
     use std::os::unix::ffi::OsStrExt;
     let tmp = tempfile::tempdir().unwrap();
     let exemplar = normal_exemplar(tmp.path(), "cheek", 32);

@@ -143,14 +143,24 @@ mod tests {
         let e =
             not_an_input(&[("--out", &tmp.path().join("a.png")), ("--report", &tmp.path().join("sub/../a.png"))], &[]);
         assert!(e.unwrap_err().to_string().contains("--out and --report"));
-        // Among many outputs (a long orbit), the one repeated is named with the first that had it.
-        let frames: Vec<PathBuf> = (0..3000).map(|f| tmp.path().join(format!("f{f:04}.png"))).collect();
+    }
+
+    /// D11: an orbit at the frame limit (3600 frames) checked its outputs pair by pair, 7.5
+    /// minutes before the first frame; they are now one set, each path resolved once, and the one
+    /// repeated among them is still named with the first that had it.
+    #[test]
+    fn probe2_d11_an_orbits_frames_are_checked_as_one_set() {
+        let tmp = tempfile::tempdir().unwrap();
+        std::fs::create_dir(tmp.path().join("sub")).unwrap();
+        let input = tmp.path().join("in.png");
+        let inputs = [("the normal map".to_owned(), input)];
+        let frames: Vec<PathBuf> = (0..3600).map(|f| tmp.path().join(format!("f{f:04}.png"))).collect();
         let mut outputs: Vec<(&str, &Path)> = frames.iter().map(|p| ("--out", p.as_path())).collect();
         assert!(not_an_input(&outputs, &inputs).is_ok());
-        let report = tmp.path().join("sub/../f2999.png");
+        let report = tmp.path().join("sub/../f3599.png");
         outputs.push(("--report", &report));
         let text = not_an_input(&outputs, &inputs).unwrap_err().to_string();
-        assert!(text.contains("--out and --report") && text.contains("f2999.png"), "{text}");
+        assert!(text.contains("--out and --report") && text.contains("f3599.png"), "{text}");
     }
 
     #[test]

@@ -78,7 +78,7 @@ mod tests {
     /// Issue 42, D16: the decoder's own memory limit (a PNG with a 256 MiB text chunk) is told
     /// apart from `--memory-limit`, not shown as a bare "Memory limit exceeded".
     #[test]
-    fn d16_the_decoders_own_limit_is_not_mistaken_for_the_memory_limit() {
+    fn probe2_d16_the_decoders_own_limit_is_not_mistaken_for_the_memory_limit() {
         let limit = image::ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory));
         let e = Error::image(std::path::Path::new("03.png"), limit).to_string();
         assert!(e.starts_with("03.png: not a readable image: the image decoder's own limit"), "{e}");

@@ -128,7 +128,7 @@ mod tests {
     /// Issue 42, D16: a 16-bit grey and alpha TIFF is read as grey, alpha ignored, as the README
     /// says; its header says so too (the memory estimate reads headers first).
     #[test]
-    fn d16_a_16_bit_grey_and_alpha_tiff_reads_as_grey() {
+    fn probe2_d16_a_16_bit_grey_and_alpha_tiff_reads_as_grey() {
         let bytes = grey_alpha_tiff(23000);
         let photo = decode_photo(Path::new("01.tif"), Cursor::new(bytes.clone()), &Limits::default()).unwrap();
         assert_eq!((photo.width(), photo.height(), photo.channels()), (8, 8, Channels::Gray));
@@ -148,7 +148,7 @@ mod tests {
     /// Issue 42, D16: a layout skinkit does not read is refused in the README's words, never with
     /// the decoder's Debug dump (`Unknown(32)`, `Multiband { .. }`).
     #[test]
-    fn d16_unsupported_layouts_are_refused_in_the_readmes_words() {
+    fn probe2_d16_unsupported_layouts_are_refused_in_the_readmes_words() {
         let mut float = Cursor::new(Vec::new());
         let mut encoder = tiff::encoder::TiffEncoder::new(&mut float).unwrap();
         encoder.write_image::<tiff::encoder::colortype::Gray32Float>(4, 4, &[0.5f32; 16]).unwrap();
@@ -163,7 +163,7 @@ mod tests {
 
     /// Issue 42, D16: a grey (Y only) EXR photo is refused saying which channels it needs and has.
     #[test]
-    fn d16_a_grey_exr_photo_names_the_channels_it_needs() {
+    fn probe2_d16_a_grey_exr_photo_names_the_channels_it_needs() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("01.exr");
         let y = [0.5f32; 16];

@@ -259,7 +259,7 @@ fn the_sample_face_layout_loads_and_partitions() {
 /// Issue 42: a layout of thousands of tiny regions ran for hours (each region is grown on its
 /// own); more than `MAX_REGIONS` is refused at load, naming the file, the field and the limit.
 #[test]
-fn too_many_regions_are_refused_at_load() {
+fn probe2_too_many_regions_are_refused_at_load() {
     let region = |i: usize| {
         format!(
             "[[region]]\nname = \"r{i}\"\nexemplar = \"e.png\"\nexemplar_mm_per_texel = 0.02\npoints = [[{}, {}]]\n",

@@ -249,7 +249,7 @@ mod tests {
     /// flags, so a new one is checked without being listed) is given a value other than its
     /// default; one that changes nothing would let a batch keep maps made with another value.
     #[test]
-    fn every_solver_flag_reaches_the_options_a_batch_compares() {
+    fn probe2_d4_every_solver_flag_reaches_the_options_a_batch_compares() {
         let base = resolved(&[]).expect("the defaults resolve");
         let command = SolveArgs::augment_args(clap::Command::new("t"));
         let flags: Vec<_> = command.get_arguments().filter(|a| a.get_action().takes_values()).collect();

@@ -198,7 +198,7 @@ fn d15_names_that_are_not_utf8_are_written() {
 /// the sweep removes only its own owner's dead writers' folders (and those of versions before
 /// owners): another owner's folder stays, whatever its process id.
 #[test]
-fn d7_the_sweep_leaves_other_hosts_staging_folders_alone() {
+fn probe2_d7_the_sweep_leaves_other_hosts_staging_folders_alone() {
     let tmp = tempfile::tempdir().unwrap();
     let dead = u32::MAX;
     let ours = tmp.path().join(format!(".x{STAGING}{}.{dead}.1", owner()));
