@@ -29,8 +29,10 @@ use crate::solve::{self, PhotoStack, SolveConfig};
 use crate::{Error, Result, Rig, bracket, detrend, near};
 
 mod folder;
+mod memory;
 mod prepare;
 pub use folder::{PHOTO_EXTENSIONS, PhotoFolder, RESERVED_STEMS, Session, Skipped, photos_in};
+pub use memory::memory_estimate;
 pub use prepare::corrections;
 use prepare::{flatten, raw_reading, unscale_albedo};
 
@@ -201,7 +203,7 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let conditioning = rig.conditioning();
     let mut warnings: Vec<String> = conditioning.warning().into_iter().collect();
     let ambient = ambient_frame(session, &rig);
-    check_memory(session, ambient.as_ref().map(|(p, _)| p.as_path()), options)?;
+    check_memory(session, &rig, ambient.as_ref().map(|(p, _)| p.as_path()), options)?;
 
     progress(Stage::Decode);
     let t = Instant::now();
@@ -319,60 +321,9 @@ pub fn check_rig(rig_path: &Path, rig: &Rig, ambient: Option<&Path>, config: &So
     Ok(())
 }
 
-/// Bytes a capture of `session` holds at its peak, worked out from the images' headers (no
-/// pixel is decoded; each header is checked against `options.limits`, and the mask, the ambient
-/// frame and the truth map against the photos' size):
-/// `maps + truth + mask + max(photos + ambient, detrend)`, where `maps` is the solution (normals
-/// 12, albedo 4 or 12, confidence 4 bytes a pixel), `truth` 12 and `mask` 1 byte a pixel, the
-/// photos as decoded ([`limits::ImageHeader::decoded_bytes`]), and `detrend` the detrended
-/// copy of the normals (12 bytes a pixel), made after the photos are dropped.
-///
-/// # Errors
-/// When a header cannot be read, is over the pixel limit, or an image's size differs from the
-/// first photo's.
-pub fn memory_estimate(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<u64> {
-    let first = session
-        .photos
-        .first()
-        .ok_or_else(|| Error::InvalidInput(format!("rig {}: no photos were given", session.rig.display())))?;
-    let header = |path: &Path, what: &str| {
-        limits::image_header_as(path, options.limits.max_pixels, options.raw)
-            .map_err(|e| context(what.to_owned(), e.into()))
-    };
-    let head = header(first, "photo 1")?;
-    let same_size = |path: &Path, what: &str| -> Result<limits::ImageHeader> {
-        let h = header(path, what)?;
-        if (h.width, h.height) != (head.width, head.height) {
-            return Err(Error::InvalidInput(format!(
-                "{what} ({}) is {}x{} but photo 1 ({}) is {}x{}",
-                path.display(),
-                h.width,
-                h.height,
-                first.display(),
-                head.width,
-                head.height
-            )));
-        }
-        Ok(h)
-    };
-    let mut photos = head.decoded_bytes();
-    for (i, path) in session.photos.iter().enumerate().skip(1) {
-        photos = photos.saturating_add(same_size(path, &format!("photo {}", i + 1))?.decoded_bytes());
-    }
-    if let Some(path) = ambient {
-        photos = photos.saturating_add(same_size(path, "ambient frame")?.decoded_bytes());
-    }
-    let px = head.pixels();
-    let mask = session.mask.as_deref().map(|p| same_size(p, "mask")).transpose()?.map_or(0, |_| px);
-    let truth = session.truth.as_deref().map(|p| same_size(p, "ground truth")).transpose()?.map_or(0, |_| 12 * px);
-    let albedo = if head.channels - u8::from(head.alpha) >= 3 { 12 } else { 4 };
-    let maps = px.saturating_mul(12 + albedo + 4);
-    Ok(maps.saturating_add(truth).saturating_add(mask).saturating_add(photos.max(px.saturating_mul(12))))
-}
-
 /// Refuses a session whose [`memory_estimate`] exceeds `options.memory_limit`.
-fn check_memory(session: &Session, ambient: Option<&Path>, options: &CaptureOptions) -> Result<()> {
-    let estimate = memory_estimate(session, ambient, options)?;
+fn check_memory(session: &Session, rig: &Rig, ambient: Option<&Path>, options: &CaptureOptions) -> Result<()> {
+    let estimate = memory::estimate(session, Some(rig), ambient, options)?;
     let folder = session.photos[0].parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let what = format!("capturing {} photos", session.photos.len());
     limits::check_memory(&folder.display().to_string(), &what, estimate, options.memory_limit)?;

@@ -9,6 +9,7 @@ use glam::Vec3;
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::SolveConfig;
 use skinkit_capture::{Light, Rig};
+use skinkit_heightfield::dng::dng_of_rgb;
 use skinkit_testkit::alloc::{Counting, alone, peak_during};
 use skinkit_testkit::header_only_png;
 
@@ -73,6 +74,91 @@ fn d9_the_estimate_bounds_what_a_capture_holds() {
     // Decoder buffers, thread-local scratch and the report ride on top of the large arrays.
     assert!(peak <= estimate + estimate / 4, "peak {peak} above the estimate {estimate}");
     assert!(peak >= estimate / 2, "peak {peak}: the estimate {estimate} is not about this capture");
+}
+
+/// The cheek mold's photos as 16-bit grey values in 0..1.
+fn cheek_photos() -> Vec<Vec<f32>> {
+    (1..=8)
+        .map(|i| {
+            let img = image::open(mold("cheek").join(format!("{i:02}.png"))).unwrap().into_luma16();
+            img.pixels().map(|p| f32::from(p.0[0]) / 65535.0).collect()
+        })
+        .collect()
+}
+
+fn write_grey(path: &Path, side: u32, values: impl Iterator<Item = f32>) {
+    let samples: Vec<u16> = values.map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16).collect();
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(side, side, samples).unwrap().save(path).unwrap();
+}
+
+/// The cheek mold's rig with `extra(i)` added to light `i`'s table (from 1).
+fn cheek_rig(dir: &Path, extra: &dyn Fn(usize) -> String) {
+    let text = std::fs::read_to_string(mold("cheek").join("rig.toml")).unwrap();
+    let mut light = 0;
+    let lines = text.lines().map(|line| {
+        if line.starts_with("intensity") {
+            light += 1;
+            format!("{line}\n{}\n", extra(light))
+        } else {
+            format!("{line}\n")
+        }
+    });
+    std::fs::write(dir.join("rig.toml"), lines.collect::<String>()).unwrap();
+}
+
+/// Writes a session's files into a folder.
+type MakeSession<'a> = dyn Fn(&Path) + 'a;
+
+/// The cheek session three ways the estimate models stage by stage (issue 39): as half-size
+/// DNGs (the RAW decode's file copies and sensor samples), three exposure brackets a light (the
+/// merged readings) and a flat frame a light (the corrected copies and the flats' fits).
+#[test]
+fn the_estimate_bounds_raw_bracketed_and_flat_fielded_captures() {
+    let _alone = alone();
+    let side = 256u32;
+    let photos = cheek_photos();
+    let kinds: [(&str, &MakeSession); 3] = [
+        ("RAW (half-size DNG)", &|dir: &Path| {
+            std::fs::copy(mold("cheek").join("rig.toml"), dir.join("rig.toml")).unwrap();
+            for (i, p) in photos.iter().enumerate() {
+                let rgb: Vec<[f32; 3]> = p.iter().map(|&v| [v, v, v]).collect();
+                let dng = dng_of_rgb(&rgb, side as usize, side as usize, [0, 1, 1, 2], 512, 16383);
+                std::fs::write(dir.join(format!("{:02}.dng", i + 1)), dng).unwrap();
+            }
+        }),
+        ("3 brackets a light", &|dir: &Path| {
+            cheek_rig(dir, &|_| "exposures = [0.5, 1.0, 2.0]".to_owned());
+            for (i, p) in photos.iter().enumerate() {
+                for (j, t) in [0.5f32, 1.0, 2.0].into_iter().enumerate() {
+                    write_grey(&dir.join(format!("{:02}-{j}.png", i + 1)), side, p.iter().map(|v| v * t));
+                }
+            }
+        }),
+        ("a flat frame a light", &|dir: &Path| {
+            std::fs::create_dir(dir.join("flats")).unwrap();
+            cheek_rig(dir, &|i| format!("flat = \"flats/{i:02}.png\""));
+            for (i, p) in photos.iter().enumerate() {
+                let gain = |k: usize| 0.6 + 0.3 * (k % side as usize) as f32 / side as f32;
+                write_grey(&dir.join(format!("flats/{:02}.png", i + 1)), side, (0..p.len()).map(gain));
+                let lit = p.iter().enumerate().map(|(k, v)| v * gain(k));
+                write_grey(&dir.join(format!("{:02}.png", i + 1)), side, lit);
+            }
+        }),
+    ];
+    for (name, make) in kinds {
+        let dir = tempfile::tempdir().unwrap();
+        make(dir.path());
+        let files = Session::from_dir(dir.path()).unwrap();
+        let options = CaptureOptions::default();
+        let estimate = session::memory_estimate(&files, None, &options).unwrap() as usize;
+        let (captured, peak) = peak_during(|| session::capture(&files, &options, &|_| {}).unwrap());
+        assert_eq!(captured.report.width, side as usize, "{name}");
+        drop(captured);
+        let ratio = peak as f64 / estimate as f64;
+        eprintln!("{name}: estimate {} KiB, heap peak {} KiB ({ratio:.2})", estimate >> 10, peak >> 10);
+        assert!(peak <= estimate + estimate / 4, "{name}: peak {peak} above the estimate {estimate}");
+        assert!(peak >= estimate / 2, "{name}: peak {peak}: the estimate {estimate} is not about this capture");
+    }
 }
 
 /// An 8-light rig close to the plane y = 0 (directions `(cos a, +-eps, sin a)`): poorly

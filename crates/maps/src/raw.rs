@@ -89,6 +89,19 @@ pub fn header(path: &Path, max_pixels: u64, mode: RawMode) -> Result<ImageHeader
     imp::header(path, &bytes, &limits, mode)
 }
 
+/// Bytes a decode of the RAW file at `path` holds besides the photo it returns (`header`, as
+/// [`header`] gave it in `mode`): the file read twice (skinkit's bounded copy and the decoder's
+/// own buffer) and the sensor's 16-bit samples (four a pixel at half size, one at full size).
+/// A file whose length cannot be read counts as empty (reading it will then fail).
+pub fn decode_cost(path: &Path, header: &ImageHeader, mode: RawMode) -> u64 {
+    let file = std::fs::metadata(path).map_or(0, |m| m.len());
+    let sensor = match mode {
+        RawMode::Half => header.pixels().saturating_mul(4),
+        RawMode::Full => header.pixels(),
+    };
+    file.saturating_mul(2).saturating_add(sensor.saturating_mul(2))
+}
+
 /// The file's bytes, refused unread when it is longer than a RAW file of the pixel limit can be.
 fn read_bounded(path: &Path, limits: &Limits) -> Result<Vec<u8>> {
     use std::io::Read;

@@ -85,6 +85,8 @@ pub(super) fn flatten(
             flat::correct(photo, ambient.as_ref(), flat.as_ref().or(vignetting.as_ref()), saturation, name)
         })
         .collect::<Result<Vec<_>>>()?;
+    // The uncorrected photos go before the rescale makes its copy (the memory estimate's stage 3).
+    drop(photos);
     let top = corrected.iter().flat_map(|p| samples_f32(p).iter().copied()).fold(0.0f32, f32::max);
     let scale = if top >= 0.9 * saturation { top / (0.9 * saturation) } else { 1.0 };
     if scale == 1.0 {
