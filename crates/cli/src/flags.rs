@@ -139,3 +139,78 @@ mod tests {
         assert!(lut("4097x1").unwrap_err().contains("larger than 4096x4096") && lut("0x3").is_err());
     }
 }
+
+/// `--green`: the green channel convention of normal maps read and written (`down` for DirectX
+/// and Unreal bakes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Green {
+    #[default]
+    Up,
+    Down,
+}
+
+impl Green {
+    pub fn encoding(self) -> skinkit_maps::NormalEncoding {
+        let green = match self {
+            Green::Up => skinkit_maps::GreenAxis::Up,
+            Green::Down => skinkit_maps::GreenAxis::Down,
+        };
+        skinkit_maps::NormalEncoding { green }
+    }
+}
+
+/// `--transfer`: how 8- and 16-bit values relate to light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TransferArg {
+    #[default]
+    Linear,
+    Srgb,
+}
+
+impl From<TransferArg> for skinkit_maps::Transfer {
+    fn from(t: TransferArg) -> Self {
+        match t {
+            TransferArg::Linear => skinkit_maps::Transfer::Linear,
+            TransferArg::Srgb => skinkit_maps::Transfer::Srgb,
+        }
+    }
+}
+
+/// `--raw`: how camera RAW photos become RGB.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum RawArg {
+    /// Each 2x2 Bayer cell binned into one pixel (no interpolation).
+    #[default]
+    Half,
+    /// Demosaiced to the sensor's size.
+    Full,
+}
+
+impl From<RawArg> for skinkit_maps::raw::RawMode {
+    fn from(r: RawArg) -> Self {
+        match r {
+            RawArg::Half => skinkit_maps::raw::RawMode::Half,
+            RawArg::Full => skinkit_maps::raw::RawMode::Full,
+        }
+    }
+}
+
+/// `--kind`: what a map holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum MapKind {
+    /// Unit normals.
+    #[default]
+    Normal,
+    /// Linear colour.
+    Color,
+}
+
+impl MapKind {
+    /// `normal` or `color`, as reports name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            MapKind::Normal => "normal",
+            MapKind::Color => "color",
+        }
+    }
+}

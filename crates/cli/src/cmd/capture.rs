@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::{Method, SolveConfig};
-use skinkit_maps::raw::RawMode;
-use skinkit_maps::{GreenAxis, Limits, NormalEncoding, Transfer};
+use skinkit_maps::Limits;
 
+use crate::flags::{Green, RawArg, TransferArg};
 use crate::output::Output;
 use crate::{guard, pipeline};
 
@@ -47,8 +47,8 @@ pub struct SolveArgs {
     /// explains every reading, elsewhere a fit that drops shadows, saturation, the brightest
     /// (specular) readings and every reading that disagrees; `threshold`: the earlier robust
     /// solve (drop readings under the shadow thresholds, solve from the rest; faster).
-    #[arg(long, default_value = "robust", value_parser = ["ls", "robust", "threshold"])]
-    pub solver: String,
+    #[arg(long, value_enum, default_value_t = SolverArg::Robust)]
+    pub solver: SolverArg,
     /// Side of the low-frequency removal block in pixels (the paper's 50); 0 turns it off.
     #[arg(long, default_value_t = 50, value_name = "PIXELS", value_parser = crate::flags::usize_in(0, 16384))]
     pub detrend_block: usize,
@@ -67,31 +67,50 @@ pub struct SolveArgs {
     #[arg(long, value_name = "C", value_parser = condition_limit)]
     pub max_condition: Option<f64>,
     /// How 8/16-bit photo values relate to light: `linear` (raw, machine-vision cameras) or `srgb`.
-    #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
-    pub transfer: String,
+    #[arg(long, value_enum, default_value_t = TransferArg::Linear)]
+    pub transfer: TransferArg,
     /// Green channel convention of the written normal.png / normal.exr.
-    #[arg(long, default_value = "up", value_parser = ["up", "down"])]
-    pub green: String,
+    #[arg(long, value_enum, default_value_t = Green::Up)]
+    pub green: Green,
     /// Camera RAW photos (DNG, CR2, NEF, ARW, ...): `half` bins each 2x2 Bayer cell into one
     /// pixel (no interpolation), `full` demosaics to the sensor's size. Either way the values are
     /// linear: black level subtracted, white level normalised, no white balance or tone curve.
-    #[arg(long, default_value = "half", value_parser = ["half", "full"])]
-    pub raw: String,
+    #[arg(long, value_enum, default_value_t = RawArg::Half)]
+    pub raw: RawArg,
+}
+
+/// `--solver` values (the doc comment on `CaptureArgs::solver` says what each does).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SolverArg {
+    Ls,
+    Robust,
+    Threshold,
+}
+
+impl SolverArg {
+    /// The flag's value: `ls`, `robust` or `threshold`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverArg::Ls => "ls",
+            SolverArg::Robust => "robust",
+            SolverArg::Threshold => "threshold",
+        }
+    }
 }
 
 impl SolveArgs {
     /// The command's defaults with `solver` (what `demo` and `face` capture with).
-    pub fn defaults(solver: &str) -> Self {
+    pub fn defaults(solver: SolverArg) -> Self {
         SolveArgs {
-            solver: solver.into(),
+            solver,
             detrend_block: 50,
             shadow_threshold: None,
             shadow_relative: None,
             saturation: None,
             max_condition: None,
-            transfer: "linear".into(),
-            green: "up".into(),
-            raw: "half".into(),
+            transfer: TransferArg::Linear,
+            green: Green::Up,
+            raw: RawArg::Half,
         }
     }
 
@@ -99,10 +118,10 @@ impl SolveArgs {
     pub fn options(&self, out: &Output) -> Result<CaptureOptions> {
         let defaults = SolveConfig::default();
         let solve = SolveConfig {
-            method: match self.solver.as_str() {
-                "ls" => Method::LeastSquares,
-                "threshold" => Method::Threshold,
-                _ => Method::Robust,
+            method: match self.solver {
+                SolverArg::Ls => Method::LeastSquares,
+                SolverArg::Threshold => Method::Threshold,
+                SolverArg::Robust => Method::Robust,
             },
             shadow_abs: self.shadow_threshold.unwrap_or(defaults.shadow_abs),
             shadow_rel: self.shadow_relative.unwrap_or(defaults.shadow_rel),
@@ -111,13 +130,12 @@ impl SolveArgs {
             ..defaults
         };
         solve.validate().context("invalid solver option")?;
-        let green: GreenAxis = self.green.parse().map_err(anyhow::Error::msg)?;
         Ok(CaptureOptions {
             solve,
             detrend_block: self.detrend_block,
-            transfer: if self.transfer == "srgb" { Transfer::Srgb } else { Transfer::Linear },
-            encoding: NormalEncoding { green },
-            raw: if self.raw == "full" { RawMode::Full } else { RawMode::Half },
+            transfer: self.transfer.into(),
+            encoding: self.green.encoding(),
+            raw: self.raw.into(),
             limits: Limits::default(),
             memory_limit: out.memory_limit(),
         })

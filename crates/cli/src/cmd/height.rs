@@ -7,8 +7,9 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use skinkit_height::deliver::{self, ExrStorage, PngScale};
 use skinkit_height::{HeightOptions, HeightReport, Integrator, Scale};
-use skinkit_maps::{GreenAxis, Limits, NormalEncoding, OutputSet, io};
+use skinkit_maps::{Limits, OutputSet, io};
 
+use crate::flags::Green;
 use crate::output::Output;
 use crate::{flags, guard, pipeline};
 
@@ -50,13 +51,6 @@ pub struct Args {
     /// Store the EXR files as half floats.
     #[arg(long)]
     pub half: bool,
-}
-
-/// Green channel conventions of a normal map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Green {
-    Up,
-    Down,
 }
 
 /// `--integrator` values.
@@ -103,8 +97,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     ];
     guard::output_files(&guard::given(&outputs), &[("the normal map".into(), args.map.clone())])?;
     check_extensions(&args)?;
-    let green = if args.green == Green::Down { GreenAxis::Down } else { GreenAxis::Up };
-    let normals = io::read_normal_map(&args.map, NormalEncoding { green }, &Limits::default())?;
+    let normals = io::read_normal_map(&args.map, args.green.encoding(), &Limits::default())?;
     let options = HeightOptions {
         wraps: args.wrap,
         integrator: args.integrator.chosen(),

@@ -23,7 +23,7 @@ use skinkit_synth::SynthConfig;
 
 use skinkit_capture::session::{self, Session};
 
-use super::capture::SolveArgs;
+use super::capture::{SolveArgs, SolverArg};
 use crate::flags;
 use crate::output::Output;
 use crate::{guard, pipeline};
@@ -424,7 +424,7 @@ fn on_mesh(layout: Layout, options: &StitchOptions, out: &Output) -> Result<Layo
 
 /// Each region's exemplar: a normal map read from disk, or a session captured (once per folder).
 fn exemplars(layout: &Layout, cache: &mut CaptureCache, out: &Output) -> Result<Vec<NormalMap>> {
-    let options = SolveArgs::defaults("robust").options(out)?;
+    let options = SolveArgs::defaults(SolverArg::Robust).options(out)?;
     let mut maps = Vec::with_capacity(layout.regions.len());
     for region in &layout.regions {
         let map = match &region.exemplar {

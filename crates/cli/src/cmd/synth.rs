@@ -17,11 +17,11 @@ use indicatif::ProgressBar;
 use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, Limits, PngLayout};
-use skinkit_maps::{Channels, ColorMap, GreenAxis, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
+use skinkit_maps::{Channels, ColorMap, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
 use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
 use skinkit_synth::{Guards, Search, SynthConfig};
 
-use crate::flags;
+use crate::flags::{self, Green, MapKind, TransferArg};
 use crate::output::Output;
 use crate::{guard, pipeline};
 
@@ -140,14 +140,14 @@ pub struct Args {
 #[derive(clap::Args, Debug, Clone)]
 pub struct MapArgs {
     /// What the maps hold: unit normals or linear colour.
-    #[arg(long, default_value = "normal", value_parser = ["normal", "color"])]
-    pub kind: String,
+    #[arg(long, value_enum, default_value_t = MapKind::Normal)]
+    pub kind: MapKind,
     /// Green channel convention of normal maps read and written.
-    #[arg(long, default_value = "up", value_parser = ["up", "down"])]
-    pub green: String,
+    #[arg(long, value_enum, default_value_t = Green::Up)]
+    pub green: Green,
     /// How 8/16-bit colour values relate to light (colour maps only; outputs are linear).
-    #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
-    pub transfer: String,
+    #[arg(long, value_enum, default_value_t = TransferArg::Linear)]
+    pub transfer: TransferArg,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -205,12 +205,11 @@ impl Map {
 
 impl MapArgs {
     fn encoding(&self) -> Result<NormalEncoding> {
-        let green: GreenAxis = self.green.parse().map_err(anyhow::Error::msg)?;
-        Ok(NormalEncoding { green })
+        Ok(self.green.encoding())
     }
 
     fn is_color(&self) -> bool {
-        self.kind == "color"
+        self.kind == MapKind::Color
     }
 
     /// Reads a normal map, or a colour image as linear RGB (grey replicated).
@@ -221,7 +220,7 @@ impl MapArgs {
                 .with_context(|| format!("cannot read normal map {}", path.display()))?;
             return Ok(Map::Normal(map));
         }
-        let transfer = if self.transfer == "srgb" { Transfer::Srgb } else { Transfer::Linear };
+        let transfer = Transfer::from(self.transfer);
         let photo = io::read_photo(path, &limits)
             .with_context(|| format!("cannot read colour image {}", path.display()))?
             .with_transfer(transfer);
@@ -568,7 +567,7 @@ fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
         other => (format!("{other:?}"), None, None),
     };
     OptionsReport {
-        kind: args.map.kind.clone(),
+        kind: args.map.kind.name().to_owned(),
         levels_requested: args.levels.unwrap_or(if args.scanline {
             SynthConfig::scanline(0, 0).levels
         } else {
@@ -742,7 +741,7 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
         coords: args.coords.display().to_string(),
         source: args.source.display().to_string(),
         out: args.out.display().to_string(),
-        kind: args.map.kind.clone(),
+        kind: args.map.kind.name().to_owned(),
         width,
         height,
         seconds: start.elapsed().as_secs_f64(),

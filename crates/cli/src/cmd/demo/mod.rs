@@ -23,7 +23,7 @@ use skinkit_synth::SynthConfig;
 
 use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
 
-use super::capture::SolveArgs;
+use super::capture::{SolveArgs, SolverArg};
 use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
 use super::synth::{Map, QualityReport, quality, write_coords};
@@ -111,7 +111,7 @@ fn default_samples() -> PathBuf {
     if here.is_dir() { here } else { Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds") }
 }
 
-fn options(solver: &str, out: &Output) -> Result<CaptureOptions> {
+fn options(solver: SolverArg, out: &Output) -> Result<CaptureOptions> {
     SolveArgs::defaults(solver).options(out)
 }
 
@@ -251,10 +251,10 @@ fn capture_and_grow(args: &Args, samples: &Path, out: &Output, seconds: &mut Dem
     for dir in &regions {
         let region = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let files = Session::from_dir(dir)?;
-        for solver in ["robust", "ls"] {
+        for solver in [SolverArg::Robust, SolverArg::Ls] {
             let (mold, captured) = capture_mold(args, &region, &files, solver, out)?;
             molds.push(mold);
-            if solver == "robust" {
+            if solver == SolverArg::Robust {
                 captured_maps.push((dir, region.clone(), captured));
             }
             bar.inc(1);
@@ -281,18 +281,18 @@ fn capture_mold(
     args: &Args,
     region: &str,
     files: &Session,
-    solver: &str,
+    solver: SolverArg,
     out: &Output,
 ) -> Result<(MoldResult, Captured)> {
     let options = options(solver, out)?;
     let mut captured = session::capture(files, &options, &|_| {})?;
-    let target = args.out.join("capture").join(region).join(solver);
+    let target = args.out.join("capture").join(region).join(solver.name());
     pipeline::write_outputs(pipeline::capture_set(&target)?, &target, &mut captured, &options)?;
     let r = &captured.report;
     let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
     let mold = MoldResult {
         region: region.to_owned(),
-        solver: solver.into(),
+        solver: solver.name().into(),
         mean_error_deg: e.mean,
         rms_error_deg: e.rms,
         p95_error_deg: e.p95,
