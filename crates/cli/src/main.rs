@@ -13,6 +13,7 @@ mod interrupt;
 mod machine;
 mod output;
 mod pipeline;
+mod solve_flags;
 
 use clap::{Parser, Subcommand};
 

@@ -35,7 +35,7 @@ use skinkit_maps::limits::{self, MemoryGate};
 
 use skinkit_capture::session::CaptureOptions;
 
-use super::capture::SolveArgs;
+use crate::solve_flags::SolveArgs;
 
 /// The batch's report in its output folder (one per shard: [`shard::Shard::report_name`]).
 const REPORT: &str = "batch-report.json";

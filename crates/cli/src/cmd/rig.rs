@@ -58,7 +58,7 @@ pub struct CheckArgs {
     #[arg(value_name = "RIG")]
     pub rig: PathBuf,
     /// Largest condition number accepted, as `capture --max-condition` [default: 50].
-    #[arg(long, value_name = "C", value_parser = super::capture::condition_limit)]
+    #[arg(long, value_name = "C", value_parser = crate::solve_flags::condition_limit)]
     pub max_condition: Option<f64>,
 }
 

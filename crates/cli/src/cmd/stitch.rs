@@ -23,9 +23,9 @@ use skinkit_synth::SynthConfig;
 
 use skinkit_capture::session::{self, Session};
 
-use super::capture::{SolveArgs, SolverArg};
 use crate::flags;
 use crate::output::Output;
+use crate::solve_flags::{SolveArgs, SolverArg};
 use crate::{guard, pipeline};
 
 /// Options shared by `stitch` and `face`.

@@ -23,13 +23,13 @@ use skinkit_synth::SynthConfig;
 
 use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
 
-use super::capture::{SolveArgs, SolverArg};
 use super::figures::{FiguresReport, figures};
 use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
 use super::synth::{Map, QualityReport, quality, write_coords};
 use crate::machine::Machine;
 use crate::output::Output;
 use crate::pipeline;
+use crate::solve_flags::{SolveArgs, SolverArg};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
