@@ -34,6 +34,25 @@ fn synth(exemplar: &Path, out: &Path, extra: &[&str]) -> Output {
     o
 }
 
+/// The default level count adapts to a small exemplar without a word on stderr (issue 38:
+/// messages that are not problems do not read like warnings); the report gives the levels used,
+/// and an explicit `--levels` the exemplar cannot hold is still warned about.
+#[test]
+fn default_levels_adapt_to_a_small_exemplar_silently() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 32);
+    let (out, report) = (tmp.path().join("out.png"), tmp.path().join("r.json"));
+    let o = skinkit(&["synth", s(&exemplar), "--out", s(&out), "--size", "48x48", "--report", s(&report)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("warning") && !err.contains("clamped"), "{err}");
+    let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(saved["options"]["levels"], 3, "{saved}");
+    let o = skinkit(&["synth", s(&exemplar), "--out", s(&out), "--size", "48x48", "--levels", "5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: levels 5 clamped to 3"), "{}", stderr(&o));
+}
+
 #[test]
 fn synth_writes_output_coords_and_report_with_finite_metrics() {
     let tmp = tempfile::tempdir().unwrap();

@@ -380,20 +380,9 @@ pub fn build(
     let composed = compose(&layout, &exemplars, &compose_options, &|_| bar.inc(1))
         .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
     bar.finish_and_clear();
-    // The synthesis adjusts itself to small exemplars (fewer pyramid levels); the layout did not
-    // ask for anything else, so this is a note, said once for all the regions it applies to.
-    let mut adjusted: Vec<(&str, Vec<&str>)> = Vec::new();
-    for r in &composed.regions {
-        for w in &r.warnings {
-            match adjusted.iter_mut().find(|(m, _)| m == w) {
-                Some((_, names)) => names.push(&r.name),
-                None => adjusted.push((w, vec![&r.name])),
-            }
-        }
-    }
-    for (message, names) in adjusted {
-        out.note(format!("regions {}: {message}", names.join(", ")));
-    }
+    // Each region's synthesis takes as many pyramid levels as its exemplar allows (up to the
+    // default); the layout does not ask for a number, so that is no news on stderr. The report
+    // keeps what each region's synthesis adjusted (`regions[].warnings`).
     Ok(Face { layout, exemplars, composed, amplitude, seconds_exemplars })
 }
 

@@ -492,13 +492,15 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         );
     }
     let context = || format!("cannot synthesise from {}", exemplar_path.display());
-    let (validated, _) = requested.validate(ew, eh).with_context(context)?;
+    let (validated, adjusted) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };
     let progress = |level: usize, fraction: f32| bars.update(level, fraction);
     let (output, coords, warnings, level_seconds, guards) =
         grow_map(&exemplar, &requested, &progress).with_context(context)?;
     bars.finish();
-    for w in &warnings {
+    // The default level count adapts to the exemplar without a word; a `--levels` the exemplar
+    // cannot hold is worth a warning (the report gives the levels used either way).
+    for w in warnings.iter().filter(|w| args.levels.is_some() || !adjusted.contains(w)) {
         out.warn(w);
     }
     let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap, guards);
