@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Generates the tables of README's "Fuzzing and property tests" section from the repository:
 # - docs/properties.tsv: every proptest property (crate, test file, name, default case count), read
-#   from the `proptest!` blocks of crates/*/tests/properties.rs (`config(N)` gives the count);
+#   from the `proptest!` blocks of crates/*/tests/properties.rs and crates/*/tests/*/properties.rs (`config(N)` gives the count);
 # - the fuzzing table from docs/fuzz-summary.tsv (written by scripts/fuzz.sh).
 #
 #   scripts/reliability-table.sh            # write docs/properties.tsv, print both tables
@@ -12,7 +12,7 @@ cd "$root"
 
 props="docs/properties.tsv"
 printf 'crate\tfile\tproperty\tcases\n' >"$props"
-for f in crates/*/tests/properties.rs; do
+for f in crates/*/tests/properties.rs crates/*/tests/*/properties.rs; do
     crate="skinkit-$(echo "$f" | cut -d/ -f2)"
     # Inside a proptest! block, `config(N)` sets the count for the `fn` items after it.
     awk -v crate="$crate" -v file="$f" '

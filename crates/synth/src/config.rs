@@ -207,7 +207,7 @@ pub const DEFAULT_ROBUST_SCALE: f32 = 0.5;
 /// The default's [`SynthConfig::layout_penalty`] (the suite, 3 seeds, against none: the slope
 /// distribution distance fell on 12 of 15 exemplars (the heightfield nose 0.0127 -> 0.0069, the
 /// captured forehead 0.0051 -> 0.0028), the energy on 14 (the ink blots 0.113 -> 0.082; the brick
-/// photo's rose 0.57 -> 0.65, the peer's 1.64); `tests/quality.rs`' captured forehead went from
+/// photo's rose 0.57 -> 0.65, the peer's 1.64); `tests/synth/quality.rs`' captured forehead went from
 /// 2.1 to 1.1 times the slope distance of two halves of its mold. 0.1 and 0.2 raised the
 /// heightfield cheek's spectrum distance over the peer's, and so did 0.05 at the three coarsest
 /// levels or at every level.)
@@ -237,7 +237,7 @@ pub const DEFAULT_FALLBACK: f32 = 3.0;
 pub const DEFAULT_FINEST_FALLBACK: f32 = 6.0;
 
 /// The occurrence penalty of [`SynthConfig::scanline`] (the scanline start regresses to flat
-/// texels without it; measured in `tests/quality.rs`).
+/// texels without it; measured in `tests/synth/quality.rs`).
 pub const SCANLINE_OCCURRENCE_PENALTY: f32 = 4.0;
 
 /// The occurrence penalty of [`SynthConfig::collapse_retry`], at the coarser levels.

@@ -1,8 +1,8 @@
 //! The stitch side of the resource policy (issue 15): a resampled exemplar's size and its
 //! synthesis estimate are checked before it is resampled (D1), the coverage mask from its header
 //! before it is decoded, and a map at the size limit from its numbers before anything of its size
-//! is allocated (D6). Heap use is measured by a counting allocator: each measured call holds a
-//! lock, so no other test of this binary allocates meanwhile.
+//! is allocated (D6). Heap use is measured by a counting allocator (installed in main.rs) that counts
+//! only the measured call's threads; each measuring test holds a lock.
 
 use std::path::Path;
 
@@ -12,11 +12,8 @@ use skinkit_stitch::curve::CurveParams;
 use skinkit_stitch::layout::Layout;
 use skinkit_stitch::{ComposeOptions, compose};
 use skinkit_synth::SynthConfig;
-use skinkit_testkit::alloc::{Counting, alone, peak_during};
+use skinkit_testkit::alloc::{alone, peak_during};
 use skinkit_testkit::header_only_png;
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
 
 const MIB: usize = 1 << 20;
 

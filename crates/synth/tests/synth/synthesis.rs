@@ -11,8 +11,7 @@ use skinkit_synth::search::KCoherenceSets;
 use skinkit_synth::synthesis::histogram_noise;
 use skinkit_synth::{Error, Search, SynthConfig, replay, synthesize, synthesize_normals};
 
-mod support;
-use support::{pattern, quiet};
+use crate::support::{pattern, quiet};
 
 fn config(w: usize, h: usize, search: Search) -> SynthConfig {
     SynthConfig { levels: 2, search, ..SynthConfig::scanline(w, h) }

@@ -10,8 +10,7 @@ use skinkit_synth::neighbourhood::Neighbourhood;
 use skinkit_synth::synthesis::random_copies;
 use skinkit_synth::{Search, SynthConfig, synthesize};
 
-mod support;
-use support::{pattern, quiet};
+use crate::support::{pattern, quiet};
 
 /// The occurrence factor of `SynthConfig::occurrence_penalty` (Kopf et al. 2007): candidates
 /// copied more often than `expected` have their squared distance scaled up.

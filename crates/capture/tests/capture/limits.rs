@@ -1,7 +1,7 @@
 //! The capture side of the resource policy (issue 15): rigs are refused by one check that
 //! `capture` and `rig check` share (D7), and a photo stack over the memory limit is refused from
-//! the headers before any photo is decoded (D9). Heap use is measured by a counting allocator:
-//! each measured call holds a lock, so no other test of this binary allocates meanwhile.
+//! the headers before any photo is decoded (D9). Heap use is measured by a counting allocator
+//! (installed in main.rs) that counts only the measured call's threads; each measuring test holds a lock.
 
 use std::path::{Path, PathBuf};
 
@@ -10,11 +10,8 @@ use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_capture::solve::SolveConfig;
 use skinkit_capture::{Light, Rig};
 use skinkit_heightfield::dng::dng_of_rgb;
-use skinkit_testkit::alloc::{Counting, alone, peak_during};
+use skinkit_testkit::alloc::{alone, peak_during};
 use skinkit_testkit::header_only_png;
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
 
 const MIB: usize = 1 << 20;
 
