@@ -298,10 +298,19 @@ interrupts() {
     selected 6.3 || return 0
     local try signal delay rc bad start end note
     local dfl=(python3 -c 'import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execvp(sys.argv[1], sys.argv[1:])')
+    # The moments are drawn within the batch's own length, timed once uninterrupted first: a
+    # fixed range outlasts a batch on a fast machine, and the signal then finds nothing to stop.
+    # Never before 0.3 s: until the wrapper has reset SIGINT, it is ignored as in any background
+    # job of a script, and the batch would rightly run on.
+    local t0 length
+    rm -rf "$OUT/b40"
+    t0=$(date +%s.%N)
+    "$BIN" batch "$IN/batch40" --out "$OUT/b40" --quiet > /dev/null 2>&1
+    length=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.3f", b - a }')
     for try in 1 2 3; do
         signal=INT
         [ "$try" = 3 ] && signal=TERM
-        delay=$(awk -v s="$RANDOM" 'BEGIN { srand(s); printf "%.2f", 0.3 + 2.0 * rand() }')
+        delay=$(awk -v s="$RANDOM" -v t="$length" 'BEGIN { srand(s); printf "%.2f", 0.3 + 0.7 * (t - 0.3) * rand() }')
         rm -rf "$OUT/b40"
         hash_inputs "$LOG/before"
         start=$(date +%s.%N)
