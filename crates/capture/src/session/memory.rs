@@ -46,32 +46,26 @@ impl Input {
     }
 }
 
-/// Reads the headers of a session's images and checks each against the limits and the first
-/// photo's size; `role` names the image in errors.
-struct Headers<'a> {
-    options: &'a CaptureOptions,
-    first: (&'a Path, u64, u64),
-}
-
-impl Headers<'_> {
-    fn read(&self, path: &Path, role: &str) -> Result<Input> {
-        let raw = self.options.raw;
-        let header = limits::image_header_as(path, self.options.limits.max_pixels, raw)
-            .map_err(|e| context(role.to_owned(), e.into()))?;
-        let (first, w, h) = self.first;
-        if (header.width, header.height) != (w, h) && path != first {
-            return Err(Error::InvalidInput(format!(
-                "{role} ({}) is {}x{} but photo 1 ({}) is {w}x{h}",
-                path.display(),
-                header.width,
-                header.height,
-                first.display(),
-            )));
-        }
-        let transient =
-            if skinkit_maps::raw::is_raw(path) { skinkit_maps::raw::decode_cost(path, &header, raw) } else { 0 };
-        Ok(Input { header, transient })
+/// Reads a header against the limits, checked against the first photo's size (`first`, its path
+/// and size; `None` while reading that photo itself); `role` names the image in errors.
+fn read(path: &Path, role: &str, options: &CaptureOptions, first: Option<(&Path, ImageHeader)>) -> Result<Input> {
+    let raw = options.raw;
+    let header = limits::image_header_as(path, options.limits.max_pixels, raw)
+        .map_err(|e| context(role.to_owned(), e.into()))?;
+    if let Some((first, h)) = first.filter(|(_, h)| (h.width, h.height) != (header.width, header.height)) {
+        return Err(Error::InvalidInput(format!(
+            "{role} ({}) is {}x{} but photo 1 ({}) is {}x{}",
+            path.display(),
+            header.width,
+            header.height,
+            first.display(),
+            h.width,
+            h.height
+        )));
     }
+    let transient =
+        if skinkit_maps::raw::is_raw(path) { skinkit_maps::raw::decode_cost(path, &header, raw) } else { 0 };
+    Ok(Input { header, transient })
 }
 
 /// Bytes a capture of `session` holds at its peak (the module's stages), from the images'
@@ -98,19 +92,18 @@ pub(super) fn estimate(
         .photos
         .first()
         .ok_or_else(|| Error::InvalidInput(format!("rig {}: no photos were given", session.rig.display())))?;
-    let probe = Headers { options, first: (first, 0, 0) };
-    let head = probe.read(first, "photo 1")?.header;
-    let headers = Headers { options, first: (first, head.width, head.height) };
+    let head = read(first, "photo 1", options, None)?.header;
+    let read = |path: &Path, role: &str| read(path, role, options, Some((first, head)));
     let photos = (session.photos.iter().enumerate())
-        .map(|(i, p)| headers.read(p, &format!("photo {}", i + 1)))
+        .map(|(i, p)| read(p, &format!("photo {}", i + 1)))
         .collect::<Result<Vec<_>>>()?;
-    let ambient = ambient.map(|p| headers.read(p, "ambient frame")).transpose()?;
+    let ambient = ambient.map(|p| read(p, "ambient frame")).transpose()?;
     let px = head.pixels();
-    let mask = session.mask.as_deref().map(|p| headers.read(p, "mask")).transpose()?.map_or(0, |_| px);
-    let truth = session.truth.as_deref().map(|p| headers.read(p, "ground truth")).transpose()?.map_or(0, |_| 12 * px);
+    let mask = session.mask.as_deref().map(|p| read(p, "mask")).transpose()?.map_or(0, |_| px);
+    let truth = session.truth.as_deref().map(|p| read(p, "ground truth")).transpose()?.map_or(0, |_| 12 * px);
     let flats = match rig {
         Some(rig) => (rig.lights().iter().enumerate())
-            .filter_map(|(i, l)| l.flat().map(|p| headers.read(p, &format!("rig light {}: flat", i + 1))))
+            .filter_map(|(i, l)| l.flat().map(|p| read(p, &format!("rig light {}: flat", i + 1))))
             .collect::<Result<Vec<_>>>()?,
         None => Vec::new(),
     };
@@ -138,13 +131,13 @@ fn largest_transients(inputs: &mut [&Input], threads: usize) -> u64 {
 }
 
 /// The merge of each bracketed light, lights in photo order: the peak bytes held, the photos'
-/// bytes after it, and each light's reading (bytes, channels) after it.
-fn brackets(rig: Option<&Rig>, photos: &[Input], px: u64) -> (u64, u64, Vec<(u64, u64)>) {
+/// bytes after it, and each light's channel count.
+fn brackets(rig: Option<&Rig>, photos: &[Input], px: u64) -> (u64, u64, Vec<u64>) {
     let mut held: u64 = photos.iter().map(Input::decoded).sum();
     let mut peak = held;
     let Some(rig) = rig.filter(|r| r.lights().iter().map(crate::Light::photo_count).sum::<usize>() == photos.len())
     else {
-        return (peak, held, photos.iter().map(|p| (p.decoded(), p.channels())).collect());
+        return (peak, held, photos.iter().map(Input::channels).collect());
     };
     let mut lights = Vec::new();
     let mut at = 0;
@@ -152,39 +145,31 @@ fn brackets(rig: Option<&Rig>, photos: &[Input], px: u64) -> (u64, u64, Vec<(u64
         let group = &photos[at..at + light.photo_count()];
         at += group.len();
         let channels = group[0].channels();
+        lights.push(channels);
         if light.exposures().is_empty() {
-            lights.push((group[0].decoded(), channels));
             continue;
         }
         let merged = px * channels * F32;
         peak = peak.max(held + merged);
         held = held + merged - group.iter().map(Input::decoded).sum::<u64>();
-        lights.push((merged, channels));
     }
     (peak, held, lights)
 }
 
 /// The flat-field step: its peak bytes (0 when the rig corrects nothing) and the photos' bytes
 /// after it (the merged photos' when it does not run).
-fn flatten(
-    rig: Option<&Rig>,
-    flats: &[Input],
-    photos: u64,
-    lights: Vec<(u64, u64)>,
-    px: u64,
-    threads: usize,
-) -> (u64, u64) {
+fn flatten(rig: Option<&Rig>, flats: &[Input], photos: u64, lights: Vec<u64>, px: u64, threads: usize) -> (u64, u64) {
     let Some(rig) = rig.filter(|r| !flats.is_empty() || !r.vignetting().is_empty()) else {
         return (0, photos);
     };
-    let corrected: u64 = lights.iter().map(|&(_, c)| px * c * F32).sum();
+    let corrected: u64 = lights.iter().map(|&c| px * c * F32).sum();
     let vignetting = if rig.vignetting().is_empty() { 0 } else { px * F32 };
     // Per flat being read: its decode (and RAW transient), luminance, the gain in f64 and f32.
     let mut per_flat: Vec<u64> = flats.iter().map(|f| f.decoded() + f.transient + px * (4 + 8 + 4)).collect();
     per_flat.sort_unstable_by(|a, b| b.cmp(a));
     let fitting: u64 = per_flat.iter().take(threads.max(1)).sum();
     // The common rescale makes a second copy one photo at a time, after the merged are dropped.
-    let largest = lights.iter().map(|&(_, c)| px * c * F32).max().unwrap_or(0);
+    let largest = lights.iter().map(|&c| px * c * F32).max().unwrap_or(0);
     let peak = (photos + corrected + vignetting + fitting).max(corrected + largest);
     (peak, corrected)
 }
