@@ -5,7 +5,8 @@
 #   scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     # default 60 s, every target
 #
 # Targets live in fuzz/ (a Cargo workspace of its own, excluded from the main one); their entry
-# points are tests/fuzz/entries.rs, shared with the regression test tests/fuzz_regressions.rs.
+# points are tests/fuzz/entries.rs, shared with the regression tests tests/fuzz_regressions.rs (a
+# module of skinkit-cli's test binary `cli`).
 #
 # Toolchain: libFuzzer needs the sanitizer-coverage flags of a nightly compiler. With a nightly
 # toolchain installed (`rustup toolchain list`) the targets build with `cargo +nightly fuzz` and
@@ -20,7 +21,7 @@
 # libFuzzer limits per input: -rss_limit_mb=2048 (the image targets accept at most 2048x2048
 # pixels, 64 MiB as RGBA float, see FUZZ_LIMITS), -timeout=10 s, -max_len by kind below.
 # A crash, timeout or out-of-memory input is copied to tests/fuzz-regressions/<target>/, where
-# `cargo test -p skinkit-cli --test fuzz_regressions` replays it until the bug is fixed.
+# `cargo test -p skinkit-cli --test cli fuzz_regressions::` replays it until the bug is fixed.
 #
 # Output: one line per target (time, executions, crashes) and docs/fuzz-summary.tsv with columns
 # target, seconds, executions, execs_per_second, crashes, corpus, max_len, toolchain, load, date.
@@ -72,7 +73,7 @@ trap 'rm -rf "$seeds"' EXIT
 # fuzz/corpus/ and the repository's sample files are used alone then.
 if [ -z "${SKINKIT_FUZZ_SKIP_SEEDS:-}" ]; then
     # `--workspace`, as the test command builds it: `-p` would resolve other features and rebuild.
-    SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q --workspace --test fuzz_regressions valid_inputs -- --nocapture >/dev/null
+    SKINKIT_FUZZ_SEEDS="$seeds" cargo test -q --workspace --test cli fuzz_regressions::valid_inputs -- --nocapture >/dev/null
 else
     mkdir -p "$seeds"/{rig_toml,layout,scene}
     cp calibration/*.toml samples/molds/*/rig.toml "$seeds/rig_toml/" 2>/dev/null || true

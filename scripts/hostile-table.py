@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""Turns scripts/hostile.sh's results (TSV) into the README's table of hostile inputs.
+"""Turns scripts/hostile.sh's results (TSV) into the book's table of hostile inputs.
 
-usage: scripts/hostile-table.py [RESULTS.tsv] [--readme README.md] [--probe2-only]
+usage: scripts/hostile-table.py [RESULTS.tsv] [--doc docs/book/src/scripts.md] [--probe2-only]
 
-Replaces everything between the README's `<!-- hostile-table:begin -->` and
-`<!-- hostile-table:end -->` lines with a summary (inputs tried, failures handled, nothing lost)
-and one row per case; prints the Markdown instead when the README has no such lines or with
-`--readme -`. The table is generated, never typed: regenerate it after a run.
+Replaces everything between the chapter's `<!-- hostile-table:begin -->` and
+`<!-- hostile-table:end -->` lines (the book's "For scripts" chapter, section "Hostile inputs")
+with a summary (inputs tried, failures handled, nothing lost) and one row per case; prints the
+Markdown instead when the file has no such lines or with `--doc -`. The table is generated, never typed: regenerate it after a run.
 
 Also replaces what lies between `<!-- probe2-table:begin -->` and `<!-- probe2-table:end -->`
 with the second probe's table (issue 42), read from the test sources: every test named
@@ -114,10 +114,10 @@ def probe2_markdown(root):
     return "\n".join(out) + "\n"
 
 
-def replace(text, begin, end, table, readme):
+def replace(text, begin, end, table, doc):
     if begin not in text or end not in text:
         sys.stdout.write(table)
-        sys.exit(f"{readme}: no {begin} / {end} lines: the table was printed instead")
+        sys.exit(f"{doc}: no {begin} / {end} lines: the table was printed instead")
     head, rest = text.split(begin, 1)
     _, tail = rest.split(end, 1)
     return head + begin + "\n" + table + end + tail
@@ -125,10 +125,10 @@ def replace(text, begin, end, table, readme):
 
 def main(argv):
     args = argv[1:]
-    readme = "README.md"
-    if "--readme" in args:
-        i = args.index("--readme")
-        readme = args[i + 1]
+    doc = "docs/book/src/scripts.md"
+    if "--doc" in args:
+        i = args.index("--doc")
+        doc = args[i + 1]
         del args[i : i + 2]
     probe2_only = "--probe2-only" in args
     args = [a for a in args if a != "--probe2-only"]
@@ -136,15 +136,15 @@ def main(argv):
     probe2 = probe2_markdown(root)
     results = args[0] if args else "target/hostile/results.tsv"
     table = None if probe2_only else markdown(*read(results))
-    if readme == "-":
+    if doc == "-":
         sys.stdout.write((table or "") + "\n" + probe2)
         return
-    text = Path(readme).read_text()
+    text = Path(doc).read_text()
     if table is not None:
-        text = replace(text, BEGIN, END, table, readme)
-    text = replace(text, PROBE2_BEGIN, PROBE2_END, probe2, readme)
-    Path(readme).write_text(text)
-    print(f"{readme}: " + ("" if table is None else f"table of {results} and ") + "the second probe's table written")
+        text = replace(text, BEGIN, END, table, doc)
+    text = replace(text, PROBE2_BEGIN, PROBE2_END, probe2, doc)
+    Path(doc).write_text(text)
+    print(f"{doc}: " + ("" if table is None else f"table of {results} and ") + "the second probe's table written")
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@
 # Inputs are made in a scratch folder by the binary itself, the shell and
 # scripts/hostile_inputs.py (python3, standard library only). Each run is under `timeout` and an
 # address-space cap. Results: one TSV line per case (scripts/hostile-table.py turns them into the
-# README's table); a summary at the end. It mounts tmpfs for the full-disk rows when run as root
+# book's table, docs/book/src/scripts.md); a summary at the end. It mounts tmpfs for the full-disk rows when run as root
 # (skipped otherwise). CI runs it with --quick on the debug binary its tests built.
 #
 # usage: scripts/hostile.sh [--bin PATH] [--results FILE] [--only REGEX] [--quick] [--keep]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Peak memory and time of the resource policy's refusals (issue 15, README "Limits"): each case of
+# Peak memory and time of the resource policy's refusals (issue 15, the book's "Limits"): each case of
 # the reliability probe that aborted or spent gigabytes before refusing, re-run against the
 # release binary under `/usr/bin/time`, printed as a Markdown table.
 #

@@ -18,7 +18,7 @@ What it does, in order:
    relaxed into discs inside their rims, then moved with the eyeballs one map width to the right
    (u + 1), so texture-space passes give them no texel of the skin's.
 
-Needs numpy. Prints the counts and the face's texel density; `crates/render/tests/head.rs`
+Needs numpy. Prints the counts and the face's texel density; `crates/render/tests/render/head.rs`
 checks the committed result.
 """
 import sys

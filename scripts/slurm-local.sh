@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A Slurm cluster of this one machine, for the batch's scheduler test (tests/slurm_cli.rs) and for
-# trying the README's array recipe by hand.
+# trying the book's array recipe (docs/book/src/batches.md) by hand.
 #
 #   scripts/slurm-local.sh start DIR   installs slurm-wlm and munge with apt-get when missing (as
 #                                      root, or with sudo), writes DIR/slurm.conf for this host,

@@ -7,14 +7,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{bin, s, skinkit, stderr};
-#[path = "support/browser.rs"]
-mod browser;
-#[path = "support/sessions.rs"]
-mod sessions;
-use sessions::{Fault, assert_same_tree, molds, outcomes, report};
+use crate::support::sessions::{self, Fault, assert_same_tree, molds, outcomes, report};
+use crate::support::{bin, browser, s, skinkit, stderr};
 
 /// The variables `--shard auto` reads, removed from every run here (the tests may themselves run
 /// in an array job).

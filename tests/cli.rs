@@ -1,19 +1,37 @@
 //! End-to-end tests of the `skinkit` binary: what a user at a shell sees (exit codes, messages that
 //! name the file and field, outputs written whole or not at all).
+//!
+//! This file is the root of skinkit-cli's one test binary, `cli` (issue 38): every other file in
+//! `tests/` is one of its modules, so `cargo test -p skinkit-cli --test cli batch_cli::` runs one
+//! former test file's tests. The shared helpers are `support` (with `support::sessions` and
+//! `support::browser`), declared here once.
 
 use std::path::Path;
 use std::process::Output;
 
+mod accuracy_cli;
+mod batch_cli;
+mod demo_cli;
+mod docs_links;
+mod errors_cli;
+mod export_cli;
+mod fuzz_regressions;
 #[cfg(unix)]
-#[path = "gate_cli.rs"]
 mod gate_cli;
-#[path = "height_cli.rs"]
 mod height_cli;
+mod limits_cli;
+mod lut_cli;
+mod mesh_face_cli;
+mod outputs_cli;
 #[cfg(unix)]
-#[path = "probe2_cli.rs"]
 mod probe2_cli;
-#[path = "support/mod.rs"]
+mod raw_cli;
+mod render_cli;
+mod slurm_cli;
+mod stitch_cli;
 mod support;
+mod synth_cli;
+
 use support::{mold, skinkit, stderr};
 
 /// The JSON lines of a `--json` stream (`skinkit batch`): one record per line.

@@ -5,9 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{mold, repo, s, skinkit, stderr};
+use crate::support::{mold, repo, s, skinkit, stderr};
 
 /// A writer's temporary file (`.NAME.XXXXXX.tmp`) or an output set's staging folder
 /// (`.NAME.staging.OWNER.PID.N`) in `line`. The tests' own scratch folders (`/tmp/.tmpXXXXXX/`) are not.

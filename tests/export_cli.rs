@@ -13,10 +13,9 @@ use std::sync::OnceLock;
 use skinkit_maps::io::{Limits, read_photo};
 use skinkit_maps::{NormalEncoding, NormalMap, Samples};
 
-#[path = "support/mod.rs"]
-mod support;
 use skinkit_testkit::image_diff;
-use support::{repo, s, skinkit, stderr};
+
+use crate::support::{repo, s, skinkit, stderr};
 
 /// Render size: small, so the two renders stay quick on lavapipe.
 const SIZE: u32 = 256;
@@ -206,7 +205,7 @@ fn linear_pixels(path: &Path) -> Vec<f32> {
     v.clone()
 }
 
-// The tolerances of the renderer's GPU tests (crates/render/tests/gpu.rs: mean 0.005 and 99th
+// The tolerances of the renderer's GPU tests (crates/render/tests/render/gpu.rs: mean 0.005 and 99th
 // percentile 0.02 of the per-pixel largest channel error, relative to the brightest reference
 // channel). The export adds quantisation on top of the renderer's own differences: the albedo goes
 // from 16-bit linear to 8-bit sRGB and the normal map to 8 or 16 bits.

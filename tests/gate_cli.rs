@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use super::support::{mkfifo, mold, run_within, s, stderr};
+use crate::support::{mkfifo, mold, run_within, s, stderr};
 
 fn refused(o: &Output, wants: &[&str]) {
     let e = stderr(o);

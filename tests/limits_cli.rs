@@ -9,9 +9,7 @@ use std::process::Output;
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_testkit::header_only_png;
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{mold, s, skinkit, stderr};
+use crate::support::{mold, s, skinkit, stderr};
 
 /// Usage error: exit 2, and clap's message names the flag and the value.
 fn assert_usage_error(args: &[&str], flag: &str, value: &str) {

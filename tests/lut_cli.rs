@@ -7,9 +7,7 @@ use skinkit_render::skin::lut_file;
 use skinkit_render::skin::profile::{Domain, Normalisation};
 use skinkit_render::skin::shadow::{ShadowLut, ShadowLutSpec};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{s, skinkit};
+use crate::support::{s, skinkit};
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()

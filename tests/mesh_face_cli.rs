@@ -4,9 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{s, skinkit, stderr};
+use crate::support::{s, skinkit, stderr};
 
 /// A 2 x 1 plane (cm) in two quads split at x = 1, every corner its own `v` line: the left quad
 /// on u in [0, 0.25], the right on u in [0.25, 1]. OBJ's v runs up (`vt` v = y), so the map's

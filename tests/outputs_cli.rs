@@ -8,9 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{bin, s, skinkit, stderr};
+use crate::support::{bin, s, skinkit, stderr};
 
 /// What every complete capture folder holds; `report.json` marks it complete.
 const SET: [&str; 5] = ["normal.exr", "normal.png", "albedo.png", "confidence.png", "report.json"];
@@ -107,16 +105,45 @@ impl Rng {
     }
 }
 
-/// Runs a batch and sends `signal` after `delay`; the status is the batch's own. With `--force`,
-/// so every run captures all sessions again rather than skipping those an earlier run finished.
+/// Waits (up to 5 s) until process `pid` catches signal number `signo`: its handlers are installed
+/// a few ms after the start, later on a loaded machine (this binary's other tests run beside),
+/// and a signal before then would kill it with the default action. Returns at once when the
+/// process ignores the signal (inherited ignored, as in a script's background job, and kept so by
+/// the binary) or has exited. Linux only (`/proc/<pid>/status`); elsewhere it returns at once.
+fn wait_for_signal_handler(pid: u32, signo: u32) {
+    let bit = 1u64 << (signo - 1);
+    let mask = |status: &str, field: &str| {
+        let hex = status.lines().find_map(|l| l.strip_prefix(field)).map(str::trim);
+        hex.and_then(|m| u64::from_str_radix(m, 16).ok())
+    };
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(5) {
+        let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else { return };
+        // Already exited (a zombie until waited for): nothing left to catch.
+        if status.lines().any(|l| l.starts_with("State:") && l.contains('Z')) {
+            return;
+        }
+        let (Some(caught), Some(ignored)) = (mask(&status, "SigCgt:"), mask(&status, "SigIgn:")) else { return };
+        if (caught | ignored) & bit != 0 {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// Runs a batch and sends `signal` `delay` after its start, once it catches the signal; the status
+/// is the batch's own. With `--force`, so every run captures all sessions again rather than
+/// skipping those an earlier run finished.
 fn interrupted_batch(sessions: &Path, out: &Path, delay: Duration, signal: &str) -> Output {
+    let started = Instant::now();
     let child = bin()
         .args(["batch", "--quiet", "--force", s(sessions), "--out", s(out)])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(delay);
+    wait_for_signal_handler(child.id(), if signal == "-TERM" { 15 } else { 2 });
+    std::thread::sleep(delay.saturating_sub(started.elapsed()));
     // Not yet waited for, so the id is still this child's even if it has just exited.
     let kill = Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap();
     assert!(kill.success());
@@ -142,7 +169,7 @@ fn d4_interrupting_a_40_session_batch_leaves_complete_sessions_or_none() {
         let run = runs;
         runs += 1;
         let _ = std::fs::remove_file(out.join("batch-report.json"));
-        // At least 30 ms: the handler is installed a few ms after the start.
+        // At least 30 ms, and never before the handlers are installed (`interrupted_batch`).
         let delay = Duration::from_millis(30 + rng.below(full.saturating_sub(30).max(1)));
         let signal = if run % 4 == 3 { "-TERM" } else { "-INT" };
         let o = interrupted_batch(&sessions, &out, delay, signal);

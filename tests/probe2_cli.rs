@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::process::Output;
 use std::time::{Duration, Instant};
 
-use super::support::{mkfifo, mold, run_within, s, stderr};
+use crate::support::{mkfifo, mold, run_within, s, stderr};
 
 /// A scratch folder: `in/` holds the inputs, `out/` is where outputs go.
 struct Scratch {
@@ -130,7 +130,7 @@ fn probe2_d2_render_onto_the_environment_map_is_refused() {
                 latlong = \"cheek/truth.png\"\n[[light]]\nkind = \"directional\"\ndirection = [0.75, 0.35, 0.55]\n\
                 [[camera]]\nposition = [170.0, 25.0, 380.0]\ntarget = [0.0, 5.0, 0.0]\n[output]\nsize = [32, 24]\n";
     std::fs::write(&scene, text).unwrap();
-    std::fs::copy(super::support::repo().join("samples/head/head.obj"), scratch.input("head.obj")).unwrap();
+    std::fs::copy(crate::support::repo().join("samples/head/head.obj"), scratch.input("head.obj")).unwrap();
     let env = scratch.input("cheek/truth.png");
     scratch.case(2, &["--out", "truth.png"], &["render", s(&scene), "--out", s(&env)]);
 }

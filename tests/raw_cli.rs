@@ -4,9 +4,7 @@
 
 use std::path::Path;
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{s, skinkit, stderr};
+use crate::support::{s, skinkit, stderr};
 
 use skinkit_heightfield::dng::dng_of_rgb;
 

@@ -9,9 +9,7 @@ use std::process::Command;
 use skinkit_maps::io::{Limits, read_photo};
 use skinkit_maps::{NormalEncoding, NormalMap, Samples};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{repo, s, skinkit, stderr};
+use crate::support::{repo, s, skinkit, stderr};
 
 /// 8-bit RGB samples of a PNG render.
 fn pixels(path: &Path) -> (usize, usize, Vec<u8>) {

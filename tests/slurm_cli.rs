@@ -8,12 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{repo, s, skinkit, stderr};
-#[path = "support/sessions.rs"]
-mod sessions;
-use sessions::{Fault, assert_same_tree, molds, outcomes, report};
+use crate::support::sessions::{self, Fault, assert_same_tree, molds, outcomes, report};
+use crate::support::{repo, s, skinkit, stderr};
 
 /// The single-node cluster, stopped (its daemons only) when dropped.
 struct Cluster {

@@ -4,9 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{s, skinkit, stderr};
+use crate::support::{s, skinkit, stderr};
 
 fn molds() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").canonicalize().unwrap()

@@ -8,9 +8,7 @@ use std::process::Output;
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Vec3};
 
-#[path = "support/mod.rs"]
-mod support;
-use support::{s, skinkit, stderr};
+use crate::support::{s, skinkit, stderr};
 
 fn truth(region: &str) -> NormalMap {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/molds").join(region).join("truth.png");
@@ -314,49 +312,11 @@ fn probe2_d15_an_out_name_that_is_not_utf8_is_written() {
     let tmp = tempfile::tempdir().unwrap();
     let exemplar = normal_exemplar(tmp.path(), "cheek", 32);
     let out = tmp.path().join(std::ffi::OsStr::from_bytes(b"o\xff.png"));
-    let o = support::bin()
+    let o = crate::support::bin()
         .args(["synth", s(&exemplar), "--size", "16x16", "--quiet", "--out"])
         .arg(&out)
         .output()
         .expect("skinkit runs");
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.is_file());
-}
-
-/// The `sh` blocks of a README section (`## NAME` up to the next `## `), one command a line.
-fn readme_commands(section: &str) -> Vec<String> {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
-    let start = readme.find(&format!("\n## {section}\n")).unwrap_or_else(|| panic!("README has no section {section}"));
-    let body = &readme[start + 4..];
-    let body = &body[..body.find("\n## ").unwrap_or(body.len())];
-    let mut commands = Vec::new();
-    for block in body.split("```sh\n").skip(1) {
-        let block = &block[..block.find("```").unwrap()];
-        commands.extend(block.lines().filter(|l| !l.trim().is_empty()).map(str::to_owned));
-    }
-    assert!(!commands.is_empty(), "section {section} shows no command");
-    commands
-}
-
-/// The README's capture and growth examples run as written, in order, from a folder holding
-/// only the repository's samples (issue 38: every command it shows runs on a fresh clone).
-#[test]
-fn the_readme_capture_and_synth_examples_run_as_written() {
-    let tmp = tempfile::tempdir().unwrap();
-    let samples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples").canonicalize().unwrap();
-    std::os::unix::fs::symlink(samples, tmp.path().join("samples")).unwrap();
-    let bin = Path::new(env!("CARGO_BIN_EXE_skinkit")).parent().unwrap().to_owned();
-    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
-    for section in ["Capturing a mold", "Growing a map"] {
-        for command in readme_commands(section) {
-            let o = std::process::Command::new("bash")
-                .args(["-c", &format!("{command} --quiet")])
-                .current_dir(tmp.path())
-                .env("PATH", &path)
-                .output()
-                .unwrap();
-            assert!(o.status.success(), "README, {section}: `{command}` failed:\n{}", stderr(&o));
-        }
-    }
-    assert!(tmp.path().join("albedo-512.png").is_file());
 }

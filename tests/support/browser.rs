@@ -1,8 +1,5 @@
 //! Opening a page in headless Chromium (`tools/page-check/check-page.mjs`) from a test.
 
-// Each test file that takes this uses part of it.
-#![allow(dead_code)]
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

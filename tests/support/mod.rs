@@ -1,9 +1,12 @@
 //! What the end-to-end tests of the `skinkit` binary share: running it, reading what it said, and
-//! the repository's sample folders. Each test file takes it with
-//! `#[path = "support/mod.rs"] mod support;` and uses what it needs.
+//! the repository's sample folders. Declared once, by the test binary's root `tests/cli.rs`; each
+//! module takes what it needs with `use crate::support::...`.
 
-// Every test file is its own crate, and none uses every helper.
+// Some helpers serve only tests that are compiled on Unix (the FIFO and hang checks).
 #![allow(dead_code)]
+
+pub mod browser;
+pub mod sessions;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -2,10 +2,6 @@
 //! tiny sample molds made by `skinkit samples`, some made bad on purpose the ways a lab's
 //! captures go bad, and what a batch's output tree holds, to compare two of them bit for bit.
 
-// Each test file that takes this (`#[path = "support/sessions.rs"] mod sessions;`, beside
-// `support`) uses part of it.
-#![allow(dead_code)]
-
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

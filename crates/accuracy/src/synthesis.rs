@@ -3,7 +3,7 @@
 //! square crop of the sample forehead mold's true normals (`samples/molds/forehead/truth.png`).
 //!
 //! Error: the neighbourhood-matching energy of the output ([`window_energy`], 5x5 windows, every
-//! other texel per axis; as the README's synthesis table), beside the largest verbatim copy as a
+//! other texel per axis; as the book's synthesis table), beside the largest verbatim copy as a
 //! share of the exemplar, the slope-histogram distance and the kept variation. Cost: the growth's
 //! wall-clock time (the measures are not timed).
 

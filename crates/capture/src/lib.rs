@@ -17,6 +17,7 @@ pub mod error;
 pub mod flat;
 pub mod import;
 pub mod near;
+pub mod outputs;
 pub mod readings;
 pub mod rig;
 pub mod robust;

@@ -206,38 +206,13 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     check_memory(session, &rig, ambient.as_ref().map(|(p, _)| p.as_path()), options)?;
 
     progress(Stage::Decode);
-    let t = Instant::now();
-    let inputs = decode(session, ambient.as_ref().map(|(p, role)| (p.as_path(), role.as_str())), options)?;
-    timings.decode = t.elapsed().as_secs_f64();
-
-    let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
-    let mut corrections = corrections(&rig, inputs.ambient.is_some());
-    if session.photos.iter().any(|p| skinkit_maps::raw::is_raw(p)) {
-        corrections.insert(0, raw_reading(options.raw));
-    }
-    let saturation = options.solve.saturation;
-    let (merged, readings) =
-        bracket::merge_rig(&rig, inputs.photos, &names, inputs.ambient.is_some(), saturation).map_err(in_rig)?;
-    let (photos, ambient_frame, scale) = flatten(&rig, merged, inputs.ambient, &readings, options)?;
-    let mut stack = PhotoStack::new(photos, readings)?;
-    if let (Some(frame), Some((path, _))) = (ambient_frame, &ambient) {
-        stack = stack.with_ambient(frame, &path.display().to_string())?;
-    }
-    if let Some(mask) = inputs.mask {
-        stack = stack.with_mask(mask)?;
-    }
+    let Stacked { stack, names, corrections, scale, truth } =
+        stacked(session, &rig, ambient.as_ref(), options, &mut timings)?;
     let (width, height) = (stack.width(), stack.height());
 
     progress(Stage::Solve);
     let t = Instant::now();
-    let near_lights = near::applies(&rig);
-    let mut solution = if near_lights {
-        near::solve(&stack, &rig, &options.solve).map_err(in_rig)?
-    } else {
-        solve::solve(&stack, &rig, &options.solve, &solve::no_progress).map_err(in_rig)?
-    };
-    drop(stack);
-    unscale_albedo(&mut solution.albedo, scale);
+    let (mut solution, near_lights) = solved(stack, &rig, options, scale).map_err(in_rig)?;
     timings.solve = t.elapsed().as_secs_f64();
 
     progress(Stage::Detrend);
@@ -249,15 +224,9 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let t = Instant::now();
     let tilt = tilt_stats(&solution.normals);
     let error_vs_truth =
-        inputs.truth.map(|truth| compare_with_truth(&solution.normals, truth, options.detrend_block)).transpose()?;
+        truth.map(|truth| compare_with_truth(&solution.normals, truth, options.detrend_block)).transpose()?;
     let invalid = solution.stats.invalid_count;
-    if invalid * 10 > width * height {
-        warnings.push(format!(
-            "{invalid} of {} pixels ({:.1}%) could not be solved (shadowed, saturated or too few usable lights)",
-            width * height,
-            100.0 * invalid as f64 / (width * height) as f64
-        ));
-    }
+    warnings.extend(unsolved_warning(invalid, width * height));
     timings.stats = t.elapsed().as_secs_f64();
 
     progress(Stage::Height);
@@ -291,6 +260,71 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
         corrections,
     };
     Ok(Captured { solution, height: heights, report })
+}
+
+/// Solves the stack (near point lights when the rig gives every lamp's position and the pixel
+/// size, else distant lights) and undoes the flat-field rescale of the albedo; `true` with near
+/// lights.
+fn solved(stack: PhotoStack, rig: &Rig, options: &CaptureOptions, scale: f32) -> Result<(solve::Solution, bool)> {
+    let near_lights = near::applies(rig);
+    let mut solution = if near_lights {
+        near::solve(&stack, rig, &options.solve)?
+    } else {
+        solve::solve(&stack, rig, &options.solve, &solve::no_progress)?
+    };
+    drop(stack);
+    unscale_albedo(&mut solution.albedo, scale);
+    Ok((solution, near_lights))
+}
+
+/// The photos of a capture stacked for the solve, with what the report needs of their reading.
+struct Stacked {
+    stack: PhotoStack,
+    names: Vec<String>,
+    corrections: Vec<String>,
+    scale: f32,
+    truth: Option<NormalMap>,
+}
+
+/// Decodes `session`'s files (timed into `timings.decode`), merges each light's brackets,
+/// corrects the flat fields and stacks the photos with the ambient frame and mask.
+fn stacked(
+    session: &Session,
+    rig: &Rig,
+    ambient: Option<&(PathBuf, String)>,
+    options: &CaptureOptions,
+    timings: &mut Timings,
+) -> Result<Stacked> {
+    let t = Instant::now();
+    let inputs = decode(session, ambient.map(|(p, role)| (p.as_path(), role.as_str())), options)?;
+    timings.decode = t.elapsed().as_secs_f64();
+    let names: Vec<String> = session.photos.iter().map(|p| p.display().to_string()).collect();
+    let mut corrections = corrections(rig, inputs.ambient.is_some());
+    if session.photos.iter().any(|p| skinkit_maps::raw::is_raw(p)) {
+        corrections.insert(0, raw_reading(options.raw));
+    }
+    let saturation = options.solve.saturation;
+    let (merged, readings) = bracket::merge_rig(rig, inputs.photos, &names, inputs.ambient.is_some(), saturation)
+        .map_err(|e| context(session.rig.display().to_string(), e))?;
+    let (photos, ambient_frame, scale) = flatten(rig, merged, inputs.ambient, &readings, options)?;
+    let mut stack = PhotoStack::new(photos, readings)?;
+    if let (Some(frame), Some((path, _))) = (ambient_frame, ambient) {
+        stack = stack.with_ambient(frame, &path.display().to_string())?;
+    }
+    if let Some(mask) = inputs.mask {
+        stack = stack.with_mask(mask)?;
+    }
+    Ok(Stacked { stack, names, corrections, scale, truth: inputs.truth })
+}
+
+/// The warning of a capture that left more than a tenth of its `pixels` unsolved.
+fn unsolved_warning(invalid: usize, pixels: usize) -> Option<String> {
+    (invalid * 10 > pixels).then(|| {
+        format!(
+            "{invalid} of {pixels} pixels ({:.1}%) could not be solved (shadowed, saturated or too few usable lights)",
+            100.0 * invalid as f64 / pixels as f64
+        )
+    })
 }
 
 /// Checks a rig against everything [`capture`] refuses of a rig before decoding a photo: at most

@@ -65,6 +65,17 @@ pub fn penumbra_mm(text: &str) -> Result<f32, String> {
 }
 
 /// A face map size `WxH` of at most [`limits::MAX_MAP_TEXELS`] texels.
+/// `WIDTHxHEIGHT` with positive integers (`x` or `X`).
+pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("`{text}` is not a size: expected WIDTHxHEIGHT with positive integers, e.g. 512x512");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = |s: &str| s.trim().parse::<usize>().ok().filter(|&v| v > 0);
+    match (side(w), side(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(bad()),
+    }
+}
+
 pub fn map_size(text: &str) -> Result<(usize, usize), String> {
     size_within(text, limits::MAX_MAP_TEXELS, "a face map may be", "texels, 32768x32768")
 }
@@ -76,7 +87,7 @@ pub fn image_size(text: &str) -> Result<(usize, usize), String> {
 
 /// A `WxH` size whose area is at most `max` (no overflow), else a message naming `what` and `unit`.
 fn size_within(text: &str, max: u64, what: &str, unit: &str) -> Result<(usize, usize), String> {
-    let (w, h) = crate::cmd::synth::parse_size(text)?;
+    let (w, h) = parse_size(text)?;
     match (w as u64).checked_mul(h as u64) {
         Some(n) if n <= max => Ok((w, h)),
         _ => Err(format!("`{text}` is larger than {what} ({max} {unit})")),
@@ -97,7 +108,7 @@ pub fn square_side(
 /// A parser of `WxH` sizes of at most `max` per side.
 pub fn size_at_most(max: usize) -> impl Fn(&str) -> Result<(usize, usize), String> + Clone + Send + Sync + 'static {
     move |text: &str| {
-        let (w, h) = crate::cmd::synth::parse_size(text)?;
+        let (w, h) = parse_size(text)?;
         if w > max || h > max {
             return Err(format!("`{text}` is larger than {max}x{max}"));
         }
@@ -107,6 +118,16 @@ pub fn size_at_most(max: usize) -> impl Fn(&str) -> Result<(usize, usize), Strin
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn sizes_parse_and_bad_ones_explain_the_format() {
+        assert_eq!(parse_size("512x256"), Ok((512, 256)));
+        assert_eq!(parse_size("7X3"), Ok((7, 3)));
+        for bad in ["512", "0x4", "ax4", "4x", "-1x3", "4x4x4"] {
+            let e = parse_size(bad).unwrap_err();
+            assert!(e.contains(bad) && e.contains("WIDTHxHEIGHT"), "{bad}: {e}");
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -7,12 +7,13 @@
 //! `interrupt`). Errors print as one line ([`output::Output::error`]), each cause once.
 
 mod cmd;
+mod face;
 mod flags;
-mod guard;
 mod interrupt;
 mod machine;
 mod output;
 mod pipeline;
+mod render_job;
 mod solve_flags;
 
 use clap::{Parser, Subcommand};

@@ -142,62 +142,24 @@ fn tagged<T: Serialize>(kind: &str, value: &T) -> String {
     json.to_string()
 }
 
-/// The error and its causes on one line, each cause once (issue 15, D10). Two rules:
-/// - a cause whose text the line already holds is skipped (a library error that embeds its
-///   source's text, as every skinkit error does, repeats nothing);
-/// - a cause that opens with what the line ends with drops that opening, so a context naming a
-///   file (`cannot write a.png`) and a library error naming it again (`a.png: Is a directory`)
-///   read `cannot write a.png: Is a directory`.
+/// The error and its causes on one line, each cause once ([`skinkit_maps::error::one_line`]).
 pub(crate) fn one_line(error: &anyhow::Error) -> String {
-    let mut line = String::new();
-    for cause in error.chain() {
-        join_cause(&mut line, &cause.to_string());
-    }
-    line
+    skinkit_maps::error::one_line(error.as_ref())
 }
 
 /// A command line that asks for something impossible (an `--out` that is an input, a folder where
-/// a file goes): refused before any work, exit 2 like clap's own usage errors.
-#[derive(Debug)]
-pub struct UsageError(pub String);
+/// a file goes): refused before any work, exit 2 like clap's own usage errors. The output gate's
+/// refusals are these.
+pub use skinkit_maps::gate::Refused as UsageError;
 
-impl std::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// A [`UsageError`] as an `anyhow::Error`.
+pub fn usage(message: String) -> anyhow::Error {
+    anyhow::Error::new(UsageError(message))
 }
-
-impl std::error::Error for UsageError {}
 
 /// The exit code of a failed run: 2 for a [`UsageError`] anywhere in the chain, else 1.
 pub fn exit_code(error: &anyhow::Error) -> i32 {
     if error.chain().any(|cause| cause.is::<UsageError>()) { 2 } else { 1 }
-}
-
-/// Appends `cause` to `line` under the rules of [`one_line`].
-fn join_cause(line: &mut String, cause: &str) {
-    if cause.is_empty() || line.contains(cause) {
-        return;
-    }
-    let rest = match cause.split_once(": ") {
-        Some((head, rest)) if ends_with_word(line, head) => rest,
-        _ => cause,
-    };
-    if line.contains(rest) {
-        return;
-    }
-    if !line.is_empty() {
-        line.push_str(": ");
-    }
-    line.push_str(rest);
-}
-
-/// `line` ends with `word` as a whole word (after a space, a quote or bracket, or as all of it).
-fn ends_with_word(line: &str, word: &str) -> bool {
-    match line.strip_suffix(word) {
-        Some(before) => !line.is_empty() && before.chars().last().is_none_or(|c| " ([`'\"".contains(c)),
-        None => false,
-    }
 }
 
 #[cfg(test)]

@@ -19,3 +19,14 @@ pub enum Error {
 
 /// The crate's result type.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A height error as the `maps` crate's, which output sets carry: its own `maps` error where it
+/// has one, else its message.
+impl From<Error> for skinkit_maps::Error {
+    fn from(e: Error) -> Self {
+        match e {
+            Error::Maps(e) => e,
+            other => skinkit_maps::Error::InvalidParameter(other.to_string()),
+        }
+    }
+}

@@ -48,7 +48,7 @@ impl Error {
         Error::Decode { path: path.into(), reason: reason.to_string() }
     }
 
-    /// An `image` crate refusal in the README's words (issue 42, D16): what the decoder cannot
+    /// An `image` crate refusal in the book's words (issue 42, D16): what the decoder cannot
     /// handle becomes the list of layouts skinkit reads, and the decoder's own memory limit is
     /// told apart from `--memory-limit`, never a Debug dump of the decoder's types.
     pub(crate) fn image(path: &std::path::Path, error: image::ImageError) -> Self {
@@ -66,9 +66,51 @@ impl Error {
     }
 }
 
-/// The pixel layouts image files may have, as the README's formats table gives them.
+/// The pixel layouts image files may have, as the book's formats table gives them.
 pub(crate) const LAYOUTS_READ: &str = "its pixel layout is not one skinkit reads: PNG or TIFF of 8 or 16 bits \
      a sample, grey or RGB (alpha ignored), or float EXR with R, G and B channels";
+
+/// The error and its causes on one line, each cause once (issue 15, D10). Two rules:
+/// - a cause whose text the line already holds is skipped (a library error that embeds its
+///   source's text, as every skinkit error does, repeats nothing);
+/// - a cause that opens with what the line ends with drops that opening, so a context naming a
+///   file (`cannot write a.png`) and a library error naming it again (`a.png: Is a directory`)
+///   read `cannot write a.png: Is a directory`.
+pub fn one_line(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut line = String::new();
+    let mut cause = Some(error);
+    while let Some(e) = cause {
+        join_cause(&mut line, &e.to_string());
+        cause = e.source();
+    }
+    line
+}
+
+/// Appends `cause` to `line` under the rules of [`one_line`].
+fn join_cause(line: &mut String, cause: &str) {
+    if cause.is_empty() || line.contains(cause) {
+        return;
+    }
+    let rest = match cause.split_once(": ") {
+        Some((head, rest)) if ends_with_word(line, head) => rest,
+        _ => cause,
+    };
+    if line.contains(rest) {
+        return;
+    }
+    if !line.is_empty() {
+        line.push_str(": ");
+    }
+    line.push_str(rest);
+}
+
+/// `line` ends with `word` as a whole word (after a space, a quote or bracket, or as all of it).
+fn ends_with_word(line: &str, word: &str) -> bool {
+    match line.strip_suffix(word) {
+        Some(before) => !line.is_empty() && before.chars().last().is_none_or(|c| " ([`'\"".contains(c)),
+        None => false,
+    }
+}
 
 #[cfg(test)]
 mod tests {

@@ -19,9 +19,11 @@
 //! texture coordinate (0, 0) at the top-left texel (as glTF and wgpu do); loaders of bottom-left
 //! formats (OBJ) flip v.
 
+pub mod documents;
 pub mod encoding;
 pub mod error;
 mod exr_write;
+pub mod gate;
 pub mod grid;
 pub mod input;
 pub mod io;

@@ -368,5 +368,14 @@ impl Drop for Admission<'_> {
     }
 }
 
+/// The process's peak resident set (Linux's `VmHWM`) in MiB, where `/proc` exposes it: what
+/// reports give as the memory a run took.
+pub fn peak_resident_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
 #[cfg(test)]
 mod tests;

@@ -1,5 +1,5 @@
 //! Grey TIFFs with extra samples (grey and alpha), which the `image` crate's TIFF decoder refuses
-//! as "Multiband" (issue 42, D16). The README promises grey or RGB photos with alpha ignored, as
+//! as "Multiband" (issue 42, D16). The book promises grey or RGB photos with alpha ignored, as
 //! for PNG, so these are read with the `tiff` crate and the first sample of each pixel kept.
 
 use std::io::{Read, Seek};
@@ -71,7 +71,7 @@ pub(crate) fn decode(path: &Path, reader: impl Read + Seek, found: GreyExtra, ma
     let pixels = crate::limits::check_pixels(path, found.width.into(), found.height.into(), max_pixels)?;
     let bad = |e: tiff::TiffError| Error::decode(path, e);
     // The pixel limit was checked above; the crate's own buffer limit (256 MiB) would refuse a
-    // 16-bit grey and alpha photo of 8192 x 8192 that the README accepts.
+    // 16-bit grey and alpha photo of 8192 x 8192 that the book accepts.
     let mut decoder = Decoder::new(reader).map_err(bad)?.with_limits(tiff::decoder::Limits::unlimited());
     let step = usize::from(found.samples);
     let samples = match decoder.read_image().map_err(bad)? {
@@ -125,7 +125,7 @@ mod tests {
         bytes
     }
 
-    /// Issue 42, D16: a 16-bit grey and alpha TIFF is read as grey, alpha ignored, as the README
+    /// Issue 42, D16: a 16-bit grey and alpha TIFF is read as grey, alpha ignored, as the book
     /// says; its header says so too (the memory estimate reads headers first).
     #[test]
     fn probe2_d16_a_16_bit_grey_and_alpha_tiff_reads_as_grey() {
@@ -145,7 +145,7 @@ mod tests {
         assert!(matches!(decode_photo(&path, Cursor::new(bytes), &tiny), Err(Error::TooLarge { .. })));
     }
 
-    /// Issue 42, D16: a layout skinkit does not read is refused in the README's words, never with
+    /// Issue 42, D16: a layout skinkit does not read is refused in the book's words, never with
     /// the decoder's Debug dump (`Unknown(32)`, `Multiband { .. }`).
     #[test]
     fn probe2_d16_unsupported_layouts_are_refused_in_the_readmes_words() {

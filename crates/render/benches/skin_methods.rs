@@ -17,7 +17,8 @@
 //! - `SKIN_METHODS_REFERENCE=N`: the reference's light map (2048; its half is a row too);
 //! - `SKIN_METHODS_ONLY=lambert,lut-256`: these methods only (the reference always);
 //! - `SKIN_METHODS_SIZE=WxH`: one image size for every scene (else each scene's own);
-//! - `SKIN_METHODS_DOCS=1`: the tables into the README.
+//! - `SKIN_METHODS_DOCS=1`: the tables into the book's "Skin scattering" chapter
+//!   (`docs/book/src/skin-scattering.md`).
 //!
 //! The plot of error against time is `skinkit accuracy`'s rendering stage (plotters), which
 //! measures the same methods on the sphere and the head.
@@ -90,11 +91,11 @@ fn main() {
     let all = tables.join("\n");
     write(&out.join("skin-methods.md"), &all);
     if docs() {
-        splice_readme(&root.join("README.md"), &all);
+        splice_doc(&root.join("docs/book/src/skin-scattering.md"), &all);
     }
 }
 
-/// `SKIN_METHODS_DOCS=1`: the tables go into the README and the plots into `docs/`.
+/// `SKIN_METHODS_DOCS=1`: the tables go into the book.
 fn docs() -> bool {
     std::env::var("SKIN_METHODS_DOCS").is_ok_and(|v| v == "1")
 }
@@ -171,16 +172,16 @@ fn write_pngs<'a>(stem: &Path, renders: impl Iterator<Item = (String, &'a Render
     }
 }
 
-/// Replaces the README's text between `<!-- skin-methods:start -->` and `<!-- skin-methods:end -->`.
-fn splice_readme(readme: &Path, tables: &str) {
-    let text = std::fs::read_to_string(readme).unwrap_or_else(|e| panic!("{}: {e}", readme.display()));
+/// Replaces the chapter's text between `<!-- skin-methods:start -->` and `<!-- skin-methods:end -->`.
+fn splice_doc(doc: &Path, tables: &str) {
+    let text = std::fs::read_to_string(doc).unwrap_or_else(|e| panic!("{}: {e}", doc.display()));
     let (start, end) = ("<!-- skin-methods:start -->", "<!-- skin-methods:end -->");
     let (Some(a), Some(b)) = (text.find(start), text.find(end)) else {
-        panic!("{}: no {start} ... {end} markers", readme.display());
+        panic!("{}: no {start} ... {end} markers", doc.display());
     };
     let spliced = format!("{}{start}\n{tables}{}", &text[..a], &text[b..]);
-    write(&readme.to_path_buf(), &spliced);
-    eprintln!("README tables updated");
+    write(&doc.to_path_buf(), &spliced);
+    eprintln!("{}: tables updated", doc.display());
 }
 
 /// `SKIN_METHODS_SIZE=WxH`, when set: the image size for every scene (else each scene's own).

@@ -1,5 +1,5 @@
 //! Prints how long the pre-integrated tables take to build at their default 256x256 size (all
-//! cores), for the README and reports: `cargo run -p skinkit-render --example lut_timing --profile test`.
+//! cores), for the book and reports: `cargo run -p skinkit-render --example lut_timing --profile test`.
 
 use std::time::Instant;
 

@@ -22,7 +22,7 @@
 //! baker with bottom-left UVs (Blender) uses for its green-up maps. Decoding a texel is then
 //! `n_object = T * n.x + B * n.y + N * n.z` ([`to_object`]). An unmirrored layout (image up on
 //! the surface's "up" seen from outside) has `w = +1`; a mirrored one `w = -1`. Getting this
-//! wrong turns pores into bumps; `tests/frames.rs` pushes a known bump through the whole path.
+//! wrong turns pores into bumps; `tests/render/frames.rs` pushes a known bump through the whole path.
 //!
 //! # Hard cases
 //! Triangles with zero UV area or zero 3-D area contribute nothing. When a vertex's accumulated

@@ -19,8 +19,9 @@
 //! `samples/face/layout.toml` puts its regions. The pockets, which fold over in the projection,
 //! are relaxed (each an averaged disc inside its rim) and, with the eyeballs (each a disc about
 //! its front pole), moved one map width to the right (`u + 1`): a repeating sampler reads the
-//! same texels, and texture-space passes, which draw into the map, leave them out. `crates/render/tests/head.rs` measures the
-//! layout: no flipped or zero-area face triangle, the face's texel density in a stated range.
+//! same texels, and texture-space passes, which draw into the map, leave them out.
+//! `crates/render/tests/render/head.rs` measures the layout: no flipped or zero-area face
+//! triangle, the face's texel density in a stated range.
 
 use std::io::Write;
 use std::path::Path;

@@ -48,6 +48,25 @@ pub enum Error {
     /// A region's exemplar (normal map or capture session) is not where the layout says.
     #[error("{}: region `{region}`: {what} {} does not exist", origin.display(), path.display())]
     MissingExemplar { origin: PathBuf, region: String, what: &'static str, path: PathBuf },
+    /// A region's exemplar could not be read, or its session could not be captured.
+    #[error("{}: region `{region}`: {what}", origin.display())]
+    Exemplar {
+        origin: PathBuf,
+        region: String,
+        what: String,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// Integrating a face's height failed.
+    #[error("cannot integrate the face's normals")]
+    Height(#[source] skinkit_height::Error),
+    /// Writing one of a face's files failed.
+    #[error("cannot write {}", path.display())]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: skinkit_maps::Error,
+    },
     /// Reading a file failed.
     #[error("{}: {error}", path.display())]
     Io { path: PathBuf, error: std::io::Error },

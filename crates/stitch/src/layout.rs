@@ -18,7 +18,7 @@
 //! seed = 11                          # optional synthesis seed of this region
 //! ```
 //!
-//! Coordinates follow the workspace convention (README, "Formats and conventions"): image row 0
+//! Coordinates follow the workspace convention (the book, "Formats and conventions"): image row 0
 //! at the top, so `v = 0` is the top row. This matches glTF and wgpu UVs; a layout made against
 //! an OBJ/OpenGL unwrap (v up) must use `1 - v`. A UV point goes to the texel containing it,
 //! `(floor(u * width), floor(v * height))`, clamped so `u = 1` or `v = 1` is the last texel.

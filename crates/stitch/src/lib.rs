@@ -9,6 +9,7 @@
 pub mod compose;
 pub mod curve;
 pub mod error;
+pub mod face;
 pub mod layout;
 pub mod partition;
 pub mod seam;
@@ -18,3 +19,4 @@ pub mod udim;
 
 pub use compose::{ComposeOptions, Composed, compose};
 pub use error::{Error, Result};
+pub use face::{Face, FaceOptions, FaceReport};

@@ -17,9 +17,9 @@
 //! megatexel and the process's peak resident memory after each size.
 //!
 //! Outputs: the markdown tables on stderr and in `target/synth-suite.md`. With `SYNTH_SUITE_DOCS=1`
-//! the tables also replace the block between the suite markers in the README, and a contact sheet
-//! (exemplar | peer | skinkit per exemplar, seed 1, normals shaded) goes to
-//! `docs/synth-contact-sheet.png` (the peer then runs again for seed 1, for its output).
+//! the tables also replace the block between the suite markers in the book's chapter
+//! `docs/book/src/synthesis.md`, and a contact sheet (exemplar | peer | skinkit per exemplar, seed
+//! 1, normals shaded) goes to `docs/synth-contact-sheet.png` (the peer then runs again for seed 1, for its output).
 //!
 //! The three texture photos come from the folder `SYNTH_SUITE_TEXTURES` names (without it they
 //! are skipped, and the report has 9 exemplars). Knobs for experiments: `SYNTH_SUITE_CONFIG` (keys as `k=2,j=1,...`, see [`parse_config`]),
@@ -298,7 +298,7 @@ fn main() {
     std::fs::write(&out, &markdown).expect("writes the suite report");
     eprintln!("written to {}", out.display());
     if docs {
-        report::splice_readme(&markdown);
+        report::splice_doc(&markdown);
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../docs/synth-contact-sheet.png");
         report::contact_sheet(&results).save(&path).expect("writes the contact sheet");
         eprintln!("contact sheet: {}", path.display());

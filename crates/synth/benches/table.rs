@@ -1,7 +1,7 @@
-//! The accuracy-against-time table of issue 3 (for the README): a 256x256 normal map grown from the
-//! 128x128 forehead heightfield's normals, for every search mode x causal neighbourhood side N x
-//! pyramid levels, each cell giving seconds and neighbourhood-matching energy (also relative to
-//! exact search with the same N and levels) and the slope-histogram distance.
+//! The accuracy-against-time table of issue 3 (for the book's "Growing a map" chapter): a 256x256
+//! normal map grown from the 128x128 forehead heightfield's normals, for every search mode x causal
+//! neighbourhood side N x pyramid levels, each cell giving seconds and neighbourhood-matching energy
+//! (also relative to exact search with the same N and levels) and the slope-histogram distance.
 //!
 //! Modes: exact (exhaustive, the reference); PCA to D in {4, 8, 16, 32} dimensions + kd-tree,
 //! re-ranking the best 8 in full space (with Ashikhmin coherence candidates, the config's default);

@@ -44,7 +44,10 @@ pub enum Start {
     Upsampled,
 }
 
-/// Options of [`crate::synthesize`].
+/// Options of [`crate::synthesize`]. The per-level overrides (`finest_*`, `coarse_corrections`,
+/// `correction_penalty`, `layout_penalty`, the finest-only `copy_cap` and `polish`, and the
+/// coarse-only `robust_scale`) are resolved in one place, [`SynthConfig::schedule`], into one
+/// [`crate::LevelPlan`] per level, which is what synthesis reads.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SynthConfig {
     /// Output width in texels.
@@ -90,7 +93,7 @@ pub struct SynthConfig {
     pub correction_penalty: Option<f32>,
     /// The occurrence penalty at the [`LAYOUT_LEVELS`] coarsest levels when it is higher than
     /// [`SynthConfig::occurrence_penalty`] (never the finest level; see
-    /// [`SynthConfig::occurrence_penalty_at`]). Those levels lay out which parts of the exemplar
+    /// [`SynthConfig::schedule`]). Those levels lay out which parts of the exemplar
     /// the output grows from, and every finer level inherits the layout through its coordinates.
     /// Unpenalised, they draw from the exemplar's middle (its candidates lie at least half a
     /// window from the border at each level) and from its most typical windows: the output's
@@ -337,26 +340,6 @@ impl SynthConfig {
         }
     }
 
-    /// The occurrence penalty of pyramid level `level` (0 the finest) of a run with
-    /// [`SynthConfig::levels`] levels: [`SynthConfig::finest_penalty`] (or the general one) at
-    /// the finest, the larger of the general one and [`SynthConfig::layout_penalty`] at the
-    /// [`LAYOUT_LEVELS`] coarsest, the general one between.
-    pub fn occurrence_penalty_at(&self, level: usize) -> f32 {
-        if level == 0 {
-            self.finest_penalty.unwrap_or(self.occurrence_penalty)
-        } else if level + LAYOUT_LEVELS >= self.levels {
-            self.occurrence_penalty.max(self.layout_penalty)
-        } else {
-            self.occurrence_penalty
-        }
-    }
-
-    /// The robust distance's scale at pyramid level `level` (0 the finest):
-    /// [`SynthConfig::robust_scale`] at the coarser levels, 0 (squared L2) at the finest.
-    pub fn robust_scale_at(&self, level: usize) -> f32 {
-        if level == 0 { 0.0 } else { self.robust_scale }
-    }
-
     /// The most pyramid levels an `ew x eh` exemplar allows: its coarsest level must still hold a
     /// full `neighbourhood x neighbourhood` window.
     pub fn max_levels(&self, ew: usize, eh: usize) -> usize {
@@ -370,6 +353,37 @@ impl SynthConfig {
     /// On an empty output, an even or too small neighbourhood, zero levels, search parameters out
     /// of range, or an exemplar smaller than the neighbourhood.
     pub fn validate(&self, ew: usize, eh: usize) -> Result<(SynthConfig, Vec<String>)> {
+        self.check_shape()?;
+        self.check_weights()?;
+        self.check_search()?;
+        if ew < self.neighbourhood || eh < self.neighbourhood || ew > u32::MAX as usize || eh > u32::MAX as usize {
+            return Err(Error::ExemplarTooSmall { width: ew, height: eh, n: self.neighbourhood });
+        }
+        let mut config = self.clone();
+        let mut warnings = Vec::new();
+        let max = self.max_levels(ew, eh);
+        if self.levels > max {
+            warnings.push(format!(
+                "levels {} clamped to {max}: the {ew}x{eh} exemplar's coarsest level must hold a {n}x{n} neighbourhood",
+                self.levels,
+                n = self.neighbourhood
+            ));
+            config.levels = max;
+        }
+        let estimate = config.memory_estimate(ew, eh);
+        if estimate > config.memory_limit {
+            return Err(Error::TooLarge {
+                width: config.width,
+                height: config.height,
+                estimate_mib: estimate.div_ceil(1 << 20),
+                limit_mib: config.memory_limit >> 20,
+            });
+        }
+        Ok((config, warnings))
+    }
+
+    /// The output size, neighbourhood, levels and pass counts.
+    fn check_shape(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {
             let size = format!("{}x{}", self.width, self.height);
             return Err(Error::config("size", size, "the output must be at least 1x1"));
@@ -390,6 +404,12 @@ impl SynthConfig {
         if self.corrections > MAX_CORRECTIONS {
             return Err(Error::config("corrections", self.corrections, format!("at most {MAX_CORRECTIONS} passes")));
         }
+        Ok(())
+    }
+
+    /// The penalties, biases, ratios, the copy cap, the jitter and the pass counts of polish and
+    /// the coarse levels.
+    fn check_weights(&self) -> Result<()> {
         for (field, weight) in [
             ("occurrence_penalty", self.occurrence_penalty),
             ("layout_penalty", self.layout_penalty),
@@ -432,6 +452,11 @@ impl SynthConfig {
         if let Some(c) = self.coarse_corrections.filter(|&c| c > MAX_CORRECTIONS) {
             return Err(Error::config("coarse_corrections", c, format!("at most {MAX_CORRECTIONS} passes")));
         }
+        Ok(())
+    }
+
+    /// The search mode's parameters.
+    fn check_search(&self) -> Result<()> {
         if let Search::KCoherence { k, fallback, .. } = self.search {
             if !(1..=64).contains(&k) {
                 return Err(Error::config("k", k, "must be between 1 and 64"));
@@ -448,30 +473,7 @@ impl SynthConfig {
                 return Err(Error::config("rerank", rerank, format!("must be between 1 and {MAX_RERANK} candidates")));
             }
         }
-        if ew < self.neighbourhood || eh < self.neighbourhood || ew > u32::MAX as usize || eh > u32::MAX as usize {
-            return Err(Error::ExemplarTooSmall { width: ew, height: eh, n: self.neighbourhood });
-        }
-        let mut config = self.clone();
-        let mut warnings = Vec::new();
-        let max = self.max_levels(ew, eh);
-        if self.levels > max {
-            warnings.push(format!(
-                "levels {} clamped to {max}: the {ew}x{eh} exemplar's coarsest level must hold a {n}x{n} neighbourhood",
-                self.levels,
-                n = self.neighbourhood
-            ));
-            config.levels = max;
-        }
-        let estimate = config.memory_estimate(ew, eh);
-        if estimate > config.memory_limit {
-            return Err(Error::TooLarge {
-                width: config.width,
-                height: config.height,
-                estimate_mib: estimate.div_ceil(1 << 20),
-                limit_mib: config.memory_limit >> 20,
-            });
-        }
-        Ok((config, warnings))
+        Ok(())
     }
 
     /// Bytes a run from an `ew x eh` exemplar holds at its peak, roughly: every output level's
@@ -531,21 +533,6 @@ mod tests {
         assert_eq!(c.max_levels(5, 100), 1);
         assert_eq!(c.max_levels(9, 9), 2);
         assert_eq!(c.max_levels(10, 10), 2);
-    }
-
-    /// The layout penalty reaches the two coarsest levels only, never the finest, and a retry's
-    /// higher general penalty wins over it.
-    #[test]
-    fn each_level_gets_its_occurrence_penalty() {
-        let c = SynthConfig { levels: 5, occurrence_penalty: 0.01, layout_penalty: 0.05, ..SynthConfig::default() };
-        let at = |c: &SynthConfig| (0..c.levels).map(|l| c.occurrence_penalty_at(l)).collect::<Vec<_>>();
-        assert_eq!(at(&c), [0.01, 0.01, 0.01, 0.05, 0.05]);
-        assert_eq!(at(&SynthConfig { finest_penalty: Some(0.3), ..c.clone() }), [0.3, 0.01, 0.01, 0.05, 0.05]);
-        assert_eq!(at(&SynthConfig { levels: 2, ..c.clone() }), [0.01, 0.05]);
-        assert_eq!(at(&SynthConfig { levels: 1, ..c.clone() }), [0.01]);
-        let retry = c.collapse_retry().expect("the coarser levels are penalised less than the retry");
-        assert_eq!(at(&retry), [0.01, 2.0, 2.0, 2.0, 2.0]);
-        assert_eq!(at(&SynthConfig::scanline(8, 8)), [SCANLINE_OCCURRENCE_PENALTY; 3]);
     }
 
     #[test]

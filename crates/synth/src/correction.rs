@@ -8,24 +8,21 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use skinkit_maps::Grid;
 
-use crate::config::{CORRECTION_STRIDE, Search, Start, SynthConfig};
+use crate::config::{CORRECTION_STRIDE, Start, SynthConfig};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
+use crate::schedule::LevelPlan;
 use crate::scoring::{Occurrence, Scorer, TreeQuery, coherence_candidates, tree_refine};
-use crate::synthesis::LevelSearch;
+use crate::search::KCoherenceSets;
+use crate::synthesis::{Fallback, LevelSearch, ModeSearch};
 
 /// What the correction passes of one level read.
 pub(crate) struct CorrectionLevel<'a> {
     pub(crate) coarser: Option<&'a Grid<Vec3>>,
-    /// The copy cap of this level in texels (the finest level only; see [`cap_breaks`]).
-    pub(crate) copy_cap: Option<usize>,
-    /// Seam-polishing passes after the correction passes ([`crate::polish`]).
-    pub(crate) polish: usize,
-    /// The coherence bias of this level ([`SynthConfig::coherence_bias`]).
-    pub(crate) coherence_bias: f32,
-    /// The robust distance's scale at this level ([`SynthConfig::robust_scale`]; 0: squared L2).
-    pub(crate) robust_scale: f32,
+    /// The level's passes, penalty, bias, robust scale, copy cap (see [`cap_breaks`]) and
+    /// seam-polishing passes ([`crate::polish`]).
+    pub(crate) plan: &'a LevelPlan,
     /// The full `N x N` (+ coarser `M x M`) shape.
     pub(crate) nb: &'a Neighbourhood,
     pub(crate) search: &'a LevelSearch,
@@ -66,7 +63,7 @@ impl Seen {
 }
 
 impl CorrectionLevel<'_> {
-    /// Runs `config.corrections` passes over the level in place. Each pass is split into
+    /// Runs `plan.corrections` passes over the level in place. Each pass is split into
     /// `CORRECTION_STRIDE^2` sub-passes by `(x mod s, y mod s)`, in row-major order of the
     /// residues; a sub-pass chooses all its texels in parallel from the state the previous
     /// sub-passes left, then writes them, so the result does not depend on the thread count.
@@ -76,20 +73,20 @@ impl CorrectionLevel<'_> {
     /// of its exemplar under a 6 % cap), so the cut is then repeated, re-choosing only the cut
     /// texels, until no block exceeds the cap or [`CAP_ROUNDS`] rounds have run.
     pub(crate) fn run(&self, out: &mut Grid<Vec3>, coords: &mut Grid<[u32; 2]>, report: &dyn Fn(usize)) {
-        let full = self.search.full.as_ref().expect("built for corrections");
+        let (full, plan) = (&self.search.full, self.plan);
         let (s, h) = (CORRECTION_STRIDE, out.size().1);
-        for pass in 0..self.config.corrections {
-            let last = pass + 1 == self.config.corrections;
-            let breaks = self.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed));
+        for pass in 0..plan.corrections {
+            let last = pass + 1 == plan.corrections;
+            let breaks = plan.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed));
             let causal = if self.config.start == Start::Scanline { h } else { 0 };
             self.pass(out, coords, breaks.as_deref(), false, &|sub| {
                 report(causal + h * pass + (sub + 1) * h / (s * s))
             });
         }
-        if self.polish > 0 {
-            crate::polish::polish(full, self.config.neighbourhood, self.copy_cap, out, coords, self.polish);
+        if plan.polish > 0 {
+            crate::polish::polish(full, self.config.neighbourhood, plan.copy_cap, out, coords, plan.polish);
         }
-        let Some(cap) = self.copy_cap.filter(|_| self.config.corrections > 0) else { return };
+        let Some(cap) = plan.copy_cap.filter(|_| plan.corrections > 0) else { return };
         for _ in 0..CAP_ROUNDS {
             let breaks = cap_breaks(full, coords, cap, self.config.seed);
             if !breaks.contains(&true) {
@@ -109,10 +106,10 @@ impl CorrectionLevel<'_> {
         only_cut: bool,
         report: &dyn Fn(usize),
     ) {
-        let full = self.search.full.as_ref().expect("built for corrections");
+        let full = &self.search.full;
         let w = out.width();
         let s = CORRECTION_STRIDE;
-        let lambda = self.config.correction_penalty.unwrap_or(self.config.occurrence_penalty);
+        let lambda = self.plan.correction_penalty;
         for sub in 0..s * s {
             let occurrence = Occurrence::of(full, coords, lambda);
             sub_pass(full, out, coords, sub, |x, y, read_out, read_coords, scratch: &mut Scratch| {
@@ -136,7 +133,7 @@ impl CorrectionLevel<'_> {
         forbid_own: bool,
         scratch: &mut Scratch,
     ) -> usize {
-        let full = self.search.full.as_ref().expect("built for corrections");
+        let full = &self.search.full;
         let Scratch { query, sources, candidates, forbidden, seen } = scratch;
         query.resize(self.nb.dim(), 0.0);
         self.nb.gather(
@@ -152,72 +149,97 @@ impl CorrectionLevel<'_> {
         if forbid_own {
             cut_forbidden(full, coords, x, y, forbidden);
         }
-        // The robust distance's scale per float: the level's typical squared distance per float,
-        // times the configured scale. A level whose typical distance is 0 (most windows have an
-        // exact twin, as in a mostly flat exemplar) has no scale to measure and matches in L2.
-        let robust = match &self.search.sets {
-            Some(sets) if self.robust_scale > 0.0 && sets.typical_full() > 0.0 => {
-                self.robust_scale * sets.typical_full() / full.dim() as f32
-            }
-            _ => 0.0,
-        };
+        let robust = self.robust_per_float();
         let scorer = Scorer { ex: full, query, active: None, occurrence, own, forbidden, robust };
         let score = |&i: &usize| (scorer.score(i), i);
         candidates.clear();
-        match (self.config.search, &self.search.sets) {
-            (Search::KCoherence { fallback, .. }, Some(sets)) => {
-                sources.clear();
-                coherence_candidates(full, self.nb, coords, None, x, y, sources);
-                // The texel's current source is usually close to the best: scoring it first makes
-                // the early exit cut the others sooner. Each candidate is scored once (`seen`);
-                // the minimum does not depend on the order.
-                let stamp = seen.next(full.len());
-                let mut best = match own {
-                    Some(i) if forbid_own => {
-                        seen.marks[i] = stamp;
-                        (f32::INFINITY, usize::MAX)
-                    }
-                    Some(i) => {
-                        seen.marks[i] = stamp;
-                        (scorer.score(i), i)
-                    }
-                    None => (f32::INFINITY, usize::MAX),
-                };
-                // Shifted sources first (they continue a neighbour's block), then the rest of
-                // their sets, biased: a candidate counts as coherent if any neighbour makes it so.
-                for &j in sources.iter() {
-                    if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
-                        best = better(best, (scorer.score_below(j, best.0), j));
-                    }
-                }
-                let bias = 1.0 + self.coherence_bias;
-                for &source in sources.iter() {
-                    for &j in &sets.set(source)[1..] {
-                        let j = j as usize;
-                        if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
-                            best = better(best, (scorer.score_below(j, best.0 / bias) * bias, j));
-                        }
-                    }
-                }
-                match (&self.search.full_index, fallback) {
+        match &self.search.mode {
+            ModeSearch::KCoherence { sets, correction, .. } => {
+                let best = self.coherent_best(x, y, coords, sets, &scorer, forbid_own, sources, seen);
+                match correction {
                     _ if best.1 == usize::MAX => scorer.nearest_exact(),
-                    // The tree searches within an L2 radius, which a robust score does not give.
-                    (Some(index), Some(ratio)) if robust == 0.0 && best.0 > ratio * sets.typical_full() => {
+                    // The tree searches within an L2 radius, which a robust score does not give
+                    // (the plan builds no tree where the level matches robustly).
+                    Some(Fallback { index, ratio }) if robust == 0.0 && best.0 > ratio * sets.typical_full() => {
                         tree_refine(index, &TreeQuery { query, active: None }, best, &score, candidates)
                     }
                     _ => best.1,
                 }
             }
-            (Search::Approximate { .. }, _) => {
+            // The full-feature tree is built for every level with correction passes.
+            ModeSearch::Approximate { full_index: Some(index), .. } => {
                 if self.config.coherence {
                     coherence_candidates(full, self.nb, coords, None, x, y, candidates);
                 }
                 let coherent = candidates.iter().map(score).fold((f32::INFINITY, usize::MAX), better);
-                let index = self.search.full_index.as_ref().expect("built for corrections");
                 tree_refine(index, &TreeQuery { query, active: None }, coherent, &score, candidates)
             }
-            _ => scorer.nearest_exact(),
+            ModeSearch::Approximate { full_index: None, .. } | ModeSearch::Exact => scorer.nearest_exact(),
         }
+    }
+
+    /// The robust distance's scale per float: the level's typical squared distance per float,
+    /// times the plan's scale. A level whose typical distance is 0 (most windows have an exact
+    /// twin, as in a mostly flat exemplar) has no scale to measure and matches in L2 (0).
+    fn robust_per_float(&self) -> f32 {
+        match &self.search.mode {
+            ModeSearch::KCoherence { sets, .. } if self.plan.robust_scale > 0.0 && sets.typical_full() > 0.0 => {
+                self.plan.robust_scale * sets.typical_full() / self.search.full.dim() as f32
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The best k-coherence candidate of texel `(x, y)` and its score: its own source (unless the
+    /// copy cap cuts it), the sources its neighbours' blocks continue, then the rest of their
+    /// sets, biased by the plan's coherence bias; `(INFINITY, usize::MAX)` when there is none.
+    #[allow(clippy::too_many_arguments)]
+    fn coherent_best(
+        &self,
+        x: isize,
+        y: isize,
+        coords: &Grid<[u32; 2]>,
+        sets: &KCoherenceSets,
+        scorer: &Scorer,
+        forbid_own: bool,
+        sources: &mut Vec<usize>,
+        seen: &mut Seen,
+    ) -> (f32, usize) {
+        let (full, own) = (&self.search.full, scorer.own);
+        sources.clear();
+        coherence_candidates(full, self.nb, coords, None, x, y, sources);
+        // The texel's current source is usually close to the best: scoring it first makes
+        // the early exit cut the others sooner. Each candidate is scored once (`seen`);
+        // the minimum does not depend on the order.
+        let stamp = seen.next(full.len());
+        let mut best = match own {
+            Some(i) if forbid_own => {
+                seen.marks[i] = stamp;
+                (f32::INFINITY, usize::MAX)
+            }
+            Some(i) => {
+                seen.marks[i] = stamp;
+                (scorer.score(i), i)
+            }
+            None => (f32::INFINITY, usize::MAX),
+        };
+        // Shifted sources first (they continue a neighbour's block), then the rest of
+        // their sets, biased: a candidate counts as coherent if any neighbour makes it so.
+        for &j in sources.iter() {
+            if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
+                best = better(best, (scorer.score_below(j, best.0), j));
+            }
+        }
+        let bias = 1.0 + self.plan.coherence_bias;
+        for &source in sources.iter() {
+            for &j in &sets.set(source)[1..] {
+                let j = j as usize;
+                if std::mem::replace(&mut seen.marks[j], stamp) != stamp {
+                    best = better(best, (scorer.score_below(j, best.0 / bias) * bias, j));
+                }
+            }
+        }
+        best
     }
 }
 

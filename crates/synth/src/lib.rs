@@ -26,21 +26,25 @@
 //! correction passes (a robust distance at the coarser levels, [`SynthConfig::robust_scale`]),
 //! seam polishing, a copy cap and a collapse guard; [`SynthConfig::scanline`] the Wei-Levoy
 //! causal start. Both are scored against the `texture-synthesis` peer on a fixed set of
-//! exemplars by `benches/suite.rs` (its table is in the README); `benches/table.rs` gives
+//! exemplars by `benches/suite.rs` (its table is in the book); `benches/table.rs` gives
 //! accuracy against time per search mode, and `docs/synthesis-notes.md` keeps what was measured
 //! on the way (the occurrence penalty, correction passes, seams, search modes).
 
 pub mod appearance;
 mod causal;
 pub mod config;
+pub mod coords;
 mod correction;
 pub mod energy;
 pub mod error;
 pub mod exemplar;
 mod guard;
+pub mod map;
 pub mod metrics;
 pub mod neighbourhood;
 mod polish;
+pub mod report;
+pub mod schedule;
 mod scoring;
 pub mod search;
 pub mod synthesis;
@@ -48,4 +52,7 @@ pub mod synthesis;
 pub use config::{Search, Start, SynthConfig};
 pub use error::{Error, Result};
 pub use guard::Guards;
+pub use map::{Grown, Map};
+pub use report::{OptionsReport, QualityReport};
+pub use schedule::LevelPlan;
 pub use synthesis::{NormalSynthesis, Synthesis, replay, synthesize, synthesize_normals};

@@ -54,6 +54,10 @@
 //! k-coherence fallback), which is where a good seam texel is found; the finest level places the
 //! seams without a bias and with a looser fallback ratio (its tree queries cost the most).
 //!
+//! Per-level options: which penalty, bias, fallback ratio, distance, cap and passes a level runs
+//! with is decided once per run by [`SynthConfig::schedule`], one [`LevelPlan`] per level; every
+//! step of a level reads its plan (see [`LevelPlan`] for which value applies where).
+//!
 //! Guards ([`synthesize`], [`synthesize_normals`]; `guard`): an output that collapsed, or whose
 //! histograms drifted from the exemplar's, is grown again with an occurrence penalty and the
 //! better output kept.
@@ -86,6 +90,7 @@ use crate::exemplar::ExemplarLevel;
 use crate::guard::Guards;
 use crate::metrics;
 use crate::neighbourhood::Neighbourhood;
+use crate::schedule::LevelPlan;
 use crate::search::{ApproximateIndex, KCoherenceSets, SET_DIMS};
 use crate::{Error, Result};
 
@@ -200,15 +205,12 @@ pub(crate) fn synthesize_unguarded(
     let mut coarser: Option<Grid<Vec3>> = None;
     let mut coarser_coords: Option<Grid<[u32; 2]>> = None;
     let mut result = None;
-    for level in (0..config.levels).rev() {
-        let start = Instant::now();
-        let level_config = SynthConfig {
-            occurrence_penalty: config.occurrence_penalty_at(level),
-            corrections: if level > 0 { config.coarse_corrections } else { None }.unwrap_or(config.corrections),
-            ..config.clone()
-        };
+    // The validated config's levels are clamped already, so the schedule has one plan per level.
+    let schedule = config.schedule(ew, eh);
+    for plan in schedule.iter().rev() {
+        let (level, start) = (plan.level, Instant::now());
         let coarser_level = coarser.as_ref().zip(coarser_coords.as_ref());
-        let (texels, coords) = synthesize_level(&pyramid, level, sizes[level], coarser_level, &level_config, progress);
+        let (texels, coords) = synthesize_level(&pyramid, plan, sizes[level], coarser_level, &config, progress);
         level_seconds[level] = start.elapsed().as_secs_f64();
         if level == 0 {
             result = Some((texels, coords));
@@ -288,25 +290,17 @@ pub fn histogram_noise(exemplar: &Grid<Vec3>, width: usize, height: usize, seed:
     Grid::from_vec(width, height, data).expect("length is width * height")
 }
 
-/// Synthesises one output level given the finished coarser one: the causal scanline pass, then
-/// `config.corrections` correction passes.
+/// Synthesises one output level given the finished coarser one: the causal scanline pass (or the
+/// upsampled start), then `plan.corrections` correction passes.
 fn synthesize_level(
     pyramid: &[Grid<Vec3>],
-    level: usize,
+    plan: &LevelPlan,
     (w, h): (usize, usize),
     coarser_level: Option<(&Grid<Vec3>, &Grid<[u32; 2]>)>,
     config: &SynthConfig,
     progress: &dyn Fn(usize, f32),
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
-    let finest;
-    let config = match (level, config.finest_fallback, config.search) {
-        (0, Some(ratio), Search::KCoherence { k, dims, rerank, .. }) => {
-            finest =
-                SynthConfig { search: Search::KCoherence { k, fallback: Some(ratio), dims, rerank }, ..config.clone() };
-            &finest
-        }
-        _ => config,
-    };
+    let level = plan.level;
     let coarser = coarser_level.map(|(t, _)| t);
     let nb = shape(config, false, coarser.is_some());
     let ex = ExemplarLevel::new(
@@ -316,44 +310,23 @@ fn synthesize_level(
         config.neighbourhood,
         config.exemplar_wrap,
     );
-    let search = build_search(pyramid, level, coarser.is_some(), &ex, config);
+    let search = build_search(pyramid, plan, coarser.is_some(), &ex, config);
     // Progress counts rows: `h` for the causal pass and `h` for each correction pass.
-    let total = (h * (usize::from(config.start == Start::Scanline) + config.corrections)).max(1) as f32;
+    let total = (h * (usize::from(config.start == Start::Scanline) + plan.corrections)).max(1) as f32;
     let report = |units: usize| progress(level, units as f32 / total);
     let (mut out, mut coords) = match (config.start, coarser_level) {
-        (Start::Scanline, _) => causal_pass(level, (w, h), coarser, &nb, &ex, &search, config, &report),
+        (Start::Scanline, _) => causal_pass(plan, (w, h), coarser, &nb, &ex, &search, config, &report),
         (Start::Upsampled, None) => random_copies(ex.texels(), ex.margin(), w, h, config.seed, level),
-        (Start::Upsampled, Some((_, parent))) => {
-            upsampled(search.full.as_ref().expect("always built"), parent, w, h, config.jitter, config.seed, level)
-        }
+        (Start::Upsampled, Some((_, parent))) => upsampled(&search.full, parent, w, h, plan, config.seed),
     };
     drop(ex);
-    if config.corrections > 0 {
+    if plan.corrections > 0 {
         let full_nb = shape(config, true, coarser.is_some());
-        let copy_cap = config.copy_cap.filter(|_| level == 0).map(|share| {
-            let (ew, eh) = pyramid[0].size();
-            ((share as f64 * (ew * eh) as f64) as usize).max(4)
-        });
-        let coherence_bias =
-            if level == 0 { config.finest_coherence_bias } else { None }.unwrap_or(config.coherence_bias);
-        let polish = if level == 0 { config.polish } else { 0 };
-        let robust_scale = config.robust_scale_at(level);
-        let level = CorrectionLevel {
-            coarser,
-            copy_cap,
-            polish,
-            coherence_bias,
-            robust_scale,
-            nb: &full_nb,
-            search: &search,
-            config,
-        };
+        let level = CorrectionLevel { coarser, plan, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
     (out, coords)
 }
-
-const JITTER_MIN_LEVEL: usize = 2;
 
 /// A level's start from its coarser level's coordinates (Lefebvre and Hoppe 2005): texel `(x, y)`
 /// copies exemplar position `2 p + (x mod 2, y mod 2)`, `p` the coarser texel's source, kept
@@ -363,13 +336,12 @@ fn upsampled(
     parent: &Grid<[u32; 2]>,
     w: usize,
     h: usize,
-    jitter: usize,
+    plan: &LevelPlan,
     seed: u64,
-    level: usize,
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
-    let (pw, ph) = parent.size();
+    let (pw, ph, jitter, level) = (parent.width(), parent.height(), plan.jitter, plan.level);
     // One ChaCha stream per level, offset from random_copies' streams; drawn in row-major order.
-    let offsets: Vec<[isize; 2]> = if jitter == 0 || level < JITTER_MIN_LEVEL {
+    let offsets: Vec<[isize; 2]> = if jitter == 0 {
         Vec::new()
     } else {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -424,54 +396,64 @@ pub fn random_copies(
     (grid, Grid::from_vec(width, height, picks).expect("length is width * height"))
 }
 
-/// The search structures of one level.
+/// The search structures of one level: the candidates with full-window features, which every
+/// mode needs (the causal pass's texels next to already synthesised wrapped neighbours, the
+/// upsampled start's clamping and the correction passes), and what the level's search mode built.
 pub(crate) struct LevelSearch {
-    /// PCA kd-tree over causal features (approximate search, or k-coherence with a fallback).
-    pub(crate) index: Option<ApproximateIndex>,
-    /// k-coherence sets (k-coherence only).
-    pub(crate) sets: Option<KCoherenceSets>,
-    /// The candidates with full-window features (the causal pass's texels next to already
-    /// synthesised wrapped neighbours, and the correction passes).
-    pub(crate) full: Option<ExemplarLevel>,
-    /// PCA kd-tree over full features (correction passes of approximate search and of k-coherence
-    /// with a fallback).
-    pub(crate) full_index: Option<ApproximateIndex>,
+    pub(crate) full: ExemplarLevel,
+    pub(crate) mode: ModeSearch,
 }
 
-/// The search structures a level needs: the PCA kd-trees (approximate search, or k-coherence with
-/// a fallback), the k-coherence sets and, for correction passes, the full-window candidates.
+/// What one search mode builds for a level ([`LevelPlan::search`]).
+pub(crate) enum ModeSearch {
+    /// [`Search::Exact`]: nothing; every texel scans all candidates.
+    Exact,
+    /// [`Search::Approximate`]: a PCA kd-tree over causal features and, when the level has
+    /// correction passes, one over full features.
+    Approximate { index: ApproximateIndex, full_index: Option<ApproximateIndex> },
+    /// [`Search::KCoherence`]: the sets, and the tree fallbacks the plan asks for
+    /// ([`LevelPlan::causal_fallback`] over causal features, [`LevelPlan::correction_fallback`]
+    /// over full features).
+    KCoherence { sets: KCoherenceSets, causal: Option<Fallback>, correction: Option<Fallback> },
+}
+
+/// A k-coherence tree fallback: a texel whose best candidate's squared distance exceeds `ratio`
+/// times the level's typical one also searches `index`.
+pub(crate) struct Fallback {
+    pub(crate) index: ApproximateIndex,
+    pub(crate) ratio: f32,
+}
+
+/// The search structures a level needs: the full-window candidates, and what `plan.search`
+/// builds (the PCA kd-trees, the k-coherence sets).
 fn build_search(
     pyramid: &[Grid<Vec3>],
-    level: usize,
+    plan: &LevelPlan,
     has_parent: bool,
     ex: &ExemplarLevel,
     config: &SynthConfig,
 ) -> LevelSearch {
-    let corrections = config.corrections > 0;
-    let full = Some(ExemplarLevel::new(
-        pyramid[level].clone(),
-        pyramid.get(level + 1).filter(|_| has_parent),
+    let full = ExemplarLevel::new(
+        pyramid[plan.level].clone(),
+        pyramid.get(plan.level + 1).filter(|_| has_parent),
         &shape(config, true, has_parent),
         config.neighbourhood,
         config.exemplar_wrap,
-    ));
-    let full_tree =
-        |dims, rerank| full.as_ref().filter(|_| corrections).map(|f| ApproximateIndex::new(f, dims, rerank));
-    let (index, sets, full_index) = match config.search {
-        Search::Exact => (None, None, None),
-        Search::Approximate { dims, rerank } => {
-            (Some(ApproximateIndex::new(ex, dims, rerank)), None, full_tree(dims, rerank))
-        }
-        Search::KCoherence { k, fallback, dims, rerank } => {
+    );
+    let mode = match plan.search {
+        Search::Exact => ModeSearch::Exact,
+        Search::Approximate { dims, rerank } => ModeSearch::Approximate {
+            index: ApproximateIndex::new(ex, dims, rerank),
+            full_index: (plan.corrections > 0).then(|| ApproximateIndex::new(&full, dims, rerank)),
+        },
+        Search::KCoherence { k, dims, rerank, .. } => {
             // The sets start from a coarser projection of their own (see `search::SET_DIMS`).
-            let full = full.as_ref().expect("built for k-coherence");
-            let sets = KCoherenceSets::new(full, ex, k, SET_DIMS.min(dims));
-            let causal = fallback.filter(|_| config.start == Start::Scanline);
-            let index = causal.map(|_| ApproximateIndex::new(ex, dims, rerank));
-            // The levels that match with the robust distance never search the tree.
-            let robust = config.robust_scale_at(level) > 0.0;
-            (index, Some(sets), fallback.filter(|_| !robust).and_then(|_| full_tree(dims, rerank)))
+            let sets = KCoherenceSets::new(&full, ex, k, SET_DIMS.min(dims));
+            let tree = |ex: &ExemplarLevel, ratio| Fallback { index: ApproximateIndex::new(ex, dims, rerank), ratio };
+            let causal = plan.causal_fallback.map(|ratio| tree(ex, ratio));
+            let correction = plan.correction_fallback.map(|ratio| tree(&full, ratio));
+            ModeSearch::KCoherence { sets, causal, correction }
         }
     };
-    LevelSearch { index, sets, full, full_index }
+    LevelSearch { full, mode }
 }

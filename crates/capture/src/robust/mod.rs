@@ -29,7 +29,7 @@
 //!    few outliers is recovered exactly, not merely down-weighted.
 //!
 //! [`Estimator::Trimmed`] (the default) skips step 2: on DiLiGenT cat and the synthetic molds it
-//! was the most accurate (README, "Robust solvers"); the reweightings stay for comparison.
+//! was the most accurate (the book, "Robust solvers"); the reweightings stay for comparison.
 //!
 //! The fit is a pure function of its inputs (fixed iteration cap, a convergence test on `g`), so
 //! results do not depend on threads. Too few usable readings, an ill-conditioned set of inliers

@@ -111,6 +111,45 @@ pub(super) fn step<T: Lanes, const ROBUST: bool>(
     confidence: &mut [f32],
 ) -> Step {
     assert!(normals.len() == STEP && albedo.len() == STEP && confidence.len() == STEP);
+    let mut sums = accumulate::<T, ROBUST>(kernel, rows, p);
+    if !ROBUST {
+        let post = _mm256_set1_ps(kernel.rr_post);
+        sums.rr = sums.rr.map(|q| _mm256_mul_ps(q, post));
+    }
+    if ROBUST && let Some(step) = screen(kernel, rows, p, &sums) {
+        return step;
+    }
+    let mut invalid = 0;
+    for h in 0..2 {
+        let out = Outputs { normals: &mut *normals, albedo: &mut *albedo, confidence: &mut *confidence };
+        invalid += solve_half(kernel, &sums, h, out);
+    }
+    Step::Solved(invalid)
+}
+
+/// One step's sums per half (8 lanes each): `g` = sum of `c_i r_i`, `sum w^2`, and with `ROBUST`
+/// the dimmest and brightest gained readings and the lanes with a saturated one.
+struct Sums {
+    gx: [__m256; 2],
+    gy: [__m256; 2],
+    gz: [__m256; 2],
+    rr: [__m256; 2],
+    lo: [__m256; 2],
+    hi: [__m256; 2],
+    saturated: [__m256; 2],
+}
+
+/// The three output slices of a step, each [`STEP`] long.
+struct Outputs<'a> {
+    normals: &'a mut [Vec3],
+    albedo: &'a mut [f32],
+    confidence: &'a mut [f32],
+}
+
+/// Loads every light's samples of the step at `p` and accumulates its [`Sums`] in registers.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+fn accumulate<T: Lanes, const ROBUST: bool>(kernel: &Kernel, rows: &[&[T]], p: usize) -> Sums {
     let zero = _mm256_setzero_ps();
     let (mut gx, mut gy, mut gz, mut rr) = ([zero; 2], [zero; 2], [zero; 2], [zero; 2]);
     let (mut lo, mut hi) = ([_mm256_set1_ps(f32::INFINITY); 2], [_mm256_set1_ps(f32::NEG_INFINITY); 2]);
@@ -140,69 +179,75 @@ pub(super) fn step<T: Lanes, const ROBUST: bool>(
             rr[h] = _mm256_fmadd_ps(w, w, rr[h]);
         }
     }
-    if !ROBUST {
-        let post = _mm256_set1_ps(kernel.rr_post);
-        rr = rr.map(|q| _mm256_mul_ps(q, post));
+    Sums { gx, gy, gz, rr, lo, hi, saturated }
+}
+
+/// The robust solve's screen of a step: `None` when no pixel drops a reading (the step is solved
+/// here), else the step declined or, when all pixels share their usable lights, that subset.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+fn screen<T: Lanes>(kernel: &Kernel, rows: &[&[T]], p: usize, sums: &Sums) -> Option<Step> {
+    // Some reading is below `max(abs, rel * brightest)` iff the dimmest one is.
+    let (abs, rel) = (_mm256_set1_ps(kernel.shadow_abs), _mm256_set1_ps(kernel.shadow_rel));
+    // The brightest is the shadow rule's reference reading (`readings::Shadows`) only up to
+    // 9 lights and without saturated readings (it excludes them); otherwise the threshold
+    // from the brightest is at least the rule's, so "nothing dropped" still holds exactly,
+    // and any other step is declined to the chunk path.
+    let (mut dropped, mut clipped) = (0, 0);
+    let mut threshold = [_mm256_setzero_ps(); 2];
+    for h in 0..2 {
+        threshold[h] = _mm256_max_ps(_mm256_mul_ps(rel, sums.hi[h]), abs);
+        let shadowed = _mm256_cmp_ps::<_CMP_LT_OQ>(sums.lo[h], threshold[h]);
+        dropped |= _mm256_movemask_ps(_mm256_or_ps(shadowed, sums.saturated[h])) << (8 * h);
+        clipped |= _mm256_movemask_ps(sums.saturated[h]);
     }
-    if ROBUST {
-        // Some reading is below `max(abs, rel * brightest)` iff the dimmest one is.
-        let (abs, rel) = (_mm256_set1_ps(kernel.shadow_abs), _mm256_set1_ps(kernel.shadow_rel));
-        // The brightest is the shadow rule's reference reading (`readings::Shadows`) only up to
-        // 9 lights and without saturated readings (it excludes them); otherwise the threshold
-        // from the brightest is at least the rule's, so "nothing dropped" still holds exactly,
-        // and any other step is declined to the chunk path.
-        let (mut dropped, mut clipped) = (0, 0);
-        let mut threshold = [zero; 2];
-        for h in 0..2 {
-            threshold[h] = _mm256_max_ps(_mm256_mul_ps(rel, hi[h]), abs);
-            let shadowed = _mm256_cmp_ps::<_CMP_LT_OQ>(lo[h], threshold[h]);
-            dropped |= _mm256_movemask_ps(_mm256_or_ps(shadowed, saturated[h])) << (8 * h);
-            clipped |= _mm256_movemask_ps(saturated[h]);
-        }
-        if dropped == 0xffff && clipped == 0 && kernel.group_subsets {
-            return common_usable(kernel, rows, p, threshold).map_or(Step::Declined, Step::Subset);
-        }
-        if dropped != 0 {
-            return Step::Declined;
-        }
+    if dropped == 0xffff && clipped == 0 && kernel.group_subsets {
+        return Some(common_usable(kernel, rows, p, threshold).map_or(Step::Declined, Step::Subset));
     }
+    (dropped != 0).then_some(Step::Declined)
+}
+
+/// Normalises half `h` of the step's sums and writes its 8 normals, albedos and confidences into
+/// `out`; returns how many of them are invalid.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+fn solve_half(kernel: &Kernel, sums: &Sums, h: usize, out: Outputs) -> u32 {
+    let zero = _mm256_setzero_ps();
     let m = kernel.gram.map(|v| _mm256_set1_ps(v));
     let one = _mm256_set1_ps(1.0);
     let excess_scale = _mm256_set1_ps(1.0 / (RESIDUAL_SCALE * RESIDUAL_SCALE));
-    let mut invalid = 0;
-    for h in 0..2 {
-        let (x, y, z, rr) = (gx[h], gy[h], gz[h], rr[h]);
-        let mul = |a, b| _mm256_mul_ps(a, b);
-        let add = |a, b| _mm256_add_ps(a, b);
-        let len = _mm256_sqrt_ps(add(add(mul(x, x), mul(y, y)), mul(z, z)));
-        let ok = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(len, _mm256_set1_ps(MIN_ALBEDO)),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(len, _mm256_set1_ps(f32::INFINITY)),
-        );
-        invalid += 8 - _mm256_movemask_ps(ok).count_ones();
-        let inv = _mm256_div_ps(one, len);
-        // `gram_form` and `residual_factor`, in the same order.
-        let diagonal = add(add(mul(mul(m[0], x), x), mul(mul(m[3], y), y)), mul(mul(m[5], z), z));
-        let cross = add(add(mul(mul(m[1], x), y), mul(mul(m[2], x), z)), mul(mul(m[4], y), z));
-        let fitted = add(diagonal, mul(_mm256_set1_ps(2.0), cross));
-        let excess = mul(_mm256_max_ps(_mm256_sub_ps(rr, fitted), zero), excess_scale);
-        let factor = _mm256_blendv_ps(one, _mm256_div_ps(rr, add(rr, excess)), _mm256_cmp_ps::<_CMP_GT_OQ>(rr, zero));
-        // Masks, not products with zero: a NaN must not leak into the outputs.
-        let keep = |v| _mm256_and_ps(ok, v);
-        let (nx, ny, nz) = (keep(mul(x, inv)), keep(mul(y, inv)), keep(mul(z, inv)));
-        let [a, b, c] = interleave3(nx, ny, nz);
-        // SAFETY: each output slice holds STEP = 16 texels (asserted); half `h` writes
-        // texels 8h..8h+8 (24 floats of `Vec3 { x, y, z }`, `repr(C)`) and floats 8h..8h+8.
-        unsafe {
-            let n = normals.as_mut_ptr().cast::<f32>().add(24 * h);
-            _mm256_storeu_ps(n, a);
-            _mm256_storeu_ps(n.add(8), b);
-            _mm256_storeu_ps(n.add(16), c);
-            _mm256_storeu_ps(albedo.as_mut_ptr().add(8 * h), keep(len));
-            _mm256_storeu_ps(confidence.as_mut_ptr().add(8 * h), keep(factor));
-        }
+    let (x, y, z, rr) = (sums.gx[h], sums.gy[h], sums.gz[h], sums.rr[h]);
+    let mul = |a, b| _mm256_mul_ps(a, b);
+    let add = |a, b| _mm256_add_ps(a, b);
+    let len = _mm256_sqrt_ps(add(add(mul(x, x), mul(y, y)), mul(z, z)));
+    let ok = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GT_OQ>(len, _mm256_set1_ps(MIN_ALBEDO)),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(len, _mm256_set1_ps(f32::INFINITY)),
+    );
+    let invalid = 8 - _mm256_movemask_ps(ok).count_ones();
+    let inv = _mm256_div_ps(one, len);
+    // `gram_form` and `residual_factor`, in the same order.
+    let diagonal = add(add(mul(mul(m[0], x), x), mul(mul(m[3], y), y)), mul(mul(m[5], z), z));
+    let cross = add(add(mul(mul(m[1], x), y), mul(mul(m[2], x), z)), mul(mul(m[4], y), z));
+    let fitted = add(diagonal, mul(_mm256_set1_ps(2.0), cross));
+    let excess = mul(_mm256_max_ps(_mm256_sub_ps(rr, fitted), zero), excess_scale);
+    let factor = _mm256_blendv_ps(one, _mm256_div_ps(rr, add(rr, excess)), _mm256_cmp_ps::<_CMP_GT_OQ>(rr, zero));
+    // Masks, not products with zero: a NaN must not leak into the outputs.
+    let keep = |v| _mm256_and_ps(ok, v);
+    let (nx, ny, nz) = (keep(mul(x, inv)), keep(mul(y, inv)), keep(mul(z, inv)));
+    let [a, b, c] = interleave3(nx, ny, nz);
+    assert!(out.normals.len() == STEP && out.albedo.len() == STEP && out.confidence.len() == STEP && h < 2);
+    // SAFETY: each output slice holds STEP = 16 texels (asserted); half `h` writes texels
+    // 8h..8h+8 (24 floats of `Vec3 { x, y, z }`, `repr(C)`) and floats 8h..8h+8.
+    unsafe {
+        let n = out.normals.as_mut_ptr().cast::<f32>().add(24 * h);
+        _mm256_storeu_ps(n, a);
+        _mm256_storeu_ps(n.add(8), b);
+        _mm256_storeu_ps(n.add(16), c);
+        _mm256_storeu_ps(out.albedo.as_mut_ptr().add(8 * h), keep(len));
+        _mm256_storeu_ps(out.confidence.as_mut_ptr().add(8 * h), keep(factor));
     }
-    Step::Solved(invalid)
+    invalid
 }
 
 /// The usable lights (bit `i` for light `i`) of the [`STEP`] pixels at `p` given their shadow

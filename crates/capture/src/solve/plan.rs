@@ -393,16 +393,8 @@ impl<'a> Plan<'a> {
     ) {
         let n = out.normals.len();
         let inside = self.mask.map(|m| &m[p..p + n]);
-        if let Some(inside) = inside {
-            let masked = inside.iter().filter(|v| !**v).count();
-            stats.masked_count += masked;
-            if masked == n {
-                out.normals.fill(Vec3::ZERO);
-                out.albedo.fill(A::ZERO);
-                out.confidence.fill(0.0);
-                stats.invalid_count += n;
-                return;
-            }
+        if all_masked(inside, &mut out, stats) {
+            return;
         }
         if self.fast_ls {
             self.accumulate_folded(p, n, scratch);
@@ -543,4 +535,21 @@ impl<'a> Plan<'a> {
     pub(super) fn accumulate_readings(&self, n: usize, s: &mut Scratch) {
         accumulate_all(n, s, &self.full.cols, &self.ones);
     }
+}
+
+/// Counts the chunk's pixels outside the mask (`inside`) into `stats`; when all are outside,
+/// writes the invalid marker over the chunk, counts it invalid and returns `true`.
+#[inline(always)]
+fn all_masked<A: AlbedoTexel>(inside: Option<&[bool]>, out: &mut Out<A>, stats: &mut SolveStats) -> bool {
+    let Some(inside) = inside else { return false };
+    let n = out.normals.len();
+    let masked = inside.iter().filter(|v| !**v).count();
+    stats.masked_count += masked;
+    if masked == n {
+        out.normals.fill(Vec3::ZERO);
+        out.albedo.fill(A::ZERO);
+        out.confidence.fill(0.0);
+        stats.invalid_count += n;
+    }
+    masked == n
 }

@@ -23,7 +23,7 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Small sizes, a couple of choices per knob, one timed run per choice (a few minutes);
-    /// without it, the sizes and choices of the README's tables, medians of 3 runs.
+    /// without it, the sizes and choices of the book's tables, medians of 3 runs.
     #[arg(long)]
     pub quick: bool,
     /// Seed of every random choice (molds, sensor noise, synthesis, curves).

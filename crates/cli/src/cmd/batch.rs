@@ -10,18 +10,12 @@
 //! an interrupt still writes `batch-report.json` of the sessions that finished.
 //!
 //! `--shard K/N` and `--merge` spread a batch over machines ([`shard`]); a re-run skips the
-//! sessions whose outputs are complete and up to date ([`resume`]; `--force` redoes them). A
+//! sessions whose outputs are complete and up to date ([`skinkit_batch::resume`]; `--force` redoes them). A
 //! folder with a `layout.toml` is a subject: its face map is stitched after its sessions
-//! ([`subject`]). With `--json`, stdout has one JSON line per session and per face as each ends,
+//! ([`subject`], [`skinkit_batch::units`]). With `--json`, stdout has one JSON line per session and per face as each ends,
 //! then one line with the batch report.
 
-mod outcome;
-mod page;
 mod report;
-mod resume;
-mod review;
-mod scheduler;
-mod shard;
 mod subject;
 
 use std::path::{Path, PathBuf};
@@ -39,15 +33,12 @@ use crate::solve_flags::SolveArgs;
 
 /// The batch's report in its output folder (one per shard: [`shard::Shard::report_name`]).
 const REPORT: &str = "batch-report.json";
-use crate::guard;
 use crate::interrupt::{self, HookGuard};
 use crate::output::Output;
-pub use outcome::SessionOutcome;
-use outcome::{Settings, lock};
-pub use report::BatchReport;
-use scheduler::ShardSpec;
-use shard::Shard;
-use subject::{FaceOutcome, Job, Unit};
+use skinkit_batch::outcome::{self, Settings, lock};
+use skinkit_batch::scheduler::ShardSpec;
+use skinkit_batch::shard::{self, Shard};
+use skinkit_batch::{BatchReport, FaceOutcome, Job, SessionOutcome, Unit, page, review, units};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -60,7 +51,7 @@ pub struct Args {
     /// Process only shard K of N (1 <= K <= N): the sessions whose index in name order is K - 1
     /// modulo N. The report goes to batch-report-K-of-N.json; `--merge` joins the N of them.
     /// `auto`: K and N from the array job's environment (Slurm, Kubernetes Indexed Job, AWS
-    /// Batch; see the README), refused when they are missing or disagree.
+    /// Batch; see the book's Batches chapter), refused when they are missing or disagree.
     #[arg(long, value_name = "K/N|auto")]
     pub shard: Option<ShardSpec>,
     /// The number of tasks of the array, for `--shard auto` where the scheduler does not say
@@ -106,9 +97,11 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     };
     let shard = match args.shard {
         None => None,
-        Some(spec) => Some(spec.resolve(&|name| std::env::var(name).ok(), args.shard_count).map_err(guard::usage)?),
+        Some(spec) => {
+            Some(spec.resolve(&|name| std::env::var(name).ok(), args.shard_count).map_err(crate::output::usage)?)
+        }
     };
-    let all = subject::units(sessions, &args.out)?;
+    let all = units::units(sessions, &args.out)?;
     if all.iter().all(|u| u.jobs().is_empty()) {
         anyhow::bail!("{}: no session sub-folders", sessions.display());
     }
@@ -122,8 +115,8 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         return Ok(0);
     }
     let options = args.solve.options(out)?;
-    guard::out_folder("--out", &args.out)?;
-    guard::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
+    skinkit_maps::gate::out_folder("--out", &args.out)?;
+    skinkit_maps::gate::not_in_input_folder("--out", &args.out, "the sessions folder", sessions)?;
     // Made here, not by the sessions' output sets: one session's failure must not remove it.
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let (mut report, hook) = capture_units(&units, &args, &options, (shard, &partition), out);
@@ -146,7 +139,7 @@ fn refuse_reserved(units: &[Unit], root: &Path) -> Result<()> {
     let top = |name: &str| name.split('/').next().unwrap_or_default().to_owned();
     let names = units.iter().flat_map(|u| std::iter::once(top(u.name())).chain(u.jobs().iter().map(|j| top(&j.name))));
     match names.into_iter().find(|name| batch_own(name)) {
-        Some(name) => Err(guard::usage(format!(
+        Some(name) => Err(crate::output::usage(format!(
             "{}: a session or subject named `{name}` would write over the batch's own `{name}`: rename it",
             root.display()
         ))),
@@ -167,7 +160,7 @@ fn select(all: Vec<Unit>, shard: Option<Shard>, only: &[String], root: &Path) ->
         None => all,
     };
     if let Some(missing) = only.iter().find(|name| !units.iter().any(|u| u.name() == name.as_str())) {
-        return Err(guard::usage(format!(
+        return Err(crate::output::usage(format!(
             "--only {missing}: no session or subject of that name in {} (`skinkit batch --list` names them)",
             root.display()
         )));

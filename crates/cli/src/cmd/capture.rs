@@ -7,7 +7,6 @@ use skinkit_capture::session::{self, Session};
 
 use crate::output::Output;
 use crate::solve_flags::SolveArgs;
-use crate::{guard, pipeline};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -43,12 +42,12 @@ pub struct Args {
 /// discovery that guesses which files are skinkit's, and keeps a session folder a session), or
 /// whose files would replace an input. A sub-folder of the photo folder is fine: photos are files.
 pub fn check_out(out: &Path, photos_from: Option<&Path>, files: &Session) -> Result<()> {
-    guard::out_folder("--out", out)?;
+    skinkit_maps::gate::out_folder("--out", out)?;
     let photo_folders = files.photos.iter().map(|p| p.parent().filter(|d| !d.as_os_str().is_empty()));
     let folders = photos_from.into_iter().chain(photo_folders.map(|d| d.unwrap_or(Path::new("."))));
     for folder in folders {
-        if guard::resolve(folder) == guard::resolve(out) {
-            return Err(guard::usage(format!(
+        if skinkit_maps::gate::resolve(folder) == skinkit_maps::gate::resolve(out) {
+            return Err(crate::output::usage(format!(
                 "--out {} is the folder of the photos: the maps would be taken for photos by the next run; choose another folder",
                 out.display()
             )));
@@ -61,9 +60,9 @@ pub fn check_out(out: &Path, photos_from: Option<&Path>, files: &Session) -> Res
     {
         inputs.extend(path.iter().map(|p| (what.to_owned(), p.clone())));
     }
-    let outputs: Vec<PathBuf> = pipeline::CAPTURE_FILES.iter().map(|f| out.join(f)).collect();
+    let outputs: Vec<PathBuf> = skinkit_capture::outputs::FILES.iter().map(|f| out.join(f)).collect();
     let flags: Vec<(&str, &Path)> = outputs.iter().map(|p| ("--out", p.as_path())).collect();
-    guard::not_an_input(&flags, &inputs)
+    Ok(skinkit_maps::gate::not_an_input(&flags, &inputs)?)
 }
 
 pub fn run(args: Args, out: &Output) -> Result<i32> {
@@ -78,14 +77,14 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let (photos, skipped) = (folder.photos, folder.skipped);
     let files = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth, skipped };
     check_out(&args.out, args.photos_from.as_deref(), &files)?;
-    let set = pipeline::capture_set(&args.out)?;
+    let set = skinkit_capture::outputs::output_set(&args.out)?;
     let bar = out.progress(4, "capture");
     let mut captured = session::capture(&files, &options, &|stage| {
         bar.set_message(stage.name());
         bar.inc(1);
     })?;
     bar.set_message("write");
-    let swept = pipeline::write_outputs(set, &args.out, &mut captured, &options)?;
+    let swept = skinkit_capture::outputs::write(set, &args.out, &mut captured, &options)?;
     bar.finish_and_clear();
     out.swept(&swept);
     for w in &captured.report.warnings {

@@ -15,7 +15,6 @@ use skinkit_maps::{OutputSet, io};
 use skinkit_render::export::{self, Container, ExportOptions, ExportSummary, NormalBits};
 use skinkit_render::scene::{Albedo, Scene};
 
-use crate::guard;
 use crate::output::Output;
 
 /// Export formats.
@@ -138,7 +137,7 @@ fn check_outputs(args: &GltfArgs, scene: &Scene, dir: &Path, stem: &str, contain
         }
     }
     let outputs: Vec<(&str, &Path)> = paths.iter().map(|p| ("--out", p.as_path())).collect();
-    guard::output_files(&outputs, &inputs)
+    Ok(skinkit_maps::gate::output_files(&outputs, &inputs)?)
 }
 
 /// Writes `bytes` to `path` atomically.

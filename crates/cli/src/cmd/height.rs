@@ -9,9 +9,9 @@ use skinkit_height::deliver::{self, ExrStorage, PngScale};
 use skinkit_height::{HeightOptions, HeightReport, Integrator, Scale};
 use skinkit_maps::{Limits, OutputSet, io};
 
+use crate::flags;
 use crate::flags::Green;
 use crate::output::Output;
-use crate::{flags, guard, pipeline};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -95,7 +95,10 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         ("--cavity", args.cavity.as_ref()),
         ("--bands", args.bands.as_ref()),
     ];
-    guard::output_files(&guard::given(&outputs), &[("the normal map".into(), args.map.clone())])?;
+    skinkit_maps::gate::output_files(
+        &skinkit_maps::gate::given(&outputs),
+        &[("the normal map".into(), args.map.clone())],
+    )?;
     check_extensions(&args)?;
     let normals = io::read_normal_map(&args.map, args.green.encoding(), &Limits::default())?;
     let options = HeightOptions {
@@ -111,12 +114,12 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let mut png = None;
     let written = |path: &PathBuf| format!("cannot write {}", path.display());
     set.write_file(&args.out, |p| {
-        deliver::write_height(p, &height, storage).map(|s| png = s).map_err(pipeline::height_error)
+        deliver::write_height(p, &height, storage).map(|s| png = s).map_err(skinkit_maps::Error::from)
     })
     .with_context(|| written(&args.out))?;
     if let Some(path) = &args.png {
         set.write_file(path, |p| {
-            deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(pipeline::height_error)
+            deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(skinkit_maps::Error::from)
         })
         .with_context(|| written(path))?;
     }
@@ -124,12 +127,12 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
         let bands = deliver::bands(&height);
         if let Some(path) = &args.cavity {
             let cavity = deliver::cavity(&bands);
-            set.write_file(path, |p| deliver::write_cavity_png(p, &cavity).map_err(pipeline::height_error))
+            set.write_file(path, |p| deliver::write_cavity_png(p, &cavity).map_err(skinkit_maps::Error::from))
                 .with_context(|| written(path))?;
         }
         if let Some(path) = &args.bands {
             set.write_file(path, |p| {
-                deliver::write_bands_exr(p, &height, &bands, storage).map_err(pipeline::height_error)
+                deliver::write_bands_exr(p, &height, &bands, storage).map_err(skinkit_maps::Error::from)
             })
             .with_context(|| written(path))?;
         }
@@ -164,7 +167,7 @@ fn check_extensions(args: &Args) -> Result<()> {
             && !allowed.contains(&ext(path).as_str())
         {
             let message = format!("{}: {flag} is written as .{}", path.display(), allowed.join(" or ."));
-            return Err(guard::usage(message));
+            return Err(crate::output::usage(message));
         }
     }
     Ok(())

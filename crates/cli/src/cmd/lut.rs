@@ -176,7 +176,7 @@ fn sides((w, h): (usize, usize)) -> (u32, u32) {
 
 fn check_extension(path: &Path) -> Result<()> {
     if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
-        return Err(crate::guard::usage(format!("--out {}: tables are written as float .exr files", path.display())));
+        return Err(crate::output::usage(format!("--out {}: tables are written as float .exr files", path.display())));
     }
     Ok(())
 }
@@ -190,7 +190,7 @@ fn flag_error(error: SpecError) -> anyhow::Error {
         SpecError::Inverted { min_name, max_name, .. } => format!("{} / {}", flag(min_name), flag(max_name)),
         _ => "invalid table".to_owned(),
     };
-    crate::guard::usage(format!("{prefix}: {error}"))
+    crate::output::usage(format!("{prefix}: {error}"))
 }
 
 fn report(

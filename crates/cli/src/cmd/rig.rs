@@ -9,7 +9,6 @@ use skinkit_capture::solve::SolveConfig;
 use skinkit_capture::{Rig, import, sphere};
 use skinkit_maps::io;
 
-use crate::guard;
 use crate::output::Output;
 
 #[derive(clap::Subcommand, Debug)]
@@ -97,7 +96,7 @@ fn import_rig(args: ImportArgs, out: &Output) -> Result<i32> {
         (_, Some(path)) => vec![("the light file".to_owned(), path.clone())],
         _ => Vec::new(),
     };
-    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
+    skinkit_maps::gate::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let (rig, source) = match (&args.diligent, &args.uw) {
         (Some(dir), _) => (import::diligent(dir)?, dir),
         (_, Some(path)) => (import::uw_lights(path)?, path),
@@ -112,7 +111,7 @@ fn from_sphere(args: FromSphereArgs, out: &Output) -> Result<i32> {
     let photos = args.photos.iter().map(|p| ("a mirror-sphere photo".to_owned(), p.clone()));
     let inputs: Vec<_> =
         photos.chain(args.matte.iter().map(|p| ("a matte-sphere photo".to_owned(), p.clone()))).collect();
-    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
+    skinkit_maps::gate::output_files(&[("--out", args.out.as_path())], &inputs)?;
     let limits = skinkit_maps::Limits::default();
     // The photo's role and place; the library's error names the file.
     let read = |paths: &[PathBuf], kind: &str| -> Result<Vec<_>> {

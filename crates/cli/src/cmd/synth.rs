@@ -16,17 +16,13 @@ use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::Serialize;
 use skinkit_maps::OutputSet;
-use skinkit_maps::io::{self, Limits, PngLayout};
-use skinkit_maps::{Channels, ColorMap, Grid, NormalEncoding, NormalMap, Samples, Transfer, Vec3};
-use skinkit_synth::metrics::{self, DEFAULT_SPECTRUM_BINS};
-use skinkit_synth::{Guards, Search, SynthConfig};
+use skinkit_maps::io::Limits;
+use skinkit_maps::{NormalEncoding, Transfer};
+use skinkit_synth::{Grown, Map, OptionsReport, QualityReport, Search, SynthConfig, coords};
 
 use crate::flags::{self, Green, MapKind, TransferArg};
 use crate::output::Output;
-use crate::{guard, pipeline};
-
-/// The largest exemplar side a 16-bit coordinate map can address.
-pub const MAX_COORD_SIDE: usize = u16::MAX as usize;
+use crate::pipeline;
 
 /// Steps of each level's progress bar (the library reports a fraction per output row).
 const PROGRESS_STEPS: u64 = 1000;
@@ -42,7 +38,7 @@ pub struct Args {
     #[arg(long, value_name = "OUT", required = true)]
     pub out: Option<PathBuf>,
     /// Output size in texels, `WIDTHxHEIGHT` (e.g. 512x512).
-    #[arg(long, value_name = "WxH", value_parser = parse_size, required = true)]
+    #[arg(long, value_name = "WxH", value_parser = flags::parse_size, required = true)]
     pub size: Option<(usize, usize)>,
     /// Pyramid levels (1 = single resolution; default 5, 3 with `--scanline`); clamped, with a
     /// warning, to what the exemplar allows.
@@ -66,7 +62,7 @@ pub struct Args {
     pub polish: Option<usize>,
     /// Start every level with Wei and Levoy's causal scanline pass (sequential, 3 levels, k = 4,
     /// occurrence penalty 4, no copy cap) instead of the default's upsampled coordinates (Lefebvre
-    /// and Hoppe 2005). Slower, and higher in energy on every exemplar of the README's suite.
+    /// and Hoppe 2005). Slower, and higher in energy on every exemplar of the book's suite.
     #[arg(long)]
     pub scanline: bool,
     /// The default since the upsampled start became it; accepted so older scripts still run.
@@ -178,31 +174,6 @@ fn weight(text: &str) -> Result<f32, String> {
     flags::number_in::<f32>(0.0, skinkit_synth::config::MAX_WEIGHT, "a weight")(text)
 }
 
-pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("`{text}` is not a size: expected WIDTHxHEIGHT with positive integers, e.g. 512x512");
-    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
-    let side = |s: &str| s.trim().parse::<usize>().ok().filter(|&v| v > 0);
-    match (side(w), side(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(bad()),
-    }
-}
-
-/// An exemplar, a source or an output in memory.
-pub(crate) enum Map {
-    Normal(NormalMap),
-    Color(ColorMap),
-}
-
-impl Map {
-    fn size(&self) -> (usize, usize) {
-        match self {
-            Map::Normal(n) => n.size(),
-            Map::Color(c) => c.size(),
-        }
-    }
-}
-
 impl MapArgs {
     fn encoding(&self) -> Result<NormalEncoding> {
         Ok(self.green.encoding())
@@ -215,35 +186,19 @@ impl MapArgs {
     /// Reads a normal map, or a colour image as linear RGB (grey replicated).
     fn read(&self, path: &Path) -> Result<Map> {
         let limits = Limits::default();
-        if !self.is_color() {
-            let map = io::read_normal_map(path, self.encoding()?, &limits)
-                .with_context(|| format!("cannot read normal map {}", path.display()))?;
-            return Ok(Map::Normal(map));
+        if self.is_color() {
+            Map::read_color(path, Transfer::from(self.transfer), &limits)
+                .with_context(|| format!("cannot read colour image {}", path.display()))
+        } else {
+            Map::read_normals(path, self.encoding()?, &limits)
+                .with_context(|| format!("cannot read normal map {}", path.display()))
         }
-        let transfer = Transfer::from(self.transfer);
-        let photo = io::read_photo(path, &limits)
-            .with_context(|| format!("cannot read colour image {}", path.display()))?
-            .with_transfer(transfer);
-        let rgb = photo.channels() == Channels::Rgb;
-        let color = Grid::from_fn(photo.width(), photo.height(), |x, y| {
-            let i = y * photo.width() + x;
-            if rgb {
-                Vec3::new(photo.linear(3 * i), photo.linear(3 * i + 1), photo.linear(3 * i + 2))
-            } else {
-                Vec3::splat(photo.linear(i))
-            }
-        });
-        Ok(Map::Color(color))
     }
 
     /// Adds `path` to the output set and writes `map` there.
     fn write(&self, set: &mut OutputSet, path: &Path, map: &Map) -> Result<()> {
         let encoding = self.encoding()?;
-        set.write_file(path, |p| match map {
-            Map::Normal(n) => io::write_normal_map(p, n, encoding, 16),
-            Map::Color(c) => io::write_color_map(p, c, 16),
-        })
-        .with_context(|| format!("cannot write {}", path.display()))
+        set.write_file(path, |p| map.write(p, encoding)).with_context(|| format!("cannot write {}", path.display()))
     }
 }
 
@@ -251,7 +206,10 @@ impl MapArgs {
 fn check_map_extension(path: &Path) -> Result<()> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     if ext != "png" && ext != "exr" {
-        return Err(guard::usage(format!("{}: output maps are written as .png (16-bit) or .exr", path.display())));
+        return Err(crate::output::usage(format!(
+            "{}: output maps are written as .png (16-bit) or .exr",
+            path.display()
+        )));
     }
     Ok(())
 }
@@ -263,12 +221,15 @@ fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<(
         && coords.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png")
     {
         let message = format!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
-        return Err(guard::usage(message));
+        return Err(crate::output::usage(message));
     }
     let out_path = out_path.to_owned();
     if let Some(height) = &args.height {
         if args.map.is_color() {
-            return Err(guard::usage(format!("{}: --height needs a normal map (--kind normal)", height.display())));
+            return Err(crate::output::usage(format!(
+                "{}: --height needs a normal map (--kind normal)",
+                height.display()
+            )));
         }
         check_map_extension(height)?;
     }
@@ -278,97 +239,10 @@ fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<(
         ("--report", args.report.as_ref()),
         ("--height", args.height.as_ref()),
     ];
-    guard::output_files(&guard::given(&outputs), &[("the exemplar".into(), exemplar_path.to_owned())])
-}
-
-/// What one synthesis gives: the map, its exemplar coordinates, warnings, seconds per level and
-/// the guards' figures.
-type Grown = (Map, Grid<[u32; 2]>, Vec<String>, Vec<f64>, Guards);
-
-/// Grows `exemplar`, normals or colours, under `config`.
-fn grow_map(exemplar: &Map, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Grown> {
-    Ok(match exemplar {
-        Map::Normal(n) => {
-            let s = skinkit_synth::synthesize_normals(n, config, progress)?;
-            (Map::Normal(s.normals), s.coords, s.warnings, s.level_seconds, s.guards)
-        }
-        Map::Color(c) => {
-            let s = skinkit_synth::synthesize(c, config, progress)?;
-            (Map::Color(s.texels), s.coords, s.warnings, s.level_seconds, s.guards)
-        }
-    })
-}
-
-/// The options as run, for the report.
-#[derive(Clone, Debug, Serialize)]
-pub struct OptionsReport {
-    pub kind: String,
-    pub levels_requested: usize,
-    /// `scanline` (Wei-Levoy causal pass) or `upsampled` (Lefebvre-Hoppe coordinates).
-    pub start: String,
-    pub occurrence_penalty: f32,
-    /// Occurrence penalty of the two coarsest levels (the larger of it and the general one).
-    pub layout_penalty: f32,
-    /// Largest verbatim copy allowed, share of the exemplar's area (`null`: no cap).
-    pub copy_cap: Option<f32>,
-    pub levels: usize,
-    pub neighborhood: usize,
-    pub parent: usize,
-    pub corrections: usize,
-    /// Correction passes at the coarser levels.
-    pub coarse_corrections: usize,
-    /// Seam-polishing passes at the finest level.
-    pub polish: usize,
-    /// Normal maps: weight of the coarser levels' detail channel (`null` for colour maps).
-    pub detail_weight: Option<f32>,
-    /// Scale of the coarser levels' robust distance (0: squared L2).
-    pub robust_scale: f32,
-    /// `exact`, `approximate` (PCA kd-tree) or `k-coherence (k = K)`.
-    pub search: String,
-    /// k-coherence: the tree fallback's ratio at the coarser levels and at the finest (`null`: no
-    /// fallback).
-    pub fallback: Option<f32>,
-    pub finest_fallback: Option<f32>,
-    /// k-coherence: the coherence bias at the coarser levels and at the finest.
-    pub coherence_bias: f32,
-    pub finest_coherence_bias: f32,
-    pub dims: Option<usize>,
-    pub rerank: Option<usize>,
-    pub coherence: bool,
-    pub exemplar_wrap: bool,
-    pub seed: u64,
-}
-
-/// Quality of the output against its exemplar (see `skinkit_synth::metrics`).
-#[derive(Clone, Debug, Serialize)]
-pub struct QualityReport {
-    /// Normal maps: mean Wasserstein-1 distance of the slope histograms (slope units).
-    pub slope_distance: Option<f64>,
-    /// Colour maps: mean Wasserstein-1 distance of the channel histograms.
-    pub channel_distance: Option<f64>,
-    /// Mean decades between the radial power spectra.
-    pub spectrum_distance: f64,
-    /// Squared differences across the output's wrap-around seam over interior ones (~1 tiles).
-    pub seam_energy_ratio: f64,
-    /// The same for the exemplar, for comparison.
-    pub exemplar_seam_energy_ratio: f64,
-    /// The collapse guard: the output's slope (normals) or channel (colour) standard deviation
-    /// over the exemplar's, the smallest over axes or channels; under 0.5 a warning says the output
-    /// may be nearly blank.
-    pub variation: f64,
-    /// The histogram guard: how far the output's slope or channel histograms are from the
-    /// exemplar's, in the exemplar's deviations (Wasserstein-1 distance over deviation, mean over
-    /// axes or channels); above 0.15, on outputs of at least 64x64 texels that have not collapsed,
-    /// the output was grown again with an occurrence penalty.
-    pub histogram_mismatch: f64,
-    /// Whether the output is the histogram guard's second growth (kept because it came nearer).
-    pub histogram_retry: bool,
-    /// Texels of the largest verbatim copied block.
-    pub largest_block: usize,
-    /// Mean copied block size in texels.
-    pub mean_block: f64,
-    /// Distinct copy offsets.
-    pub distinct_offsets: usize,
+    Ok(skinkit_maps::gate::output_files(
+        &skinkit_maps::gate::given(&outputs),
+        &[("the exemplar".into(), exemplar_path.to_owned())],
+    )?)
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -485,35 +359,34 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         .with_context(|| format!("cannot synthesise from {}", exemplar_path.display()))?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
-    if args.coords.is_some() && (ew > MAX_COORD_SIDE || eh > MAX_COORD_SIDE) {
+    if args.coords.is_some() && (ew > coords::MAX_COORD_SIDE || eh > coords::MAX_COORD_SIDE) {
         bail!(
-            "{}: exemplar {ew}x{eh} is too large for a 16-bit coordinate map (sides up to {MAX_COORD_SIDE})",
-            exemplar_path.display()
+            "{}: exemplar {ew}x{eh} is too large for a 16-bit coordinate map (sides up to {})",
+            exemplar_path.display(),
+            coords::MAX_COORD_SIDE
         );
     }
     let context = || format!("cannot synthesise from {}", exemplar_path.display());
     let (validated, adjusted) = requested.validate(ew, eh).with_context(context)?;
     let bars = LevelBars { out, current: RefCell::new(None) };
     let progress = |level: usize, fraction: f32| bars.update(level, fraction);
-    let (output, coords, warnings, level_seconds, guards) =
-        grow_map(&exemplar, &requested, &progress).with_context(context)?;
+    let Grown { map: output, coords, warnings, level_seconds, guards } =
+        exemplar.grow(&requested, &progress).with_context(context)?;
     bars.finish();
     // The default level count adapts to the exemplar without a word; a `--levels` the exemplar
     // cannot hold is worth a warning (the report gives the levels used either way).
     for w in warnings.iter().filter(|w| args.levels.is_some() || !adjusted.contains(w)) {
         out.warn(w);
     }
-    let quality = quality(&exemplar, &output, &coords, validated.exemplar_wrap, guards);
-    let invalid_texels = match &output {
-        Map::Normal(normals) => normals.as_slice().len() - normals.valid_count(),
-        Map::Color(_) => 0,
-    };
+    let quality = QualityReport::new(&exemplar, &output, &coords, validated.exemplar_wrap, guards)
+        .expect("the output has the exemplar's kind");
+    let invalid_texels = output.invalid_texels();
     // One set: the map, the coordinates and the report appear together or not at all.
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
     if let Some(path) = &args.coords {
         let context = || format!("cannot write coordinate map {}", path.display());
-        set.write_file(path, |p| encode_coords(p, &coords)).with_context(context)?;
+        set.write_file(path, |p| coords::write(p, &coords)).with_context(context)?;
     }
     let height_map = match (&args.height, &output) {
         (Some(path), Map::Normal(normals)) => Some(pipeline::grown_height(&mut set, path, normals, args.mm_per_texel)?),
@@ -528,7 +401,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         exemplar_height: eh,
         width: size.0,
         height: size.1,
-        options: options_report(&args, &validated),
+        options: OptionsReport::new(&validated, args.map.kind.name(), levels_requested(&args)),
         seconds: Seconds { levels: level_seconds, total: start.elapsed().as_secs_f64() },
         warnings,
         quality,
@@ -539,6 +412,18 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     }
     out.swept(&set.commit().with_context(|| format!("cannot write {}", out_path.display()))?);
     out.result(&report, || human(&report));
+    Ok(invalid_exit(out, out_path, exemplar_path, invalid_texels, size))
+}
+
+/// The exit code of a grown map with `invalid` invalid texels: 1 with an error naming both files
+/// when more than [`MAX_INVALID_OUTPUT`] of it is invalid (the map is written, to be looked at).
+fn invalid_exit(
+    out: &Output,
+    out_path: &Path,
+    exemplar_path: &Path,
+    invalid_texels: usize,
+    size: (usize, usize),
+) -> i32 {
     let share = invalid_texels as f64 / (size.0 * size.1).max(1) as f64;
     if share > MAX_INVALID_OUTPUT {
         out.error(&anyhow::anyhow!(
@@ -550,97 +435,18 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
             100.0 * MAX_INVALID_OUTPUT,
             exemplar_path.display()
         ));
-        return Ok(1);
+        return 1;
     }
-    Ok(0)
+    0
 }
 
-fn options_report(args: &Args, run: &SynthConfig) -> OptionsReport {
-    let fallback = match run.search {
-        Search::KCoherence { fallback, .. } => fallback,
-        _ => None,
-    };
-    let (search, dims, rerank) = match run.search {
-        Search::Exact => ("exact".to_owned(), None, None),
-        Search::Approximate { dims, rerank } => ("approximate".to_owned(), Some(dims), Some(rerank)),
-        Search::KCoherence { k, dims, rerank, .. } => (format!("k-coherence (k = {k})"), Some(dims), Some(rerank)),
-        // Modes the flags cannot select yet (the library may grow more): named as the library does.
-        #[allow(unreachable_patterns)]
-        other => (format!("{other:?}"), None, None),
-    };
-    OptionsReport {
-        kind: args.map.kind.name().to_owned(),
-        levels_requested: args.levels.unwrap_or(if args.scanline {
-            SynthConfig::scanline(0, 0).levels
-        } else {
-            SynthConfig::default().levels
-        }),
-        start: format!("{:?}", run.start).to_lowercase(),
-        occurrence_penalty: run.occurrence_penalty,
-        layout_penalty: run.layout_penalty,
-        copy_cap: run.copy_cap,
-        levels: run.levels,
-        neighborhood: run.neighbourhood,
-        parent: run.parent,
-        corrections: run.corrections,
-        coarse_corrections: run.coarse_corrections.unwrap_or(run.corrections),
-        polish: run.polish,
-        detail_weight: (!args.map.is_color()).then_some(run.detail_weight),
-        robust_scale: run.robust_scale,
-        search,
-        fallback,
-        finest_fallback: run.finest_fallback.or(fallback),
-        coherence_bias: run.coherence_bias,
-        finest_coherence_bias: run.finest_coherence_bias.unwrap_or(run.coherence_bias),
-        dims,
-        rerank,
-        coherence: run.coherence,
-        exemplar_wrap: run.exemplar_wrap,
-        seed: run.seed,
-    }
-}
-
-/// The quality metrics of an output against its exemplar (slopes or channels, spectrum, tiling,
-/// copied blocks), with the synthesis's own guard figures.
-pub(crate) fn quality(
-    exemplar: &Map,
-    output: &Map,
-    coords: &Grid<[u32; 2]>,
-    wrap: bool,
-    guards: Guards,
-) -> QualityReport {
-    let bins = DEFAULT_SPECTRUM_BINS;
-    let copies = metrics::copy_statistics(coords, exemplar.size(), wrap);
-    let (slope, channel, spectrum, seam, exemplar_seam) = match (exemplar, output) {
-        (Map::Normal(e), Map::Normal(o)) => (
-            Some(metrics::slope_distance(o, e)),
-            None,
-            metrics::normal_spectrum_distance(o, e, bins),
-            metrics::normal_seam_energy(o).ratio,
-            metrics::normal_seam_energy(e).ratio,
-        ),
-        (Map::Color(e), Map::Color(o)) => (
-            None,
-            Some(metrics::channel_distance(o, e)),
-            metrics::color_spectrum_distance(o, e, bins),
-            metrics::seam_energy(o).ratio,
-            metrics::seam_energy(e).ratio,
-        ),
-        _ => unreachable!("the output has the exemplar's kind"),
-    };
-    QualityReport {
-        slope_distance: slope,
-        channel_distance: channel,
-        spectrum_distance: spectrum,
-        seam_energy_ratio: seam,
-        exemplar_seam_energy_ratio: exemplar_seam,
-        variation: guards.variation,
-        histogram_mismatch: guards.histogram,
-        histogram_retry: guards.histogram_retry,
-        largest_block: copies.largest_block,
-        mean_block: copies.mean_block,
-        distinct_offsets: copies.distinct_offsets,
-    }
+/// The level count asked for: `--levels`, or the default of the start chosen.
+fn levels_requested(args: &Args) -> usize {
+    args.levels.unwrap_or(if args.scanline {
+        SynthConfig::scanline(0, 0).levels
+    } else {
+        SynthConfig::default().levels
+    })
 }
 
 fn human(r: &SynthReport) -> String {
@@ -670,37 +476,6 @@ fn human(r: &SynthReport) -> String {
     )
 }
 
-/// Writes a coordinate map: 16-bit RGB PNG, R = exemplar x, G = exemplar y, B = 0.
-pub(crate) fn write_coords(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
-    encode_coords(path, coords).with_context(|| format!("cannot write coordinate map {}", path.display()))
-}
-
-fn encode_coords(path: &Path, coords: &Grid<[u32; 2]>) -> skinkit_maps::Result<()> {
-    let (w, h) = coords.size();
-    io::write_png_rows(path, w, h, PngLayout::Rgb16, io::PngColour::Linear, |y, row| {
-        for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
-            // Sides were checked against MAX_COORD_SIDE, so coordinates fit.
-            px.copy_from_slice(&[c[0] as u16, c[1] as u16, 0]);
-        }
-    })
-}
-
-/// Reads a coordinate map written by [`write_coords`].
-fn read_coords(path: &Path) -> Result<Grid<[u32; 2]>> {
-    let photo = io::read_photo(path, &Limits::default())
-        .with_context(|| format!("cannot read coordinate map {}", path.display()))?;
-    let (Channels::Rgb, Samples::U16(samples)) = (photo.channels(), photo.samples()) else {
-        bail!(
-            "{}: not a coordinate map (expected a 16-bit RGB PNG from `skinkit synth --coords`, got {}-bit {:?})",
-            path.display(),
-            photo.bit_depth(),
-            photo.channels()
-        );
-    };
-    let texels = samples.chunks_exact(3).map(|c| [c[0] as u32, c[1] as u32]).collect();
-    Ok(Grid::from_vec(photo.width(), photo.height(), texels)?)
-}
-
 /// What `synth replay --json` prints.
 #[derive(Clone, Debug, Serialize)]
 pub struct ReplayReport {
@@ -717,8 +492,8 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let start = Instant::now();
     check_map_extension(&args.out)?;
     let inputs = [("the coordinate map".into(), args.coords.clone()), ("the source map".into(), args.source.clone())];
-    guard::output_files(&[("--out", args.out.as_path())], &inputs)?;
-    let coords = read_coords(&args.coords)?;
+    skinkit_maps::gate::output_files(&[("--out", args.out.as_path())], &inputs)?;
+    let coords = coords::read(&args.coords)?;
     let source = args.map.read(&args.source)?;
     let (sw, sh) = source.size();
     let context = || {
@@ -728,13 +503,7 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
             args.source.display()
         )
     };
-    let replayed = match &source {
-        Map::Normal(n) => {
-            let grid = skinkit_synth::replay(&coords, n.grid()).with_context(context)?;
-            Map::Normal(NormalMap::from_unit_grid(grid)?)
-        }
-        Map::Color(c) => Map::Color(skinkit_synth::replay(&coords, c).with_context(context)?),
-    };
+    let replayed = source.replay(&coords).with_context(context)?;
     let mut set = OutputSet::files();
     args.map.write(&mut set, &args.out, &replayed)?;
     out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
@@ -750,19 +519,4 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     };
     out.result(&report, || format!("{}: {width}x{height} replayed from {}", report.out, report.source));
     Ok(0)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_parse_and_bad_ones_explain_the_format() {
-        assert_eq!(parse_size("512x256"), Ok((512, 256)));
-        assert_eq!(parse_size("7X3"), Ok((7, 3)));
-        for bad in ["512", "0x4", "ax4", "4x", "-1x3", "4x4x4"] {
-            let e = parse_size(bad).unwrap_err();
-            assert!(e.contains(bad) && e.contains("WIDTHxHEIGHT"), "{bad}: {e}");
-        }
-    }
 }

@@ -1,7 +1,7 @@
 // The base pass: texture-space per-pixel bump mapping with the Lafortune BRDF
 // (Haro et al. 2001, section 5), and the skin effects it reads (pre-integrated diffuse, shadow
 // scattering, SH ambient, a TSD light map). The CPU reference of every step is src/shading.rs;
-// keep the two in step (tests/gpu.rs compares them pixel by pixel). Part of the module that
+// keep the two in step (tests/render/gpu.rs compares them pixel by pixel). Part of the module that
 // src/pass/mod.rs assembles after common.wgsl.
 
 struct Lobe {

@@ -4,7 +4,7 @@
 //
 // The skin effects are pipeline-overridable constants: a scene that asks for none of them gets
 // the plain base pass, with every skin branch folded away by the shader compiler.
-// The CPU reference of the shading is src/shading.rs (tests/gpu.rs compares them pixel by pixel).
+// The CPU reference of the shading is src/shading.rs (tests/render/gpu.rs compares them pixel by pixel).
 
 // 0 Lambert, 1 pre-integrated LUT, 2 the blog's closed form, 3 our fit, 4 a light map (TSD or the
 // CPU reference) as the diffuse irradiance.

@@ -2,7 +2,7 @@
 //! every pass reads ([`SceneUniforms`]), then each pass's own named struct, declared beside its
 //! pass ([`super::base::BaseUniforms`], [`super::shadow::ShadowUniforms`], ...). One buffer and
 //! one binding, written once per frame; [`uniform_layouts`] lists every struct's Rust layout for
-//! the naga-reflection test (`tests/wgsl.rs`) to check against the WGSL.
+//! the naga-reflection test (`tests/render/wgsl.rs`) to check against the WGSL.
 
 use super::base::{self, BaseUniforms, LobeRaw};
 use super::blur::BlurUniforms;
@@ -89,7 +89,7 @@ pub(crate) fn globals(inputs: &RenderInputs, skin: &SkinSetup) -> Globals {
 }
 
 /// The layout of one uniform struct as Rust writes it, to check against the WGSL that reads it
-/// (the naga-reflection test in `tests/wgsl.rs`).
+/// (the naga-reflection test in `tests/render/wgsl.rs`).
 #[derive(Debug, Clone)]
 pub struct UniformLayout {
     /// The WGSL source declaring the struct.

@@ -13,7 +13,7 @@
 //!   the light into the narrow Gaussians and too little past the terminator. Against the exact
 //!   texture-space reference on a 6 mm sphere lit from the side (unshadowed) the ring table's
 //!   relative RMSE is 0.063 and the sphere's 0.0051 (Lambert: 0.075); on the nose close-up 0.021
-//!   and 0.015 (Lambert 0.022). The README's tables, from the `skin_methods` benchmark.
+//!   and 0.015 (Lambert 0.022). The book's tables ("Skin scattering"), from the `skin_methods` benchmark.
 //! - The ring's cosine is clamped at 0 (`max(0, cos(theta + x))`), and the denominator uses the same `r`
 //!   as the numerator (the listing's summed weights), so flat skin (`1/r = 0`) gives exactly
 //!   `max(0, N.L)`.

@@ -36,7 +36,7 @@
 //! passes = 1                    # Poisson blur passes (per Gaussian with "gaussians"; the first dilates)
 //! kernel_map = "kernel.png"     # optional: per-texel kernel size in [0, 1), radius = a * k + b
 //! kernel_scale = [3.0, 2.0]     # with kernel_map: (a, b) in texels of a 512 map (the chapter's vBlurScale)
-//! curvature_gain = 0.0          # derived kernel: radius x (1 + gain_mm * 1/r); Gosselin's widening on curved skin, off (see README)
+//! curvature_gain = 0.0          # derived kernel: radius x (1 + gain_mm * 1/r); Gosselin's widening on curved skin, off (see the book)
 //! backface_bias = 0.3           # the back-face pre-pass keeps texels with N.V > -0.3
 //! reuse_below_px = 0            # distance culling: a head smaller than this reuses the last light map
 //! ```

@@ -38,7 +38,7 @@
 //! point sample of it at `d = 0` weighs `A_j / (2 pi 0.0064)`, several times its true mass, which
 //! skews the normalised mix toward the narrow lobes: across a light edge on a plane, point-sampled
 //! weights miss the cumulative marginal by up to 0.18 at 0.625 mm texels and 0.086 at 0.3125 mm,
-//! the texel integrals by 7e-5 (`tests/skin_reference.rs`). For each Gaussian of variance `v` the
+//! the texel integrals by 7e-5 (`tests/render/skin_reference.rs`). For each Gaussian of variance `v` the
 //! integral over the texel's rectangle (sides `a`, `b` along its axes) is separable in 3-D:
 //! `exp(-dz^2 / 2v) * B(dx, a) * B(dy, b)` with `(dx, dy, dz)` the offset in the rectangle's frame
 //! and `B(x, a)` the mass of the 1-D Gaussian on `[x - a/2, x + a/2]` (from `erfc`, or, when
@@ -58,7 +58,7 @@
 //! [`scatter_exact`] evaluates every pair with [`texel_weight`] in f64 (libm `exp` and `erfc`)
 //! over a hashed grid: the oracle. [`scatter_texels`] computes the same sums in f32, four source
 //! texels at a time in SSE2 (the private `fast` module), within 1e-5 relative of the oracle
-//! (`tests/skin_reference.rs`). Both cost per texel the number of texels within the support,
+//! (`tests/render/skin_reference.rs`). Both cost per texel the number of texels within the support,
 //! which grows with the square of the light map's size. [`scatter`], the reference the renderer
 //! and the benchmarks use, sums each Gaussian over clusters of texels no wider than half its
 //! sigma (the private `cluster` module: the Gaussian widened by each cluster's own variance, and
@@ -69,7 +69,7 @@
 //! form at 0.64 mm texels), 1024 texels 65 s and 40 s, 2048 texels (4.15M covered) about 1000 s
 //! (the scaling) and 163 s. The reference converges: at 1024 texels it is within 1.2e-3 (rms,
 //! of the mean) of itself at 2048 on the sample head and 4.6e-5 on the 6 mm sphere
-//! (`tests/skin_reference_convergence.rs`).
+//! (`tests/render/skin_reference_convergence.rs`).
 //!
 //! # Textures ([`ReferenceBake::to_texture`], [`dilate`])
 //! Results go to an RGBA [`Texture`] (alpha 1 covered, 0 not), and [`dilate`] fills uncovered

@@ -198,21 +198,21 @@ pub fn markdown(results: &[ExemplarResult], speed: Option<&Speed>, spec: &str, s
     s
 }
 
-/// README markers of the suite's block.
+/// Markers of the suite's block in the book's "Growing a map" chapter.
 const START: &str = "<!-- synth-suite:start -->";
 const END: &str = "<!-- synth-suite:end -->";
 
-/// Replaces the block between the suite markers in the README with `markdown`.
-pub fn splice_readme(markdown: &str) {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../README.md");
-    let text = std::fs::read_to_string(&path).expect("README reads");
+/// Replaces the block between the suite markers in `docs/book/src/synthesis.md` with `markdown`.
+pub fn splice_doc(markdown: &str) {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../docs/book/src/synthesis.md");
+    let text = std::fs::read_to_string(&path).expect("the chapter reads");
     let (Some(a), Some(b)) = (text.find(START), text.find(END)) else {
-        eprintln!("README has no {START} ... {END} block; not changed");
+        eprintln!("{} has no {START} ... {END} block; not changed", path.display());
         return;
     };
     let spliced = format!("{}{START}\n{markdown}{}", &text[..a], &text[b..]);
-    std::fs::write(&path, spliced).expect("README writes");
-    eprintln!("README table replaced");
+    std::fs::write(&path, spliced).expect("the chapter writes");
+    eprintln!("{}: table replaced", path.display());
 }
 
 /// An 8-bit view of a map: colour as is, normals shaded by a light from the upper left.

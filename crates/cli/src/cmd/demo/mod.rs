@@ -8,8 +8,11 @@
 //! choice of every stage costs in time, into `accuracy/`); last the report page, `index.html`
 //! ([`page`]), which shows each stage's accuracy plot beside its pictures.
 
+mod figure7;
+mod figures;
 mod height;
 mod page;
+mod round_trip;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -19,17 +22,18 @@ use serde::Serialize;
 use skinkit_capture::solve::AlbedoMap;
 use skinkit_maps::NormalEncoding;
 use skinkit_maps::io;
-use skinkit_synth::SynthConfig;
+use skinkit_synth::{Map, QualityReport, SynthConfig, coords};
 
 use skinkit_capture::session::{self, CaptureOptions, Captured, Session};
 
-use super::figures::{FiguresReport, figures};
-use super::stitch::{CaptureCache, FaceReport, StitchOptions, face_to_dir};
-use super::synth::{Map, QualityReport, quality, write_coords};
+use crate::face::{StitchOptions, face_to_dir};
 use crate::machine::Machine;
 use crate::output::Output;
 use crate::pipeline;
 use crate::solve_flags::{SolveArgs, SolverArg};
+use figures::{FiguresReport, figures};
+use skinkit_stitch::FaceReport;
+use skinkit_stitch::face::ExemplarCache;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -140,95 +144,111 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     report.seconds.page = t.elapsed().as_secs_f64();
     report.seconds.total = start.elapsed().as_secs_f64();
     pipeline::write_json(&args.out.join("demo-report.json"), &report)?;
-    out.result(&report, || {
-        let mut s = format!(
-            "{:<14} {:<7} {:>10} {:>9} {:>9} {:>8} {:>9}\n",
-            "mold", "solver", "mean deg", "rms deg", "p95 deg", "invalid", "solve ms"
-        );
-        for m in &report.molds {
-            s += &format!(
-                "{:<14} {:<7} {:>10.3} {:>9.3} {:>9.3} {:>8} {:>9.2}\n",
-                m.region,
-                m.solver,
-                m.mean_error_deg,
-                m.rms_error_deg,
-                m.p95_error_deg,
-                m.invalid_pixels,
-                m.solve_seconds * 1e3
-            );
-        }
-        s += &format!(
-            "\n{:<14} {:>10} {:>8} {:>10} {:>10} {:>9}\n",
-            "grown", "size", "seconds", "slope W1", "spectrum", "largest"
-        );
-        for g in &report.growths {
-            s += &format!(
-                "{:<14} {:>10} {:>8.2} {:>10.4} {:>10.3} {:>9}\n",
-                g.region,
-                format!("{}x{}", g.width, g.height),
-                g.seconds,
-                g.quality.slope_distance.unwrap_or(f64::NAN),
-                g.quality.spectrum_distance,
-                g.quality.largest_block
-            );
-        }
-        if let Some(f) = &report.face {
-            s += &format!(
-                "\nface {}x{}: {} regions, {} spline levels, seam gradient ratio {:.2}, mean jump {:.2} deg, {:.1} s\n",
-                f.width,
-                f.height,
-                f.regions.len(),
-                f.levels,
-                f.seams.summary.mean_gradient_ratio.unwrap_or(f64::NAN),
-                f.seams.summary.mean_jump_degrees,
-                f.seconds.total
-            );
-        }
-        if let Some(r) = &report.renders {
-            let draw: f64 = r.renders.iter().flat_map(|j| &j.images).map(|i| i.render_seconds).sum();
-            s += &format!(
-                "\nrenders on {}: {} (with and without fine-scale structure), {} (four light directions); {:.2} s drawing\n",
-                r.renders.first().map_or("", |j| j.adapter.as_str()),
-                r.figure7.image,
-                r.figure8,
-                draw
-            );
-            let (skin, smooth) = (&r.figure7.skin, &r.figure7.smooth);
-            s += &format!(
-                "figure 7 highlights (brightest 2 %): the specular lobes make {:.0} % of a pixel (median {:.0} %; smooth head {:.0} %), local contrast of the sheen {:.3} with the grown map, {:.3} without\n",
-                skin.mean * 100.0,
-                skin.median * 100.0,
-                smooth.mean * 100.0,
-                skin.local_contrast,
-                smooth.local_contrast
-            );
-            if let Some(t) = &r.height_round_trip {
-                s += &format!(
-                    "figure 7 lit from the face height's own normals: FLIP {:.3} against the normal map ({:.3} of it from the differencing, {:.3} against the differenced map)\n",
-                    t.flip_height_vs_map, t.flip_differenced_vs_map, t.flip_height_vs_differenced_map
-                );
-            }
-        }
-        s += &format!("outputs and demo-report.json in {}\n", args.out.display());
-        s += &format!("report page: {}\n", report.page.as_deref().unwrap_or("-"));
-        let t = &report.seconds;
-        s + &format!(
-            "total {:.1} s (capture {:.1}, synthesis {:.1}, face {:.1}, renders {:.1}, accuracy {:.1}, page {:.1}) on {}",
-            t.total,
-            t.capture,
-            t.synthesis,
-            t.face.unwrap_or(0.0),
-            t.renders.unwrap_or(0.0),
-            t.accuracy.unwrap_or(0.0),
-            t.page,
-            report.machine.summary()
-        )
-    });
+    out.result(&report, || human(&report, &args.out));
     Ok(0)
 }
 
+/// The demo's report in words: the molds' accuracy, the growths, the face, the renders, the times.
+fn human(report: &DemoReport, out_dir: &Path) -> String {
+    let mut s = molds_and_growths(report);
+    if let Some(f) = &report.face {
+        s += &format!(
+            "\nface {}x{}: {} regions, {} spline levels, seam gradient ratio {:.2}, mean jump {:.2} deg, {:.1} s\n",
+            f.width,
+            f.height,
+            f.regions.len(),
+            f.levels,
+            f.seams.summary.mean_gradient_ratio.unwrap_or(f64::NAN),
+            f.seams.summary.mean_jump_degrees,
+            f.seconds.total
+        );
+    }
+    if let Some(r) = &report.renders {
+        s += &renders_text(r);
+    }
+    s += &format!("outputs and demo-report.json in {}\n", out_dir.display());
+    s += &format!("report page: {}\n", report.page.as_deref().unwrap_or("-"));
+    let t = &report.seconds;
+    s + &format!(
+        "total {:.1} s (capture {:.1}, synthesis {:.1}, face {:.1}, renders {:.1}, accuracy {:.1}, page {:.1}) on {}",
+        t.total,
+        t.capture,
+        t.synthesis,
+        t.face.unwrap_or(0.0),
+        t.renders.unwrap_or(0.0),
+        t.accuracy.unwrap_or(0.0),
+        t.page,
+        report.machine.summary()
+    )
+}
+
+/// The molds' accuracy and the growths' quality, as two tables.
+fn molds_and_growths(report: &DemoReport) -> String {
+    let mut s = format!(
+        "{:<14} {:<7} {:>10} {:>9} {:>9} {:>8} {:>9}\n",
+        "mold", "solver", "mean deg", "rms deg", "p95 deg", "invalid", "solve ms"
+    );
+    for m in &report.molds {
+        s += &format!(
+            "{:<14} {:<7} {:>10.3} {:>9.3} {:>9.3} {:>8} {:>9.2}\n",
+            m.region,
+            m.solver,
+            m.mean_error_deg,
+            m.rms_error_deg,
+            m.p95_error_deg,
+            m.invalid_pixels,
+            m.solve_seconds * 1e3
+        );
+    }
+    s += &format!(
+        "\n{:<14} {:>10} {:>8} {:>10} {:>10} {:>9}\n",
+        "grown", "size", "seconds", "slope W1", "spectrum", "largest"
+    );
+    for g in &report.growths {
+        s += &format!(
+            "{:<14} {:>10} {:>8.2} {:>10.4} {:>10.3} {:>9}\n",
+            g.region,
+            format!("{}x{}", g.width, g.height),
+            g.seconds,
+            g.quality.slope_distance.unwrap_or(f64::NAN),
+            g.quality.spectrum_distance,
+            g.quality.largest_block
+        );
+    }
+    s
+}
+
+/// The figures rendered, and what figure 7's highlights measure.
+fn renders_text(r: &FiguresReport) -> String {
+    let mut s = String::new();
+    let draw: f64 = r.renders.iter().flat_map(|j| &j.images).map(|i| i.render_seconds).sum();
+    s += &format!(
+        "\nrenders on {}: {} (with and without fine-scale structure), {} (four light directions); {:.2} s drawing\n",
+        r.renders.first().map_or("", |j| j.adapter.as_str()),
+        r.figure7.image,
+        r.figure8,
+        draw
+    );
+    let (skin, smooth) = (&r.figure7.skin, &r.figure7.smooth);
+    s += &format!(
+        "figure 7 highlights (brightest 2 %): the specular lobes make {:.0} % of a pixel (median {:.0} %; smooth head {:.0} %), local contrast of the sheen {:.3} with the grown map, {:.3} without\n",
+        skin.mean * 100.0,
+        skin.median * 100.0,
+        smooth.mean * 100.0,
+        skin.local_contrast,
+        smooth.local_contrast
+    );
+    if let Some(t) = &r.height_round_trip {
+        s += &format!(
+            "figure 7 lit from the face height's own normals: FLIP {:.3} against the normal map ({:.3} of it from the differencing, {:.3} against the differenced map)\n",
+            t.flip_height_vs_map, t.flip_differenced_vs_map, t.flip_height_vs_differenced_map
+        );
+    }
+    s
+}
+
 /// Molds, growths and the capture cache the face reuses.
-type Captures = (Vec<MoldResult>, Vec<GrowthResult>, CaptureCache);
+type Captures = (Vec<MoldResult>, Vec<GrowthResult>, ExemplarCache);
 
 /// Captures every sample mold with both solvers and grows each robust map, with a progress bar
 /// per stage; adds each stage's time to `seconds`.
@@ -264,7 +284,7 @@ fn capture_and_grow(args: &Args, samples: &Path, out: &Output, seconds: &mut Dem
     seconds.capture = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let bar = out.progress(captured_maps.len() as u64, "synthesis");
-    let (mut growths, mut cache) = (Vec::new(), CaptureCache::new());
+    let (mut growths, mut cache) = (Vec::new(), ExemplarCache::new());
     for (dir, region, captured) in captured_maps {
         let target = args.out.join("synth").join(&region);
         growths.push(grow(&region, &captured, args.synth_size, args.seed, &target)?);
@@ -287,7 +307,7 @@ fn capture_mold(
     let options = options(solver, out)?;
     let mut captured = session::capture(files, &options, &|_| {})?;
     let target = args.out.join("capture").join(region).join(solver.name());
-    pipeline::write_outputs(pipeline::capture_set(&target)?, &target, &mut captured, &options)?;
+    skinkit_capture::outputs::write(skinkit_capture::outputs::output_set(&target)?, &target, &mut captured, &options)?;
     let r = &captured.report;
     let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
     let mold = MoldResult {
@@ -305,7 +325,7 @@ fn capture_mold(
 
 /// The sample face (`samples/../face/layout.toml`) stitched from the captured molds, when the
 /// layout exists.
-fn stitch_face(args: &Args, samples: &Path, cache: &mut CaptureCache, out: &Output) -> Result<Option<FaceReport>> {
+fn stitch_face(args: &Args, samples: &Path, cache: &mut ExemplarCache, out: &Output) -> Result<Option<FaceReport>> {
     let layout = samples.join("../face/layout.toml");
     if !layout.is_file() {
         out.note(format!("no face layout at {}: the face map is skipped", layout.display()));
@@ -362,13 +382,21 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
         AlbedoMap::Rgb(map) => io::write_color_map(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
     }
     .with_context(|| format!("cannot write {}", albedo.display()))?;
-    write_coords(&dir.join("coords.png"), &grown.coords)?;
+    let coords_path = dir.join("coords.png");
+    coords::write(&coords_path, &grown.coords)
+        .with_context(|| format!("cannot write coordinate map {}", coords_path.display()))?;
     // The grown map's height, periodic so it tiles, in mm at the capture's pixel size.
     let mut set = skinkit_maps::OutputSet::files();
     crate::pipeline::grown_height(&mut set, &dir.join("height.exr"), &grown.normals, captured.report.mm_per_pixel)?;
     set.commit().with_context(|| format!("cannot write {}", dir.join("height.exr").display()))?;
-    let quality =
-        quality(&Map::Normal(exemplar.clone()), &Map::Normal(grown.normals), &grown.coords, false, grown.guards);
+    let quality = QualityReport::new(
+        &Map::Normal(exemplar.clone()),
+        &Map::Normal(grown.normals),
+        &grown.coords,
+        false,
+        grown.guards,
+    )
+    .expect("both maps are normal maps");
     Ok(GrowthResult {
         region: region.to_owned(),
         width: size.0,

@@ -1,6 +1,6 @@
 //! What a person looks at first after a batch: per session, the numbers that flag a bad capture
 //! ([`Signs`]) and four small previews (the normals' relief under a raking light, the albedo,
-//! the confidence, the integrated height in false colour), written to `OUT/batch-review/SESSION/` for the review page ([`page`](super::page)).
+//! the confidence, the integrated height in false colour), written to `OUT/batch-review/SESSION/` for the review page ([`page`](crate::page)).
 //!
 //! The numbers come from the capture in memory. A session skipped as up to date keeps the ones
 //! its earlier run wrote (`signs.json` beside the previews); when those are gone, the previews
@@ -17,7 +17,7 @@ use skinkit_maps::io::{self, Limits};
 use skinkit_maps::preview::{self, Picture};
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, OutputSet, ScalarMap};
 
-use super::resume::Done;
+use crate::resume::Done;
 
 /// The folder of the previews in the output folder: `batch-review/SESSION/`.
 pub const FOLDER: &str = "batch-review";
@@ -154,7 +154,8 @@ fn write_set(dir: &Path, maps: &Maps, signs: &Signs) -> Result<()> {
         set.write(name, |p| preview::write_png(p, &preview::shrink(picture, PREVIEW_SIDE)))
             .with_context(|| format!("cannot write {}", dir.join(name).display()))?;
     }
-    crate::pipeline::write_json_in(&set, SIGNS, &dir.join(SIGNS), signs)?;
+    set.write(SIGNS, |p| skinkit_maps::documents::write_json(p, signs))
+        .with_context(|| format!("cannot write {}", dir.join(SIGNS).display()))?;
     set.commit().with_context(|| format!("cannot write {}", dir.display()))?;
     Ok(())
 }

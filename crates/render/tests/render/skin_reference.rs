@@ -583,7 +583,7 @@ fn clustered_scatter_matches_the_texel_sums() {
 /// scatter 6.4 s (the brute-force `scatter_exact` 23.2 s in the same run); 1024: 1037824
 /// texels, scatter 64 s (the oracle 598 s at load 3-4). `SKINKIT_MEASURE_EXACT=1` also
 /// runs the oracle and prints the difference. A measurement, not a check: run with
-/// `cargo test --release -p skinkit-render --test skin_reference -- --ignored --nocapture`.
+/// `cargo test --release -p skinkit-render --test render skin_reference::measure_sample_head -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn measure_sample_head() {

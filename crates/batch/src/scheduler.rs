@@ -13,7 +13,7 @@
 //! silently skip or repeat sessions. [`from_env`] is a pure function of the variables, so each
 //! form is tested without a scheduler.
 
-use super::shard::Shard;
+use crate::shard::Shard;
 
 /// What `--shard` says: a fixed `K/N`, or `auto` (from the environment).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -134,7 +134,7 @@ fn slurm(var: &dyn Fn(&str) -> Option<String>, count_flag: Option<usize>) -> Res
     let env_count = number(var, "SLURM_ARRAY_TASK_COUNT")?.map(|n| ("SLURM_ARRAY_TASK_COUNT", n));
     let count = count(env_count, count_flag, "Slurm array")?;
     // Without SLURM_ARRAY_TASK_MIN (Slurm always sets it; a hand-made environment may not),
-    // the ids are taken as the README's recipe numbers them: 1 to N.
+    // the ids are taken as the book's recipe numbers them: 1 to N.
     let first = min.unwrap_or(1);
     if step < 1 {
         return Err(format!("--shard auto: SLURM_ARRAY_TASK_STEP={step}: a step is at least 1"));
@@ -196,7 +196,7 @@ mod tests {
         assert_eq!(slurm("2", "0", "2", "1", "3"), k_of_n(3, 3));
         // --array=10-30:10.
         assert_eq!(slurm("20", "10", "30", "10", "3"), k_of_n(2, 3));
-        // The README's recipe's form: no MIN in a hand-made environment means 1-based.
+        // The book's recipe's form: no MIN in a hand-made environment means 1-based.
         assert_eq!(env(&[("SLURM_ARRAY_TASK_ID", "2"), ("SLURM_ARRAY_TASK_COUNT", "4")], None), k_of_n(2, 4));
         assert_eq!(env(&[("SLURM_ARRAY_TASK_ID", "2")], Some(4)), k_of_n(2, 4));
     }

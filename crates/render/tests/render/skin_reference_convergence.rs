@@ -57,7 +57,7 @@ fn reference_at_512_agrees_with_1024() {
 }
 
 /// The claim behind the docs' 2048-texel reference, 1024 against 2048: about 10 minutes, so run
-/// by hand (`cargo test --release -p skinkit-render --test skin_reference_convergence --
+/// by hand (`cargo test --release -p skinkit-render --test render skin_reference_convergence:: --
 /// --ignored`).
 #[test]
 #[ignore = "about 10 minutes on 2 cores: run by hand with --ignored"]

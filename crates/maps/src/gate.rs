@@ -1,6 +1,7 @@
-//! Output paths checked before any work (issue 15, D5 and D14): an `--out` that is one of the
-//! command's inputs (or a folder of inputs it would write among) is refused, and so is a folder
-//! where a file is written or a file where a folder is. All are usage errors (exit 2).
+//! The output gate: output paths checked before any work (issue 15, D5 and D14). An output that
+//! is one of the command's inputs (or a folder of inputs it would write among) is refused, and so
+//! is a folder where a file is written or a file where a folder is: [`Refused`], which the CLI
+//! exits with as a usage error (2). Every command that writes passes its outputs through here.
 //!
 //! Paths are compared canonicalized (symbolic links, `..` and relative forms resolved); an output
 //! that does not exist yet is resolved through its deepest existing ancestor.
@@ -8,9 +9,24 @@
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 
-use anyhow::Result;
+/// An output the gate refuses, with the message naming the flag, the path and why.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refused(pub String);
 
-use crate::output::UsageError;
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Refused {}
+
+/// Result alias of the gate.
+pub type Result<T = (), E = Refused> = std::result::Result<T, E>;
+
+fn usage(message: String) -> Refused {
+    Refused(message)
+}
 
 /// `path` made absolute with links resolved as far as it exists.
 pub fn resolve(path: &Path) -> PathBuf {
@@ -29,11 +45,6 @@ pub fn resolve(path: &Path) -> PathBuf {
             _ => return absolute,
         }
     }
-}
-
-/// A [`UsageError`] as an `anyhow::Error`.
-pub fn usage(message: String) -> anyhow::Error {
-    anyhow::Error::new(UsageError(message))
 }
 
 /// Refuses an existing folder as the output file `path` of `flag`.
@@ -130,7 +141,6 @@ mod tests {
         let roundabout = tmp.path().join("sub/../in.png");
         let inputs = [("the exemplar".to_owned(), input.clone())];
         let e = not_an_input(&[("--out", &roundabout)], &inputs).unwrap_err();
-        assert_eq!(crate::output::exit_code(&e), 2);
         let text = e.to_string();
         assert!(text.contains("--out") && text.contains("the exemplar") && text.contains("in.png"), "{text}");
         #[cfg(unix)]
@@ -176,8 +186,8 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let file = tmp.path().join("f.txt");
         std::fs::write(&file, "x").unwrap();
-        assert_eq!(crate::output::exit_code(&out_file("--out", tmp.path()).unwrap_err()), 2);
-        assert_eq!(crate::output::exit_code(&out_folder("--out", &file).unwrap_err()), 2);
+        assert!(out_file("--out", tmp.path()).unwrap_err().0.contains("is a folder"));
+        assert!(out_folder("--out", &file).unwrap_err().0.contains("is a file"));
         assert!(out_file("--out", &file).is_ok() && out_folder("--out", tmp.path()).is_ok());
     }
 }

@@ -3,7 +3,7 @@
 //! batch of hundreds at a glance.
 //!
 //! One file of HTML and CSS (no script, nothing fetched from elsewhere). Each row shows the
-//! session's previews (`batch-review/SESSION/*.png`, [`review`](super::review); small and
+//! session's previews (`batch-review/SESSION/*.png`, [`review`](crate::review); small and
 //! `loading="lazy"`, so 500 rows open at once), the numbers that flag a bad capture, its time,
 //! and links to its files. Rows are ordered: failed sessions, then by [`badness`] (the worst of
 //! the signs, each divided by the level that deserves a look), then by name.
@@ -12,8 +12,9 @@ use std::fmt::Write as _;
 
 use percent_encoding::{AsciiSet, NON_ALPHANUMERIC, utf8_percent_encode};
 
-use super::review::{HeightRange, PREVIEW_SIDE, PREVIEWS, Signs};
-use super::{BatchReport, SessionOutcome};
+use crate::outcome::SessionOutcome;
+use crate::report::BatchReport;
+use crate::review::{HeightRange, PREVIEW_SIDE, PREVIEWS, Signs};
 
 /// The page's file name, beside `batch-report.json`.
 pub const PAGE: &str = "batch-review.html";
@@ -120,7 +121,7 @@ fn session_row(html: &mut String, rank: usize, o: &SessionOutcome) {
     let _ = write!(html, "<td><a href=\"{}/\">{name}</a></td>", link(&[&o.session]));
     for preview in PREVIEWS {
         if o.signs.is_some() {
-            let src = link(&[super::review::FOLDER, &o.session, preview]);
+            let src = link(&[crate::review::FOLDER, &o.session, preview]);
             let what = preview.trim_end_matches(".png");
             let _ = write!(
                 html,

@@ -1,5 +1,5 @@
 //! One session of a batch: captured (or skipped when up to date), judged against `--min-valid`,
-//! its review previews drawn (`super::review`), and its line of the batch report.
+//! its review previews drawn ([`crate::review`]), and its line of the batch report.
 //!
 //! A session whose solve leaves fewer valid pixels than `--min-valid` of the map (blank or dark
 //! photos, a lens cap, a mold outside the frame) is a failed outcome with the reason, although
@@ -9,17 +9,16 @@
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use skinkit_capture::Rig;
 use skinkit_capture::session::{self, CaptureOptions, Session};
 use skinkit_maps::limits::{self, MemoryGate};
 
-use super::resume;
-use super::review::{self, Signs};
-use super::subject::Job;
-use crate::pipeline;
+use crate::resume;
+use crate::review::{self, Signs};
+use crate::units::Job;
 
 /// One line of the batch summary.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -91,12 +90,14 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     limits::check_memory(&dir.display().to_string(), "capturing the session", estimate, settings.gate.budget())?;
     let _admitted = settings.gate.acquire(estimate);
     // Staged from the start, so an interrupt during the solve removes this session's folder too.
-    let set = pipeline::capture_set(out_dir)?;
-    pipeline::write_json_in(&set, resume::MADE_FROM, &out_dir.join(resume::MADE_FROM), &made)?;
+    let set = skinkit_capture::outputs::output_set(out_dir)?;
+    let made_path = out_dir.join(resume::MADE_FROM);
+    set.write(resume::MADE_FROM, |p| skinkit_maps::documents::write_json(p, &made))
+        .with_context(|| format!("cannot write {}", made_path.display()))?;
     let mut captured = session::capture(&files, options, &|_| {})?;
     let signs = review::signs(&captured);
     review::write_previews(&previews, &captured, &signs)?;
-    let swept = pipeline::write_outputs(set, out_dir, &mut captured, options)?;
+    let swept = skinkit_capture::outputs::write(set, out_dir, &mut captured, options)?;
     let report = &captured.report;
     Ok(SessionRun {
         invalid_pixels: report.invalid_pixels,
@@ -144,7 +145,7 @@ pub fn outcome(job: &Job, settings: &Settings, swept: &Mutex<Vec<PathBuf>>) -> S
         Err(e) => SessionOutcome {
             session: name,
             ok: false,
-            error: Some(crate::output::one_line(&e)),
+            error: Some(skinkit_maps::error::one_line(e.as_ref())),
             invalid_pixels: None,
             seconds: None,
             skipped: false,
@@ -154,6 +155,7 @@ pub fn outcome(job: &Job, settings: &Settings, swept: &Mutex<Vec<PathBuf>>) -> S
     }
 }
 
+/// The value behind `mutex`, also after a panicking holder (the outcomes stay readable).
 pub fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }

@@ -16,8 +16,8 @@ use skinkit_render::renderer::Renderer;
 
 use super::figure7::face_scene;
 use super::figures::{grid, rgba, write_text};
-use super::render::{Job, RenderReport, render};
 use crate::output::Output;
+use crate::render_job::{Job, RenderReport, render};
 
 /// What the round trip's renders show.
 #[derive(Serialize)]

@@ -35,8 +35,8 @@ use skinkit_render::highlight::{SpecularShare, specular_share};
 use skinkit_render::renderer::Renderer;
 
 use super::figures::{grid, write_text};
-use super::render::{Job, RenderReport, render};
 use crate::output::Output;
+use crate::render_job::{Job, RenderReport, render};
 
 /// Side of each figure-7 panel, pixels.
 pub const PANEL: usize = 1024;

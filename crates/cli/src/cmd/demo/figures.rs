@@ -26,9 +26,9 @@ use skinkit_render::mesh::Mesh;
 use skinkit_render::renderer::Renderer;
 
 use super::figure7::{Figure7, figure7};
-use super::render::{Job, RenderReport, render};
 use super::round_trip::{RoundTripFigure, round_trip};
 use crate::output::Output;
+use crate::render_job::{Job, RenderReport, render};
 
 /// Side of each figure panel, pixels.
 pub const PANEL: usize = 768;
