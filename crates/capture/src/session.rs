@@ -31,7 +31,7 @@ use crate::{Error, Result, Rig, bracket, detrend, near};
 mod folder;
 mod memory;
 mod prepare;
-pub use folder::{PHOTO_EXTENSIONS, PhotoFolder, RESERVED_STEMS, Session, Skipped, photos_in};
+pub use folder::{PhotoFolder, RESERVED_STEMS, Session, Skipped, photos_in};
 pub use memory::memory_estimate;
 pub use prepare::corrections;
 use prepare::{flatten, raw_reading, unscale_albedo};

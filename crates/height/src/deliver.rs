@@ -12,6 +12,7 @@
 //!   B (coarse) that sum to the height, the limits in the header.
 
 use serde::Serialize;
+use skinkit_maps::format::ImageFormat;
 use skinkit_maps::io::{self, ExrChannel, ExrCompression, ExrOptions, PngColour, PngInfo, PngLayout};
 use skinkit_maps::pyramid::{self, Border};
 use skinkit_maps::{Grid, ScalarMap};
@@ -211,9 +212,9 @@ pub fn write_cavity_png(path: &Path, cavity: &ScalarMap) -> Result<()> {
 /// # Errors
 /// When the extension is neither, or writing fails.
 pub fn write_height(path: &Path, height: &Height, storage: ExrStorage) -> Result<Option<PngScale>> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("exr") => write_exr(path, height, storage).map(|_| None),
-        Some("png") => write_png16(path, height).map(Some),
+    match ImageFormat::of(path) {
+        Some(ImageFormat::Exr) => write_exr(path, height, storage).map(|_| None),
+        Some(ImageFormat::Png) => write_png16(path, height).map(Some),
         _ => Err(crate::Error::Parameter(format!(
             "{}: a height map is written as .exr (float) or .png (16-bit, midlevel 0.5)",
             path.display()

@@ -13,6 +13,7 @@ use glam::Vec3;
 use image::{DynamicImage, ImageDecoder, ImageReader};
 
 use crate::encoding::{NormalEncoding, linear_to_srgb};
+use crate::format::ImageFormat;
 use crate::raw::RawMode;
 use crate::{Channels, ColorMap, Error, Grid, NormalMap, Photo, Result, Samples, ScalarMap};
 
@@ -39,6 +40,10 @@ impl Limits {
 /// The lowercase extension of `path`, or "".
 fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
+}
+
+fn is_exr(path: &Path) -> bool {
+    ImageFormat::of(path) == Some(ImageFormat::Exr)
 }
 
 /// The image file, opened through the input gate ([`crate::input`]) and buffered: decoders
@@ -78,7 +83,7 @@ pub fn read_photo_as(path: &Path, limits: &Limits, raw: RawMode) -> Result<Photo
     if crate::raw::is_raw(path) {
         return crate::raw::read(path, limits, raw);
     }
-    if extension(path) == "exr" {
+    if is_exr(path) {
         let (w, h, data) = read_exr_rgb(path, limits)?;
         let samples = data.into_iter().flatten().collect();
         return Photo::new(w, h, Channels::Rgb, Samples::F32(samples));
@@ -136,7 +141,7 @@ fn photo_from_dynamic(path: &Path, image: DynamicImage) -> Result<Photo> {
 /// # Errors
 /// When the file cannot be read or decoded, is not RGB, or exceeds `limits`.
 pub fn read_normal_map(path: &Path, encoding: NormalEncoding, limits: &Limits) -> Result<NormalMap> {
-    if extension(path) == "exr" {
+    if is_exr(path) {
         let (w, h, data) = read_exr_rgb(path, limits)?;
         let normals = data.into_iter().map(|c| encoding.decode_float(c)).collect();
         return NormalMap::from_unit_grid(Grid::from_vec(w, h, normals)?);
@@ -471,9 +476,9 @@ pub fn write_exr_channels(
 /// When the extension is not `png` or `exr`, or writing fails.
 pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, bits: u32) -> Result<()> {
     let (w, h) = map.size();
-    match extension(path).as_str() {
-        "exr" => write_exr_rgb(path, w, h, |x, y| encoding.encode_float(map.get(x, y))),
-        "png" => {
+    match ImageFormat::of(path) {
+        Some(ImageFormat::Exr) => write_exr_rgb(path, w, h, |x, y| encoding.encode_float(map.get(x, y))),
+        Some(ImageFormat::Png) => {
             let (max, layout) = if bits == 8 { (255, PngLayout::Rgb8) } else { (65535, PngLayout::Rgb16) };
             let texels = map.as_slice();
             write_png_rows(path, w, h, layout, PngColour::Linear, |y, row| {
@@ -482,9 +487,10 @@ pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, 
                 }
             })
         }
-        other => Err(Error::InvalidParameter(format!(
-            "{}: cannot write a normal map as `.{other}` (use .png or .exr)",
-            path.display()
+        _ => Err(Error::InvalidParameter(format!(
+            "{}: cannot write a normal map as `.{}` (use .png or .exr)",
+            path.display(),
+            extension(path)
         ))),
     }
 }
@@ -496,9 +502,9 @@ pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, 
 /// When writing fails or the extension is unknown.
 pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
     let (w, h) = map.size();
-    match extension(path).as_str() {
-        "exr" => write_exr_rgb(path, w, h, |x, y| map.get(x, y).to_array()),
-        "png" => {
+    match ImageFormat::of(path) {
+        Some(ImageFormat::Exr) => write_exr_rgb(path, w, h, |x, y| map.get(x, y).to_array()),
+        Some(ImageFormat::Png) => {
             let texels = map.as_slice();
             let layout = if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 };
             write_png_rows(path, w, h, layout, PngColour::for_layout(layout), |y, row| {
@@ -513,7 +519,11 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
                 }
             })
         }
-        other => Err(Error::InvalidParameter(format!("{}: cannot write a colour map as `.{other}`", path.display()))),
+        _ => Err(Error::InvalidParameter(format!(
+            "{}: cannot write a colour map as `.{}`",
+            path.display(),
+            extension(path)
+        ))),
     }
 }
 

@@ -23,6 +23,7 @@ pub mod documents;
 pub mod encoding;
 pub mod error;
 mod exr_write;
+pub mod format;
 pub mod gate;
 pub mod grid;
 pub mod input;

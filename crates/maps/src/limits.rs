@@ -202,7 +202,7 @@ pub fn image_header_as(path: &Path, max_pixels: u64, raw: crate::raw::RawMode) -
         check_pixels(path, header.width, header.height, max_pixels)?;
         return Ok(header);
     }
-    let header = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+    let header = if crate::format::ImageFormat::of(path) == Some(crate::format::ImageFormat::Exr) {
         exr_header(path, file, max_pixels)?
     } else {
         raster_header(path, file)?

@@ -23,11 +23,7 @@ use std::path::Path;
 use crate::limits::ImageHeader;
 use crate::{Error, Limits, Photo, Result};
 
-/// File extensions read as camera RAW.
-pub const RAW_EXTENSIONS: &[&str] = &[
-    "dng", "cr2", "nef", "nrw", "arw", "srf", "sr2", "orf", "rw2", "pef", "srw", "erf", "kdc", "dcr", "mef", "mrw",
-    "3fr",
-];
+pub use crate::format::RAW_EXTENSIONS;
 
 /// Bytes a RAW file may hold per sensor pixel of the pixel limit, plus [`RAW_SLACK_BYTES`] for
 /// previews and metadata: float DNGs store 4 bytes a sample, every other layout fewer.
@@ -56,8 +52,7 @@ impl RawMode {
 
 /// Whether `path`'s extension says camera RAW ([`RAW_EXTENSIONS`], any case).
 pub fn is_raw(path: &Path) -> bool {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    RAW_EXTENSIONS.contains(&ext.as_str())
+    crate::format::ImageFormat::of(path) == Some(crate::format::ImageFormat::Raw)
 }
 
 /// Reads a RAW photo as linear camera RGB (float, full scale 1) in `mode`.

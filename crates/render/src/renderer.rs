@@ -112,9 +112,11 @@ pub struct FrameOptions {
 }
 
 impl FrameOptions {
-    /// `width x height` frames of the scene's own shading, with no memory limit.
+    /// `width x height` frames of the scene's own shading, within the memory budget every stage
+    /// defaults to ([`skinkit_maps::limits::default_memory_limit`]).
     pub fn new(width: u32, height: u32, encoding: Encoding) -> FrameOptions {
-        FrameOptions { width, height, encoding, shading: Shading::Scene, memory_limit: u64::MAX }
+        let memory_limit = skinkit_maps::limits::default_memory_limit();
+        FrameOptions { width, height, encoding, shading: Shading::Scene, memory_limit }
     }
 }
 

@@ -233,9 +233,9 @@ pub enum OutputFormat {
 impl OutputFormat {
     /// The format for a path's extension (case-insensitive), if supported.
     pub fn from_path(path: &Path) -> Option<OutputFormat> {
-        match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
-            "png" => Some(OutputFormat::Png),
-            "exr" => Some(OutputFormat::Exr),
+        match skinkit_maps::format::ImageFormat::of(path)? {
+            skinkit_maps::format::ImageFormat::Png => Some(OutputFormat::Png),
+            skinkit_maps::format::ImageFormat::Exr => Some(OutputFormat::Exr),
             _ => None,
         }
     }

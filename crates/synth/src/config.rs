@@ -140,7 +140,8 @@ pub struct SynthConfig {
     pub detail_weight: f32,
     /// Seed of the initial state (random exemplar positions, see [`crate::synthesis::random_copies`]).
     pub seed: u64,
-    /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused.
+    /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused (default:
+    /// the one budget of every stage, [`skinkit_maps::limits::default_memory_limit`]).
     pub memory_limit: u64,
 }
 
@@ -171,7 +172,7 @@ impl Default for SynthConfig {
             robust_scale: DEFAULT_ROBUST_SCALE,
             detail_weight: DEFAULT_DETAIL_WEIGHT,
             seed: 0,
-            memory_limit: 8 << 30,
+            memory_limit: skinkit_maps::limits::default_memory_limit(),
         }
     }
 }

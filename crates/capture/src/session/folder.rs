@@ -7,13 +7,11 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
+use skinkit_maps::format::ImageFormat;
 use skinkit_maps::input::{self, InputError, Kind};
 
 use crate::{Error, Result};
 
-/// Photo file extensions a session folder's photos may have.
-/// Camera RAW files ([`skinkit_maps::raw::RAW_EXTENSIONS`]) are photos too.
-pub const PHOTO_EXTENSIONS: &[&str] = &["png", "tif", "tiff", "exr"];
 /// File stems a session folder reserves for other inputs: never taken as photos.
 pub const RESERVED_STEMS: &[&str] = &["mask", "ambient", "truth"];
 
@@ -82,7 +80,7 @@ impl Session {
 }
 
 /// Photo files of a folder in light order: the order `filenames.txt` gives when the folder has
-/// one (the DiLiGenT layout), else sorted by name (only [`PHOTO_EXTENSIONS`], never
+/// one (the DiLiGenT layout), else sorted by name (only names whose [`ImageFormat`] is a photo format: PNG, TIFF, EXR, camera RAW; never
 /// [`RESERVED_STEMS`]); entries with a photo's name that are not regular files are skipped and
 /// named.
 ///
@@ -156,8 +154,7 @@ fn photos_listed(listing: &Path) -> Result<Vec<PathBuf>> {
 }
 
 fn is_photo(path: &Path) -> bool {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let stem = path.file_stem().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let photo = PHOTO_EXTENSIONS.contains(&ext.as_str()) || skinkit_maps::raw::is_raw(path);
+    let photo = ImageFormat::of(path).is_some_and(ImageFormat::is_photo);
     photo && !RESERVED_STEMS.contains(&stem.as_str())
 }

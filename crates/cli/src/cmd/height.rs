@@ -1,6 +1,7 @@
 //! `skinkit height`: a normal map made anywhere (a capture, a baker, a sculpting tool) ->
 //! height (displacement) in millimetres, with the 16-bit PNG, cavity and band files artists load.
 
+use skinkit_maps::format::ImageFormat;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -155,18 +156,18 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
 
 /// Refuses, before any work, outputs whose extension does not match what is written there.
 fn check_extensions(args: &Args) -> Result<()> {
-    let ext = |p: &PathBuf| p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    use ImageFormat::{Exr, Png};
     let wanted = [
-        ("--out", Some(&args.out), &["exr", "png"][..]),
-        ("--png", args.png.as_ref(), &["png"][..]),
-        ("--cavity", args.cavity.as_ref(), &["png"][..]),
-        ("--bands", args.bands.as_ref(), &["exr"][..]),
+        ("--out", Some(&args.out), &[Exr, Png][..]),
+        ("--png", args.png.as_ref(), &[Png][..]),
+        ("--cavity", args.cavity.as_ref(), &[Png][..]),
+        ("--bands", args.bands.as_ref(), &[Exr][..]),
     ];
     for (flag, path, allowed) in wanted {
         if let Some(path) = path
-            && !allowed.contains(&ext(path).as_str())
+            && !ImageFormat::is_one_of(path, allowed)
         {
-            let message = format!("{}: {flag} is written as .{}", path.display(), allowed.join(" or ."));
+            let message = format!("{}: {flag} is written as {}", path.display(), ImageFormat::extensions(allowed));
             return Err(crate::output::usage(message));
         }
     }

@@ -5,6 +5,7 @@
 //! table `P_S(s, w)` of section 1.6. Both print the definitions they used (the same text the file's
 //! attributes hold) and write the file atomically.
 
+use skinkit_maps::format::ImageFormat;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -175,7 +176,7 @@ fn sides((w, h): (usize, usize)) -> (u32, u32) {
 }
 
 fn check_extension(path: &Path) -> Result<()> {
-    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+    if ImageFormat::of(path) != Some(ImageFormat::Exr) {
         return Err(crate::output::usage(format!("--out {}: tables are written as float .exr files", path.display())));
     }
     Ok(())

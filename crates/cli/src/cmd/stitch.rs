@@ -6,6 +6,7 @@
 //! the report. Both capture the regions that name a photo session first (robust solver, detrend
 //! block 50), in memory.
 
+use skinkit_maps::format::ImageFormat;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -45,9 +46,9 @@ pub struct FaceArgs {
 
 pub fn run_stitch(args: StitchArgs, out: &Output) -> Result<i32> {
     let start = Instant::now();
-    check_extension(&args.out, &["png", "exr"])?;
+    check_extension(&args.out, &[ImageFormat::Png, ImageFormat::Exr])?;
     if let Some(labels) = &args.labels {
-        check_extension(labels, &["png"])?;
+        check_extension(labels, &[ImageFormat::Png])?;
     }
     let given = [("--out", Some(&args.out)), ("--labels", args.labels.as_ref()), ("--report", args.report.as_ref())];
     let outputs = skinkit_maps::gate::given(&given);
@@ -117,10 +118,9 @@ fn human(r: &FaceReport) -> String {
     )
 }
 
-fn check_extension(path: &Path, allowed: &[&str]) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    if !allowed.contains(&ext.as_str()) {
-        bail!("{}: unsupported output format (use {})", path.display(), allowed.join(" or "));
+fn check_extension(path: &Path, allowed: &[ImageFormat]) -> Result<()> {
+    if !ImageFormat::is_one_of(path, allowed) {
+        bail!("{}: unsupported output format (use {})", path.display(), ImageFormat::extensions(allowed));
     }
     Ok(())
 }

@@ -8,6 +8,7 @@
 //! copies; blue is 0. Exemplars wider or taller than 65535 texels cannot be described this way and
 //! are refused when `--coords` is asked for.
 
+use skinkit_maps::format::ImageFormat;
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -204,8 +205,7 @@ impl MapArgs {
 
 /// Refuses output names that are neither `.png` nor `.exr`, before any work is done.
 fn check_map_extension(path: &Path) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    if ext != "png" && ext != "exr" {
+    if !ImageFormat::is_one_of(path, &[ImageFormat::Png, ImageFormat::Exr]) {
         return Err(crate::output::usage(format!(
             "{}: output maps are written as .png (16-bit) or .exr",
             path.display()
@@ -218,7 +218,7 @@ fn check_map_extension(path: &Path) -> Result<()> {
 fn check_outputs(args: &Args, exemplar_path: &Path, out_path: &Path) -> Result<()> {
     check_map_extension(out_path)?;
     if let Some(coords) = &args.coords
-        && coords.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png")
+        && ImageFormat::of(coords) != Some(ImageFormat::Png)
     {
         let message = format!("{}: the coordinate map is written as a 16-bit PNG (.png)", coords.display());
         return Err(crate::output::usage(message));

@@ -3,6 +3,7 @@
 //! bands.exr); `exemplars/<region>.png`. Written into an [`OutputSet`], so that the folder appears
 //! whole or not at all (the caller adds its report and commits).
 
+use skinkit_maps::format::ImageFormat;
 use std::path::Path;
 use std::time::Instant;
 
@@ -58,8 +59,8 @@ fn write_normals(set: &OutputSet, dir: &Path, layout: &Layout, map: &NormalMap) 
     };
     for (tile, grid) in atlas.split(map.grid())? {
         let tile_map = NormalMap::from_unit_grid(grid)?;
-        for ext in ["png", "exr"] {
-            write_in(set, dir, &format!("normal.{tile}.{ext}"), |p| write_normal_map(p, &tile_map))?;
+        for format in [ImageFormat::Png, ImageFormat::Exr] {
+            write_in(set, dir, &format!("normal.{tile}.{}", format.extension()), |p| write_normal_map(p, &tile_map))?;
         }
     }
     Ok(())
@@ -105,7 +106,7 @@ fn write_in(
 
 /// A normal map as 16-bit PNG or, for `.exr`, float EXR.
 pub fn write_normal_map(path: &Path, map: &NormalMap) -> skinkit_maps::Result<()> {
-    let bits = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) { 32 } else { 16 };
+    let bits = if ImageFormat::of(path) == Some(ImageFormat::Exr) { 32 } else { 16 };
     io::write_normal_map(path, map, NormalEncoding::default(), bits)
 }
 

@@ -25,6 +25,7 @@
 //! highlight pixels the lobes make, and how much local contrast the bumps give the sheen (the
 //! demo report's `renders.figure7`).
 
+use skinkit_maps::format::ImageFormat;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
@@ -112,8 +113,8 @@ pub fn figure7(
     renders: &mut Vec<RenderReport>,
 ) -> Result<Figure7> {
     let mut scenes = Scenes { dir, renderer, out, renders };
-    let smooth = scenes.draw("head-smooth", face_scene(None, true), "png")?;
-    let skin = scenes.draw("head-skin", face_scene(Some(map), true), "png")?;
+    let smooth = scenes.draw("head-smooth", face_scene(None, true), ImageFormat::Png)?;
+    let skin = scenes.draw("head-skin", face_scene(Some(map), true), ImageFormat::Png)?;
     let skin_share = scenes.share("head-skin", Some(map))?;
     let smooth_share = scenes.share("head-smooth", None)?;
     let image = dir.join("figure7.png");
@@ -132,10 +133,10 @@ struct Scenes<'a> {
 
 impl Scenes<'_> {
     /// Writes `name.toml` and renders it to `name.ext`.
-    fn draw(&mut self, name: &str, text: String, ext: &str) -> Result<PathBuf> {
+    fn draw(&mut self, name: &str, text: String, format: ImageFormat) -> Result<PathBuf> {
         let scene = self.dir.join(format!("{name}.toml"));
         write_text(&scene, &text)?;
-        let image = self.dir.join(format!("{name}.{ext}"));
+        let image = self.dir.join(format!("{name}.{}", format.extension()));
         let job = Job { scene, out: Some(image.clone()), size: None, frames: None, reference: None };
         self.renders.push(render(&job, self.renderer, self.out)?);
         Ok(image)
@@ -143,8 +144,8 @@ impl Scenes<'_> {
 
     /// The face with `map` drawn to EXR with and without the lobes, and the lobes' share.
     fn share(&mut self, name: &str, map: Option<&str>) -> Result<SpecularShare> {
-        let with = self.draw(name, face_scene(map, true), "exr")?;
-        let without = self.draw(&format!("{name}-diffuse"), face_scene(map, false), "exr")?;
+        let with = self.draw(name, face_scene(map, true), ImageFormat::Exr)?;
+        let without = self.draw(&format!("{name}-diffuse"), face_scene(map, false), ImageFormat::Exr)?;
         let ((a, width), (b, _)) = (linear(&with)?, linear(&without)?);
         specular_share(&a, &b, width)
             .with_context(|| format!("comparing {} with {}", with.display(), without.display()))
