@@ -57,6 +57,12 @@
 //! amplitudes 32-128 (release, 2 busy cores).
 //!
 //! The island repair works on runs of equal labels (a few per row), so it costs one scan.
+//!
+//! # Length
+//! Over 600 lines (about 575 without its tests) on purpose: the warp and its noise, the warped
+//! cells with their block and band shortcuts, and the full-warp reference those shortcuts are
+//! tested against are one computation at two speeds, kept in one file so that each shortcut
+//! reads beside the exact form it must reproduce; the island repair after them is short.
 
 use rayon::prelude::*;
 use skinkit_maps::Grid;

@@ -2,6 +2,10 @@
 //! irradiance, a straight light edge spreads as the cumulative 1-D marginal of the profile
 //! (integrated here by fine quadrature), texel weights against brute-force 2-D quadrature of the
 //! profile, ray-cast shadows where geometry says, energy conservation, determinism.
+//!
+//! Over 600 lines: one test per oracle, each with the fixture it needs (a flat sheet, an edge, a
+//! sphere, an occluder); the fixtures are small but differ, and sharing them would hide which
+//! geometry a failure is about.
 
 use glam::{Vec2, Vec3};
 use skinkit_render::brdf::Lafortune;
