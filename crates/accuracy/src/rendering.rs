@@ -1,4 +1,4 @@
-//! Rendering: every skin diffuse method of [`skinkit_render::skin::compare`] and its quality
+//! Rendering: every skin diffuse method of [`skinkit_render::compare`] and its quality
 //! knobs (LUT size, the ring or sphere table, texture-space diffusion's passes, light-map size
 //! and kernel, the reference at half size), each render's error against the exact texture-space
 //! reference (FLIP mean of the tone-mapped images, relative RMSE of linear radiance) and its GPU
@@ -14,9 +14,9 @@
 use std::path::Path;
 use std::time::Instant;
 
+use skinkit_render::compare::{self, Method};
 use skinkit_render::renderer::{Encoding, Frame, FrameOptions, Prepared, Renderer, Shading};
 use skinkit_render::scene::Scene;
-use skinkit_render::skin::compare::{self, Method};
 use skinkit_render::skin::options::TsdKernel;
 
 use crate::choice::{Choice, Stage, StageReport, knobs, metrics};

@@ -10,10 +10,11 @@ use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, PngLayout};
 use skinkit_maps::limits;
-use skinkit_render::load::{self, Plan};
+use skinkit_render::compare::Method;
+use skinkit_render::load;
+use skinkit_render::pass::explain::Plan;
 use skinkit_render::renderer::{Encoding, Frame, FrameOptions, Renderer, Shading};
 use skinkit_render::scene::{self, Scene};
-use skinkit_render::skin::compare::Method;
 
 use crate::output::Output;
 

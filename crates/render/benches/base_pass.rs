@@ -18,7 +18,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use skinkit_render::brdf::Lafortune;
-use skinkit_render::passes::SkinSetup;
+use skinkit_render::pass::setup::SkinSetup;
 use skinkit_render::renderer::{Encoding, FrameOptions, Renderer};
 use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,

@@ -28,10 +28,10 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use skinkit_render::compare::{self, Method};
 use skinkit_render::effect::Effect;
 use skinkit_render::renderer::{Encoding, Frame as Rendered, FrameOptions, Prepared, Renderer, Shading};
 use skinkit_render::scene::Scene;
-use skinkit_render::skin::compare::{self, Method};
 
 const FRAMES: usize = 7;
 

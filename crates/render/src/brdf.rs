@@ -8,7 +8,7 @@
 //!
 //! Numerical safety: a negative lobe base gives exactly 0 (the power of a negative number would
 //! be NaN), and a lobe value is capped at [`LOBE_CEILING`] so that a base slightly above 1 raised
-//! to a huge exponent (n = 10000) stays finite. The same rules are in `src/pass/base.wgsl`.
+//! to a huge exponent (n = 10000) stays finite. The same rules are in `src/pass/base/base.wgsl`.
 
 use glam::Vec3;
 

@@ -1,6 +1,6 @@
 //! The effects a scene may list (`effects = ["shadows", "tsd"]`) and the rules between them,
 //! checked once, when the scene is parsed ([`crate::scene::Scene::parse`]). What each effect
-//! builds is decided in one place, [`crate::graph::PassGraph::build`]; their settings live in
+//! builds is decided in one place, [`crate::pass::graph::PassGraph::build`]; their settings live in
 //! [`crate::skin::options`].
 
 use serde::{Deserialize, Serialize};
@@ -21,17 +21,21 @@ pub enum Effect {
     ShadowScattering,
     /// Texture-space diffusion (light map, Poisson blurs).
     Tsd,
+    /// A debug view of the mesh's tangent frames and UV stretch in place of the shading
+    /// (`crate::pass::debug`).
+    DebugFrames,
 }
 
 impl Effect {
     /// Every effect, in the order `--explain` and error messages list them.
-    pub const ALL: [Effect; 6] = [
+    pub const ALL: [Effect; 7] = [
         Effect::Preintegrated,
         Effect::PreintegratedAnalytic,
         Effect::ShAmbient,
         Effect::Shadows,
         Effect::ShadowScattering,
         Effect::Tsd,
+        Effect::DebugFrames,
     ];
 
     /// The name a scene file uses.
@@ -43,6 +47,7 @@ impl Effect {
             Effect::Shadows => "shadows",
             Effect::ShadowScattering => "shadow-scattering",
             Effect::Tsd => "tsd",
+            Effect::DebugFrames => "debug-frames",
         }
     }
 
@@ -128,8 +133,8 @@ mod tests {
     #[test]
     fn allowed_combinations_are_every_subset_the_rules_keep() {
         let all = allowed_combinations();
-        // 4 diffuse choices x {none, shadows, shadows + scattering} x {ambient or not}.
-        assert_eq!(all.len(), 4 * 3 * 2);
+        // 4 diffuse choices x {none, shadows, shadows + scattering} x {ambient or not} x {debug view or not}.
+        assert_eq!(all.len(), 4 * 3 * 2 * 2);
         assert!(all.contains(&Vec::new()));
         assert!(all.iter().all(|set| check_rules(set, true).is_ok()));
     }

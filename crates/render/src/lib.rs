@@ -15,19 +15,18 @@
 //! specular lobes make.
 
 pub mod brdf;
+pub mod compare;
 pub mod effect;
 pub mod export;
 pub mod frames;
 pub mod gltf_maps;
 pub mod gpu;
-pub mod graph;
 pub mod head;
 pub mod highlight;
 pub mod label;
 pub mod load;
 pub mod mesh;
 pub mod pass;
-pub mod passes;
 pub mod renderer;
 pub mod scene;
 pub mod shading;

@@ -24,13 +24,15 @@
 
 use std::time::{Duration, Instant};
 
-use crate::gpu::{Gpu, GpuError, OutputFormat, PreparedScene, Target};
-use crate::graph::PassGraph;
-use crate::load::{self, LoadError, Loaded, Plan};
-use crate::passes::SkinSetup;
+use crate::compare::Method;
+use crate::gpu::{Gpu, GpuError, OutputFormat, Target};
+use crate::load::{self, LoadError, Loaded};
+use crate::pass::explain::{self, Plan};
+use crate::pass::graph::PassGraph;
+use crate::pass::setup::SkinSetup;
+use crate::pass::{self, PreparedScene};
 use crate::scene::{self, Scene};
 use crate::shading::{Light, RenderInputs, ToneCurve};
-use crate::skin::{self, compare::Method};
 
 pub use crate::gpu::Rendered as Frame;
 
@@ -89,7 +91,7 @@ pub enum Shading {
     /// The scene's own effects, through its pass graph.
     #[default]
     Scene,
-    /// One of the skin methods compared in [`crate::skin::compare`] (its effects replace the
+    /// One of the skin methods compared in [`crate::compare`] (its effects replace the
     /// scene's; [`Method::Reference`] bakes the exact light map on the CPU).
     Method(Method),
     /// The base pass alone: Lambert diffuse, no shadows, no tables (the cost baseline).
@@ -352,7 +354,7 @@ fn load_and_explain(scene: &Scene, options: &FrameOptions, max_texture_side: u32
     let (width, height) = (options.width, options.height);
     let loaded = load::load(scene, width, height, max_texture_side)?;
     let graph = PassGraph::build(scene);
-    let plan = load::plan(scene, &loaded, &graph, width, height, options.encoding.target().0);
+    let plan = explain::plan(scene, &loaded, &graph, width, height, options.encoding.target().0);
     let mut warnings = loaded.warnings.clone();
     warnings.extend(plan.notes.iter().cloned());
     Ok((loaded, Explanation { plan, warnings }))
@@ -361,7 +363,7 @@ fn load_and_explain(scene: &Scene, options: &FrameOptions, max_texture_side: u32
 /// The skin set-up `shading` asks for.
 fn skin_setup(scene: &Scene, loaded: &Loaded, shading: Shading) -> Result<SkinSetup> {
     Ok(match shading {
-        Shading::Scene => skin::setup::build(scene, loaded, &PassGraph::build(scene))?,
+        Shading::Scene => pass::build::setup(scene, loaded, &PassGraph::build(scene))?,
         Shading::Method(method) => method.setup(scene, loaded)?,
         Shading::Plain => SkinSetup::default(),
     })

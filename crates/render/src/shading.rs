@@ -1,4 +1,4 @@
-//! The CPU reference of the base shading in `src/pass/base.wgsl` and `common.wgsl` (Haro et al.
+//! The CPU reference of the base shading in `src/pass/base/base.wgsl` and `common.wgsl` (Haro et al.
 //! 2001, section 5): the same inputs, the same steps, in plain Rust, so GPU renders can be
 //! compared per pixel.
 //!

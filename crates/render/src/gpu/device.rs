@@ -2,7 +2,6 @@
 //! sizes against its limits before anything is uploaded.
 
 use super::{Gpu, GpuError, Result};
-use crate::pass;
 use crate::shading::{MAX_LIGHTS, MAX_LOBES, RenderInputs, Texture, Vertex};
 use std::sync::Mutex;
 
@@ -66,31 +65,14 @@ impl Gpu {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mesh passes (pass::BASE_WGSL)"),
-            source: wgpu::ShaderSource::Wgsl(pass::BASE_WGSL.into()),
-        });
-        let blur_layout = pass::blur::blur_bind_group_layout(&device);
-        let blur_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tsd blur layout"),
-            bind_group_layouts: &[Some(&blur_layout)],
-            immediate_size: 0,
-        });
-        let blur_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("blur.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(pass::BLUR_WGSL.into()),
-        });
         Ok(Self {
             adapter,
             device,
             queue,
             layout,
             pipeline_layout,
-            shader,
-            blur_layout,
-            blur_pipeline_layout,
-            blur_shader,
             pipelines: Mutex::new(Vec::new()),
+            shared: Mutex::new(Vec::new()),
         })
     }
 

@@ -1,7 +1,9 @@
-//! Headless wgpu: the machinery the passes of [`crate::pass`] run on. The device and its checks
-//! (`device`), buffers, textures and the shared bind group (`resources`), the pipeline cache
-//! (`pipelines`), a scene's upload and the frame's encoder walking the pass graph (`frame`),
-//! readback to linear f32 pixels (`readback`) and per-pass GPU timestamps (`timing`).
+//! Headless wgpu: the machinery the passes of [`crate::pass`] run on, knowing none of them. The
+//! device and its checks (`device`), buffers, textures, tables and the bind group layout the mesh
+//! passes share (`resources`, `table`), the caches of pipelines and of shader modules and layouts
+//! (`pipelines`), readback to linear f32 pixels (`readback`) and the timestamp queries around each
+//! pass (`timing`). A scene's upload and the frame's encoder walking its passes are
+//! [`crate::pass`]'s.
 //!
 //! Without a GPU, Mesa's lavapipe (software Vulkan) runs everything: set `WGPU_BACKEND=vulkan`.
 //! [`Gpu::new`] reads the backends from `WGPU_BACKEND` (default: the native backends compiled in:
@@ -17,23 +19,21 @@
 //! downscale.
 
 mod device;
-mod frame;
 mod pipelines;
 mod readback;
 mod resources;
+mod table;
 mod timing;
 
-pub use crate::pass::{BASE_WGSL, BLUR_WGSL, UNIFORM_BYTES, UniformLayout, uniform_layouts};
 pub use device::quiet_vulkan_loader;
-pub use frame::PreparedScene;
-pub(crate) use frame::tone_code;
-pub(crate) use pipelines::{MESH_BUFFERS, MeshPipeline, POSITION_BUFFER, PipelineKey, depth_state};
+pub(crate) use pipelines::{MESH_BUFFERS, MeshPipeline, POSITION_BUFFER, depth_state};
 pub use readback::{Rendered, padded_row_bytes};
-pub(crate) use resources::{
-    DEPTH_FORMAT, OPACITY_FORMAT, STRETCH_FORMAT, SceneTextures, colour_attachment, depth_attachment, extent,
-};
+pub(crate) use resources::{DEPTH_FORMAT, OPACITY_FORMAT, STRETCH_FORMAT, colour_attachment, depth_attachment, extent};
+pub use table::Table;
+pub(crate) use timing::{PassTimer, timestamp_writes};
 
-use std::sync::Mutex;
+use std::any::Any;
+use std::sync::{Arc, Mutex};
 
 /// What can go wrong on the GPU side.
 #[derive(Debug, thiserror::Error)]
@@ -179,18 +179,19 @@ pub struct Target {
     pub(crate) format: OutputFormat,
 }
 
-/// A headless device with the shader modules of the passes and a cache of their pipelines.
+/// A headless device with a cache of the passes' pipelines, shader modules and layouts (each
+/// built once, the first time a pass asks for it).
 pub struct Gpu {
     adapter: wgpu::Adapter,
     pub(crate) device: wgpu::Device,
-    queue: wgpu::Queue,
-    layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    pub(crate) shader: wgpu::ShaderModule,
-    pub(crate) blur_layout: wgpu::BindGroupLayout,
-    pub(crate) blur_pipeline_layout: wgpu::PipelineLayout,
-    pub(crate) blur_shader: wgpu::ShaderModule,
-    pipelines: Mutex<Vec<(PipelineKey, wgpu::RenderPipeline)>>,
+    pub(crate) queue: wgpu::Queue,
+    /// The bind group layout the mesh passes share.
+    pub(crate) layout: wgpu::BindGroupLayout,
+    pub(crate) pipeline_layout: wgpu::PipelineLayout,
+    /// Pipelines by the key their pass gives (pass, features, target format).
+    pipelines: Mutex<Vec<(String, wgpu::RenderPipeline)>>,
+    /// Shader modules and layouts by name ([`Gpu::shared`]).
+    shared: Mutex<Vec<(&'static str, Arc<dyn Any + Send + Sync>)>>,
 }
 
 #[cfg(test)]

@@ -1,26 +1,18 @@
-//! The pipeline cache: every pipeline is built once per key (pass, features, target format) and
-//! kept for the life of the [`Gpu`], so a second render of a scene builds none. The passes say
-//! what their pipelines are ([`MeshPipeline`]); this module builds them.
+//! The caches: every pipeline is built once per key (its pass says what the key holds: the pass,
+//! its shader features, its target format) and kept for the life of the [`Gpu`], so a second
+//! render of a scene builds none; shader modules and layouts likewise, by name. The passes say
+//! what their pipelines are ([`MeshPipeline`]); this module builds and keeps them.
 
-use super::{DEPTH_FORMAT, Gpu, OutputFormat};
-use crate::passes::Features;
+use super::{DEPTH_FORMAT, Gpu};
 use crate::shading::Vertex;
+use std::sync::Arc;
 
-/// Which pipeline: a pass, with the shader features and target format it is built for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum PipelineKey {
-    Base(OutputFormat, Features),
-    Shadow,
-    Translucent,
-    TsdPrepass(Features),
-    LightMap(Features),
-    Blur,
-}
-
-/// A mesh pass's pipeline in the shared module ([`crate::pass::BASE_WGSL`]): its entry points,
-/// vertex buffers, colour target and depth test, and the features its override constants take.
+/// A mesh pass's pipeline in the mesh passes' shared module: its entry points, vertex buffers,
+/// colour target and depth test, and the values of the module's override constants.
 pub(crate) struct MeshPipeline<'a> {
     pub(crate) label: &'static str,
+    /// The shader module the entry points are in.
+    pub(crate) module: &'a wgpu::ShaderModule,
     pub(crate) vertex_entry: &'static str,
     pub(crate) buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     pub(crate) fragment_entry: Option<&'static str>,
@@ -28,7 +20,8 @@ pub(crate) struct MeshPipeline<'a> {
     /// A second colour target (TSD's light map writes the stretch map beside it).
     pub(crate) second_target: Option<wgpu::TextureFormat>,
     pub(crate) depth: Option<wgpu::DepthStencilState>,
-    pub(crate) features: Features,
+    /// The pipeline-overridable constants (the shader features).
+    pub(crate) constants: &'a [(&'static str, f64)],
 }
 
 const STRIDE: u64 = std::mem::size_of::<Vertex>() as u64;
@@ -72,21 +65,50 @@ pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> Option
 }
 
 impl Gpu {
-    /// The pipeline for `key`, built once.
-    pub(crate) fn pipeline(&self, key: PipelineKey) -> wgpu::RenderPipeline {
+    /// The pipeline of `key`, built by `build` the first time it is asked for. The key names
+    /// the pass and everything its pipeline depends on (features, target format).
+    pub(crate) fn pipeline(
+        &self,
+        key: String,
+        build: impl FnOnce(&Gpu) -> wgpu::RenderPipeline,
+    ) -> wgpu::RenderPipeline {
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((_, p)) = cache.iter().find(|(k, _)| *k == key) {
             return p.clone();
         }
-        let pipeline = crate::pass::build_pipeline(self, key);
+        let pipeline = build(self);
         cache.push((key, pipeline.clone()));
         pipeline
     }
 
-    /// Builds a mesh pass's pipeline in the shared module, with the shared bind group layout.
+    /// The value named `name` (a shader module, a layout), built by `build` the first time.
+    pub(crate) fn shared<T: Clone + Send + Sync + 'static>(
+        &self,
+        name: &'static str,
+        build: impl FnOnce(&Gpu) -> T,
+    ) -> T {
+        let mut cache = self.shared.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(value) = cache.iter().find(|(k, _)| *k == name).and_then(|(_, v)| v.downcast_ref::<T>()) {
+            return value.clone();
+        }
+        let value = build(self);
+        cache.push((name, Arc::new(value.clone())));
+        value
+    }
+
+    /// The WGSL module `source`, compiled once under `name`.
+    pub(crate) fn shader_module(&self, name: &'static str, source: &'static str) -> wgpu::ShaderModule {
+        self.shared(name, |gpu| {
+            gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(name),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            })
+        })
+    }
+
+    /// Builds a mesh pass's pipeline, with the shared bind group layout.
     pub(crate) fn mesh_pipeline(&self, spec: &MeshPipeline) -> wgpu::RenderPipeline {
-        let constants = spec.features.constants();
-        let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+        let options = wgpu::PipelineCompilationOptions { constants: spec.constants, ..Default::default() };
         let targets: Vec<Option<wgpu::ColorTargetState>> = [spec.target, spec.second_target]
             .into_iter()
             .flatten()
@@ -96,7 +118,7 @@ impl Gpu {
             label: Some(spec.label),
             layout: Some(&self.pipeline_layout),
             vertex: wgpu::VertexState {
-                module: &self.shader,
+                module: spec.module,
                 entry_point: Some(spec.vertex_entry),
                 compilation_options: options.clone(),
                 buffers: spec.buffers,
@@ -105,7 +127,7 @@ impl Gpu {
             depth_stencil: spec.depth.clone(),
             multisample: Default::default(),
             fragment: spec.fragment_entry.map(|entry| wgpu::FragmentState {
-                module: &self.shader,
+                module: spec.module,
                 entry_point: Some(entry),
                 compilation_options: options.clone(),
                 targets: &targets,

@@ -1,7 +1,7 @@
 //! Readback: a target copied into a mappable buffer (rows padded to wgpu's copy alignment),
 //! mapped, and unpacked to linear f32 RGBA.
 
-use super::{Gpu, GpuError, OutputFormat, Result, Target, extent};
+use super::{DEPTH_FORMAT, Gpu, GpuError, OutputFormat, Result, Target, extent};
 
 /// A rendered image read back from the GPU.
 #[derive(Debug, Clone, PartialEq)]
@@ -120,5 +120,26 @@ fn decode_srgb8(byte: u8, alpha: bool) -> f32 {
         c / 12.92
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+impl Gpu {
+    /// An offscreen colour target with its depth buffer.
+    ///
+    /// # Errors
+    /// [`GpuError::BadOutputSize`] for a zero size or one above the device limit.
+    pub fn create_target(&self, width: u32, height: u32, format: OutputFormat) -> Result<Target> {
+        let limit = self.max_texture_side();
+        if width == 0 || height == 0 || width > limit || height > limit {
+            return Err(GpuError::BadOutputSize { width, height, limit });
+        }
+        Ok(Target {
+            color: self.texture("base pass colour target", width, height, format.texture_format()),
+            depth: self.texture("base pass depth", width, height, DEPTH_FORMAT),
+            readback: readback_buffer(&self.device, width, height, format),
+            width,
+            height,
+            format,
+        })
     }
 }

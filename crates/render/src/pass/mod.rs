@@ -1,12 +1,15 @@
-//! The passes of a frame, one module each, in the order `crate::graph::ordered_passes` gives:
-//! `shadow` (the key light's depth), `translucent` (the translucent casters' opacity),
-//! `tsd_prepass`, `light_map` and `blur` (texture-space diffusion, with what they share in
-//! `tsd`), then `base`. Each module owns its WGSL (beside it), the resources it allocates,
-//! its pipeline and how it encodes itself; `Gpu::encode_pass` is the one place a
-//! [`PassKind`] is dispatched to its pass.
+//! The passes of a frame, one folder each with its WGSL beside it, each a [`Pass`]: what it is
+//! called, what it explains of itself for `--explain`, and how it encodes itself. [`PassList::of`]
+//! is the one list of them, in frame order: `shadow` (the key light's depth), `translucent` (the
+//! translucent casters' opacity), `tsd_prepass`, `light_map` and `blur` (texture-space diffusion,
+//! with what they share in `tsd`), then `base`. The graph ([`graph::PassGraph`]), the frame's
+//! encoder (`frame`), its timestamps and `--explain` ([`explain::plan`]) all walk that list, and
+//! no other type names the passes. The book's "Adding an effect" walks through adding one.
 //!
-//! The mesh passes share one uniform block (`uniforms`): a part every pass reads, then one
-//! named struct per pass, declared beside it.
+//! Around the passes: what a scene's effects decide ([`graph`]), what they hand the GPU
+//! ([`setup`], made by [`build`]), the geometry they need ([`geometry`]), the scene's textures and
+//! the bind group they share (`textures`), the uniform block (`uniforms`: a part every pass reads,
+//! then one struct per pass), and a scene's upload and the frame's encoder (`frame`).
 //!
 //! The mesh passes share one shader module, [`BASE_WGSL`], assembled here from `common.wgsl` and
 //! each pass's file (one module compiled once per device, its pipelines differing by entry point
@@ -14,75 +17,244 @@
 
 pub(crate) mod base;
 pub(crate) mod blur;
+pub mod build;
+mod debug;
+pub mod explain;
+mod frame;
+pub mod geometry;
+pub mod graph;
 pub(crate) mod light_map;
+pub mod setup;
 pub(crate) mod shadow;
+mod textures;
 pub(crate) mod translucent;
 pub(crate) mod tsd;
 pub(crate) mod tsd_prepass;
 pub(crate) mod uniforms;
 
+use std::any::Any;
+use std::sync::Arc;
+
+pub use debug::DEBUG_WGSL;
 pub use uniforms::{UNIFORM_BYTES, UniformLayout, uniform_layouts};
 
-use crate::gpu::{Gpu, PipelineKey, PreparedScene, Target};
-use crate::graph::PassKind;
+use crate::effect::Effect;
+use crate::gpu::{Gpu, Target};
+use crate::shading::RenderInputs;
+use setup::{Features, SkinSetup};
 
 /// The WGSL source of the mesh passes: the closed-form LUT fits, the shared part, then each
-/// pass's file in graph order.
+/// pass's file in frame order.
 pub const BASE_WGSL: &str = concat!(
     include_str!("../../shaders/skin_fit.wgsl"),
     "\n",
     include_str!("common.wgsl"),
     "\n",
-    include_str!("shadow.wgsl"),
+    include_str!("shadow/shadow.wgsl"),
     "\n",
-    include_str!("translucent.wgsl"),
+    include_str!("translucent/translucent.wgsl"),
     "\n",
-    include_str!("tsd.wgsl"),
+    include_str!("tsd/tsd.wgsl"),
     "\n",
-    include_str!("tsd_prepass.wgsl"),
+    include_str!("tsd_prepass/tsd_prepass.wgsl"),
     "\n",
-    include_str!("light_map.wgsl"),
+    include_str!("light_map/light_map.wgsl"),
     "\n",
-    include_str!("base.wgsl"),
+    include_str!("base/base.wgsl"),
 );
 
 /// The WGSL source of texture-space diffusion's Poisson blur.
-pub const BLUR_WGSL: &str = include_str!("blur.wgsl");
+pub const BLUR_WGSL: &str = include_str!("blur/blur.wgsl");
 
-impl Gpu {
-    /// Encodes one pass of the graph.
-    pub(crate) fn encode_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        kind: PassKind,
-        scene: &PreparedScene,
-        target: &Target,
-        writes: Option<wgpu::RenderPassTimestampWrites>,
-    ) {
-        let shadow = || scene.shadow.as_ref().expect("a shadow pass is listed only with its shadow map");
-        let tsd = || scene.tsd.as_ref().expect("a TSD pass is listed only with its light maps");
-        match kind {
-            PassKind::ShadowMap => self.encode_shadow(encoder, scene, shadow(), writes),
-            PassKind::TranslucentShadows => {
-                let opacity = shadow().opacity.as_ref().expect("translucent shadows are listed with their map");
-                self.encode_translucent(encoder, shadow(), opacity, writes);
-            }
-            PassKind::TsdPrepass => self.encode_tsd_prepass(encoder, scene, tsd(), writes),
-            PassKind::TsdLightMap => self.encode_light_map(encoder, scene, tsd(), writes),
-            PassKind::TsdBlur(i) => self.encode_blur(encoder, tsd(), i as usize, writes),
-            PassKind::Base => self.encode_base(encoder, scene, target, writes),
-        }
+/// The mesh passes' shader module ([`BASE_WGSL`]), compiled once per device.
+pub(crate) fn mesh_module(gpu: &Gpu) -> wgpu::ShaderModule {
+    gpu.shader_module("mesh passes (pass::BASE_WGSL)", BASE_WGSL)
+}
+
+/// One pass of a frame.
+pub(crate) trait Pass: Send + Sync {
+    /// Its name, as `--explain` and the GPU timings print it.
+    fn name(&self) -> String;
+
+    /// What it does, reads and writes, for `--explain`.
+    fn explain(&self, context: &explain::Context) -> explain::Described;
+
+    /// Whether it is one of texture-space diffusion's passes, which frustum and distance culling
+    /// skip together.
+    fn culled_with_tsd(&self) -> bool {
+        false
+    }
+
+    /// Uploads what this pass alone reads, once per scene (by default nothing: what several
+    /// passes share is the scene's). The frame hands it back to [`Pass::encode`]
+    /// ([`FrameEncoder::state`]).
+    fn prepare(&self, _gpu: &Gpu, _upload: &Upload<'_>) -> Option<PassState> {
+        None
+    }
+
+    /// Records the pass into the frame's encoder.
+    fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>);
+}
+
+/// What a pass prepared for one scene ([`Pass::prepare`]), kept beside the scene.
+pub(crate) type PassState = Box<dyn Any + Send + Sync>;
+
+/// What a pass prepares itself from: the scene's inputs and setup, and its uniform block.
+pub(crate) struct Upload<'a> {
+    pub(crate) inputs: &'a RenderInputs,
+    pub(crate) skin: &'a SkinSetup,
+    pub(crate) uniforms: &'a wgpu::Buffer,
+}
+
+/// What a pass encodes into: the frame's command encoder, the scene it draws and its target,
+/// and what the pass prepared for the scene.
+pub(crate) struct FrameEncoder<'a> {
+    pub(crate) encoder: &'a mut wgpu::CommandEncoder,
+    pub(crate) scene: &'a PreparedScene,
+    pub(crate) target: &'a Target,
+    pub(crate) state: Option<&'a (dyn Any + Send + Sync)>,
+}
+
+impl<'a> FrameEncoder<'a> {
+    /// What this pass prepared ([`Pass::prepare`]), as the type it prepared.
+    pub(crate) fn state<T: 'static>(&self) -> &'a T {
+        self.state.and_then(|s| s.downcast_ref::<T>()).expect("a pass reads the state it prepared")
     }
 }
 
-/// Builds the pipeline of `key`: the one place a pipeline key is dispatched to its pass.
-pub(crate) fn build_pipeline(gpu: &Gpu, key: PipelineKey) -> wgpu::RenderPipeline {
-    match key {
-        PipelineKey::Base(format, features) => gpu.mesh_pipeline(&base::pipeline(format, features)),
-        PipelineKey::Shadow => gpu.mesh_pipeline(&shadow::pipeline()),
-        PipelineKey::Translucent => gpu.mesh_pipeline(&translucent::pipeline()),
-        PipelineKey::TsdPrepass(features) => gpu.mesh_pipeline(&tsd_prepass::pipeline(features)),
-        PipelineKey::LightMap(features) => gpu.mesh_pipeline(&light_map::pipeline(features, gpu.light_map_format())),
-        PipelineKey::Blur => blur::pipeline(gpu),
+/// What decides which passes a frame runs; a scene's graph and a setup give the same one.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Shape {
+    /// The key light's shadow map is drawn.
+    pub(crate) shadow_map: bool,
+    /// ... with translucent casters.
+    pub(crate) translucent: bool,
+    /// Texture-space diffusion runs, with this many blurs.
+    pub(crate) tsd_blurs: Option<u32>,
+    /// The scene's effects (for passes that only an effect adds, as the debug view).
+    pub(crate) effects: Vec<Effect>,
+}
+
+/// What a pass module adds to a frame of a given shape (none, one, or several of its passes).
+type PassesOf = fn(&Shape) -> Vec<Arc<dyn Pass>>;
+
+/// The passes each pass module adds for a shape, in frame order: the one list of passes.
+const PASSES: [PassesOf; 7] = [
+    shadow::passes,
+    translucent::passes,
+    tsd_prepass::passes,
+    light_map::passes,
+    blur::passes,
+    base::passes,
+    debug::passes,
+];
+
+/// A frame's passes, in the order they run.
+#[derive(Clone)]
+pub struct PassList(pub(crate) Vec<Arc<dyn Pass>>);
+
+impl PassList {
+    /// The passes of `shape`, in frame order.
+    pub(crate) fn of(shape: &Shape) -> PassList {
+        PassList(PASSES.iter().flat_map(|passes| passes(shape)).collect())
+    }
+
+    /// Their names, in order.
+    pub fn names(&self) -> Vec<String> {
+        self.0.iter().map(|p| p.name()).collect()
+    }
+
+    /// How many passes run.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Whether there are none (never for a frame: the base pass always runs).
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+impl std::fmt::Debug for PassList {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.names()).finish()
+    }
+}
+
+impl PartialEq for PassList {
+    fn eq(&self, other: &Self) -> bool {
+        self.names() == other.names()
+    }
+}
+
+impl serde::Serialize for PassList {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(self.names())
+    }
+}
+
+/// A scene uploaded to the GPU by [`Gpu::prepare`], ready for [`Gpu::draw`].
+pub struct PreparedScene {
+    pub(crate) globals: uniforms::Globals,
+    pub(crate) uniforms: wgpu::Buffer,
+    pub(crate) bind_group: wgpu::BindGroup,
+    pub(crate) vertices: wgpu::Buffer,
+    pub(crate) vertex_skin: wgpu::Buffer,
+    pub(crate) indices: wgpu::Buffer,
+    pub(crate) index_count: u32,
+    pub(crate) background: [f32; 4],
+    pub(crate) features: Features,
+    /// The passes [`Gpu::draw`] runs, in order ([`setup::SkinSetup::passes`]).
+    pub(crate) passes: PassList,
+    /// What each pass prepared, in the order of `passes`.
+    pub(crate) states: Vec<Option<PassState>>,
+    pub(crate) bounds: (glam::Vec3, f32),
+    pub(crate) shadow: Option<shadow::ShadowResources>,
+    pub(crate) tsd: Option<tsd::TsdResources>,
+}
+
+impl PreparedScene {
+    /// The shader features this scene's passes were compiled with.
+    pub fn features(&self) -> Features {
+        self.features
+    }
+
+    /// The passes [`Gpu::draw`] runs for this scene, in order.
+    pub fn passes(&self) -> &PassList {
+        &self.passes
+    }
+
+    /// Their names.
+    pub fn pass_names(&self) -> Vec<String> {
+        self.passes.names()
+    }
+
+    /// The key light's shadow map (a shadow pass runs only with one).
+    pub(crate) fn shadow(&self) -> &shadow::ShadowResources {
+        self.shadow.as_ref().expect("a shadow pass is listed only with its shadow map")
+    }
+
+    /// Texture-space diffusion's light maps (a TSD pass runs only with them).
+    pub(crate) fn tsd(&self) -> &tsd::TsdResources {
+        self.tsd.as_ref().expect("a TSD pass is listed only with its light maps")
+    }
+
+    /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the
+    /// uniform block, which every draw writes anyway).
+    pub(crate) fn set_camera(&mut self, camera: &crate::shading::Camera) {
+        self.globals.scene.view_proj = camera.view_proj.to_cols_array_2d();
+        self.globals.scene.eye = camera.eye.to_array();
+    }
+
+    /// Sets the tone curve of the next [`Gpu::draw`] (the target's format may still impose one).
+    pub(crate) fn set_tone(&mut self, tone: crate::shading::ToneCurve) {
+        self.globals.base.tone = base::tone_code(tone);
+    }
+
+    /// Replaces light `index` (below the scene's light count) for the next [`Gpu::draw`].
+    pub fn set_light(&mut self, index: usize, light: &crate::shading::Light) {
+        if index < self.globals.scene.light_count as usize {
+            self.globals.scene.lights[index] = uniforms::light_raw(light);
+        }
     }
 }

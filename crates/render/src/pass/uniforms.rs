@@ -7,10 +7,10 @@
 use super::base::{self, BaseUniforms, LobeRaw};
 use super::blur::BlurUniforms;
 use super::light_map::{self, LightMapUniforms};
+use super::setup::SkinSetup;
 use super::shadow::{self, ShadowUniforms};
 use super::tsd_prepass::{self, PrepassUniforms};
 use super::{BASE_WGSL, BLUR_WGSL};
-use crate::passes::SkinSetup;
 use crate::shading::{GreenAxis, LightKind, MAX_LIGHTS, RenderInputs};
 
 /// One light as the shader reads it (`Light` in common.wgsl).

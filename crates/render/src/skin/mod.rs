@@ -1,7 +1,8 @@
 //! Skin scattering on the CPU: the diffusion profile, the pre-integrated tables (diffuse falloff
 //! and shadow scattering), their closed-form fits, the spherical-harmonic form for ambient light,
 //! per-vertex curvature, and the exact texture-space reference every real-time effect is
-//! measured against; the scene's scattering settings and what the GPU passes are given.
+//! measured against, and the scene's scattering settings. Physics only: nothing here imports
+//! the GPU side ([`crate::pass`], [`crate::gpu`]), which reads from it.
 //!
 //! - [`profile`]: the sum-of-Gaussians diffusion profile and equation 1.1 by brute force.
 //! - [`sphere`]: the same falloff over a sphere's surface, to about 1e-6.
@@ -12,10 +13,8 @@
 //! - [`curvature`]: per-vertex 1/r from the mesh.
 //! - [`reference`](mod@reference): the exact texture-space convolution.
 //! - [`tsd`]: texture-space diffusion's blur passes (single kernel or the profile's Gaussians).
-//! - [`options`], [`setup`], [`compare`]: scene settings, the GPU setup of a scene's pass graph,
-//!   and every method side by side.
+//! - [`options`]: the scene's scattering settings.
 
-pub mod compare;
 pub mod curvature;
 pub mod fit;
 pub mod lut;
@@ -24,7 +23,6 @@ pub mod options;
 pub mod poisson;
 pub mod profile;
 pub mod reference;
-pub mod setup;
 pub mod sh;
 pub mod shadow;
 pub mod sphere;

@@ -1,5 +1,5 @@
 //! Texture-space diffusion's blur plan on the CPU: which passes run, what each one blurs by and
-//! adds, and which light map each reads and writes. The GPU side is `pass/blur.rs`.
+//! adds, and which light map each reads and writes. The GPU side is `pass/blur/`.
 //!
 //! - [`TsdKernel::Single`] (Gosselin et al. 2004): `passes` Poisson blurs of one kernel, sized so
 //!   their variances add up to the profile's luminance variance, ping-ponged between two maps.

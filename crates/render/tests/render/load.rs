@@ -8,10 +8,11 @@ use glam::{Vec2, Vec3};
 use skinkit_maps::io::{PngLayout, write_normal_map, write_png};
 use skinkit_maps::{GreenAxis, Grid, NormalEncoding, NormalMap};
 use skinkit_render::gpu::OutputFormat;
-use skinkit_render::graph::PassGraph;
 use skinkit_render::head::write_obj;
-use skinkit_render::load::{load, orbit, plan};
+use skinkit_render::load::{load, orbit};
 use skinkit_render::mesh::Mesh;
+use skinkit_render::pass::explain::plan;
+use skinkit_render::pass::graph::PassGraph;
 use skinkit_render::scene::{Camera, Scene};
 
 fn quad(dir: &Path) -> PathBuf {
@@ -148,7 +149,7 @@ fn graph_of(body: &str) -> (Vec<String>, Vec<String>, Vec<String>) {
     let loaded = load(&scene, 8, 8, 8192).unwrap();
     let graph = PassGraph::build(&scene);
     let p = plan(&scene, &loaded, &graph, 8, 8, OutputFormat::Srgb8);
-    assert_eq!(p.passes.iter().map(|p| p.kind).collect::<Vec<_>>(), graph.passes);
+    assert_eq!(p.passes.iter().map(|p| p.name.clone()).collect::<Vec<_>>(), graph.pass_names());
     let passes = p.passes.iter().map(|p| p.name.clone()).collect();
     let resources = p.resources.iter().map(|r| r.name.clone()).collect();
     (passes, resources, p.notes)

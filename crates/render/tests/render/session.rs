@@ -5,17 +5,17 @@
 use std::path::Path;
 
 use skinkit_render::gpu::{Gpu, OutputFormat};
-use skinkit_render::graph::PassGraph;
 use skinkit_render::load;
+use skinkit_render::pass::build;
+use skinkit_render::pass::graph::PassGraph;
 use skinkit_render::scene::Scene;
-use skinkit_render::skin::setup;
 
 /// Everything `skinkit render` does for one image, from the scene file on.
 fn render_once(gpu: &Gpu, file: &Path) -> Vec<u8> {
     let scene = Scene::load(file).unwrap();
     let loaded = load::load(&scene, 64, 64, gpu.max_texture_side()).unwrap();
     let graph = PassGraph::build(&scene);
-    let skin = setup::build(&scene, &loaded, &graph).unwrap();
+    let skin = build::setup(&scene, &loaded, &graph).unwrap();
     let prepared = gpu.prepare_with(&loaded.inputs, &skin).unwrap();
     let target = gpu.create_target(64, 64, OutputFormat::Srgb8).unwrap();
     gpu.draw(&prepared, &target).unwrap();

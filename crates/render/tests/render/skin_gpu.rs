@@ -1,4 +1,4 @@
-//! GPU tests of the skin passes driven through `passes::SkinSetup` directly: the key light's
+//! GPU tests of the skin passes driven through `setup::SkinSetup` directly: the key light's
 //! shadow map (occluded texels dark, its box filter a linear ramp), texture-space diffusion (a
 //! constant light map survives the blur, a shadow edge is softened, UV borders are dilated),
 //! the LUT path reading the table it is given, and every feature combination compiling.
@@ -6,8 +6,10 @@
 
 use glam::{Vec3, Vec4};
 use skinkit_render::brdf::Lafortune;
+use skinkit_render::gpu::Table;
 use skinkit_render::gpu::{Gpu, OutputFormat};
-use skinkit_render::passes::{self, DiffuseMode, Features, ShadowSetup, SkinSetup, Table, TsdSetup};
+use skinkit_render::pass::geometry;
+use skinkit_render::pass::setup::{self, DiffuseMode, Features, ShadowSetup, SkinSetup, TsdSetup};
 use skinkit_render::shading::{
     Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
 };
@@ -67,9 +69,9 @@ fn inputs(mesh: (Vec<Vertex>, Vec<u32>)) -> RenderInputs {
 }
 
 fn shadow_setup(inputs: &RenderInputs, filter: u32) -> ShadowSetup {
-    let (centre, radius) = passes::bounding_sphere(&inputs.vertices);
+    let (centre, radius) = geometry::bounding_sphere(&inputs.vertices);
     let map_size = 256;
-    let (view_proj, texel) = passes::light_view_proj(&inputs.lights[0], centre, radius, map_size);
+    let (view_proj, texel) = geometry::light_view_proj(&inputs.lights[0], centre, radius, map_size);
     ShadowSetup {
         light: 0,
         map_size,
@@ -166,7 +168,7 @@ fn tsd_setup(passes: u32) -> TsdSetup {
 }
 
 fn tsd_skin(scene: &RenderInputs, passes: u32, shadows: bool) -> SkinSetup {
-    let stretch = passes::uv_stretch(&scene.vertices, &scene.indices, 1.0);
+    let stretch = geometry::uv_stretch(&scene.vertices, &scene.indices, 1.0);
     SkinSetup {
         features: Features { diffuse: DiffuseMode::LightMap, shadows, ..Default::default() },
         vertex_skin: stretch.iter().map(|&s| [0.0, s]).collect(),
@@ -205,13 +207,13 @@ fn tsd_gaussians_keep_uniform_light_and_scatter_red_farther_than_blue() {
     // than blue's (red's widest Gaussian has sigma 2.7 mm, blue's 0.75 mm with weight 0.007).
     let gpu = gpu();
     let gaussians = |scene: &RenderInputs, shadows: bool| {
-        let stretch = passes::uv_stretch(&scene.vertices, &scene.indices, 10.0);
+        let stretch = geometry::uv_stretch(&scene.vertices, &scene.indices, 10.0);
         let mut skin = tsd_skin(scene, 2, shadows);
         skin.vertex_skin = stretch.iter().map(|&s| [0.0, s]).collect();
         skin.mm_per_unit = 10.0;
         let tsd = skin.tsd.as_mut().unwrap();
         (tsd.kernel, tsd.kernel_mm) = (TsdKernel::Gaussians, skinkit_render::skin::tsd::GAUSSIANS_KERNEL_MM);
-        tsd.kernel_scale = [passes::MAX_KERNEL_TEXELS, 0.0];
+        tsd.kernel_scale = [setup::MAX_KERNEL_TEXELS, 0.0];
         skin
     };
     let row = |pixels: &[[f32; 4]], c: usize| -> Vec<f32> {
@@ -339,8 +341,8 @@ fn every_feature_combination_compiles_and_draws_finite_pixels() {
 
 /// A translucent quad over x < 0 at z = 0.5 (where the opaque blocker sits in the other tests),
 /// stopping 70% of red, nothing of green, 40% of blue.
-fn lens() -> passes::TranslucentCaster {
-    passes::TranslucentCaster {
+fn lens() -> setup::TranslucentCaster {
+    setup::TranslucentCaster {
         positions: vec![[-3.0, -3.0, 0.5], [0.0, -3.0, 0.5], [0.0, 3.0, 0.5], [-3.0, 3.0, 0.5]],
         indices: vec![0, 1, 2, 0, 2, 3],
         opacity: [0.7, 0.0, 0.4],

@@ -6,9 +6,9 @@
 
 use std::path::Path;
 
+use skinkit_render::compare::reference_light_map;
 use skinkit_render::load;
 use skinkit_render::scene::Scene;
-use skinkit_render::skin::compare::reference_light_map;
 
 /// Relative RMS difference (over texels covered at both sizes and channels, relative to the
 /// mean) and the largest difference relative to the largest value, of `scene`'s reference at

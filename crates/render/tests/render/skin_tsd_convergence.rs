@@ -6,12 +6,12 @@
 
 use std::path::Path;
 
+use skinkit_render::compare::{self, Method};
 use skinkit_render::gpu::{Gpu, OutputFormat};
 use skinkit_render::load::{self, Loaded};
-use skinkit_render::passes::SkinSetup;
+use skinkit_render::pass::setup::SkinSetup;
 use skinkit_render::scene::Scene;
 use skinkit_render::shading::{RenderInputs, ToneCurve};
-use skinkit_render::skin::compare::{self, Method};
 use skinkit_render::skin::options::TsdKernel;
 
 /// The image side: enough pixels for the terminator and the shadow edge, cheap on lavapipe.

@@ -1,7 +1,7 @@
 //! The TSD blur's own variance: what one bilinear pass of the centred Poisson disc really adds,
 //! checked against its kernel scattered texel by texel, and the table the blur inverts it with.
 
-use skinkit_render::passes::{POISSON, poisson_axis_variance, poisson_mean, poisson_second_moment};
+use skinkit_render::pass::setup::{POISSON, poisson_axis_variance, poisson_mean, poisson_second_moment};
 use skinkit_render::skin::tsd::{pass_variance, radius_for_variance, radius_table};
 
 /// The variance along `axis` of one pass's kernel built as the GPU applies it: each of the 13 taps

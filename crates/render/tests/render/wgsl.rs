@@ -4,13 +4,20 @@
 
 use std::path::PathBuf;
 
+/// The WGSL files under `folder` of the crate, its subfolders included (each pass has its own).
 fn wgsl_files(folder: &str) -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(folder);
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
-        .map(|entry| entry.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "wgsl"))
-        .collect();
+    let mut files = Vec::new();
+    let mut folders = vec![PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(folder)];
+    while let Some(dir) = folders.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display())) {
+            let path = entry.unwrap().path();
+            match path.is_dir() {
+                true => folders.push(path),
+                false if path.extension().is_some_and(|e| e == "wgsl") => files.push(path),
+                false => {}
+            }
+        }
+    }
     files.sort();
     files
 }
@@ -36,8 +43,11 @@ fn every_standalone_wgsl_file_validates() {
 
 #[test]
 fn the_assembled_pass_modules_validate() {
-    for (name, source) in [("BASE_WGSL", skinkit_render::gpu::BASE_WGSL), ("BLUR_WGSL", skinkit_render::gpu::BLUR_WGSL)]
-    {
+    for (name, source) in [
+        ("BASE_WGSL", skinkit_render::pass::BASE_WGSL),
+        ("BLUR_WGSL", skinkit_render::pass::BLUR_WGSL),
+        ("DEBUG_WGSL", skinkit_render::pass::DEBUG_WGSL),
+    ] {
         if let Err(message) = validate(source) {
             panic!("{name}: {message}");
         }
@@ -51,14 +61,15 @@ fn every_pass_wgsl_file_is_in_an_assembled_module() {
     assert!(files.len() >= 7, "{files:?}");
     for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
-        let assembled = [skinkit_render::gpu::BASE_WGSL, skinkit_render::gpu::BLUR_WGSL];
+        let assembled =
+            [skinkit_render::pass::BASE_WGSL, skinkit_render::pass::BLUR_WGSL, skinkit_render::pass::DEBUG_WGSL];
         assert!(assembled.iter().any(|m| m.contains(&text)), "{} is in no assembled module", path.display());
     }
 }
 
 #[test]
 fn base_pass_has_its_entry_points() {
-    let module = validate(skinkit_render::gpu::BASE_WGSL).unwrap();
+    let module = validate(skinkit_render::pass::BASE_WGSL).unwrap();
     let names: Vec<&str> = module.entry_points.iter().map(|e| e.name.as_str()).collect();
     assert!(names.contains(&"vs_main") && names.contains(&"fs_main"), "{names:?}");
 }
@@ -72,7 +83,7 @@ fn validator_rejects_a_broken_shader() {
 
 #[test]
 fn every_uniform_struct_matches_its_wgsl_layout() {
-    let layouts = skinkit_render::gpu::uniform_layouts();
+    let layouts = skinkit_render::pass::uniform_layouts();
     // One named struct per pass, and the block the mesh passes share.
     for name in [
         "Globals",
@@ -112,7 +123,7 @@ fn the_layout_check_catches_a_moved_member() {
                    pad2: u32, }\n@group(0) @binding(0) var<uniform> u: BlurUniforms;\n\
                    @fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(u.a); }";
     let module = validate(swapped).unwrap();
-    let blur = skinkit_render::gpu::uniform_layouts().into_iter().find(|l| l.name == "BlurUniforms").unwrap();
+    let blur = skinkit_render::pass::uniform_layouts().into_iter().find(|l| l.name == "BlurUniforms").unwrap();
     let names: Vec<String> = module
         .types
         .iter()

@@ -259,7 +259,7 @@ fn skin_figure(panels: &[(&str, PathBuf, f64)], path: &Path) -> Result<SkinFigur
             Ok(SkinPanel {
                 method: name.to_string(),
                 image: image.display().to_string(),
-                flip_mean: skinkit_render::skin::compare::flip_mean(&reference, &test, w, h),
+                flip_mean: skinkit_render::compare::flip_mean(&reference, &test, w, h),
                 render_seconds: *seconds,
             })
         })

@@ -70,9 +70,8 @@ pub fn round_trip(
     let height = draw("height-normals", &NormalMap::from_grid(from_height))?;
     let differenced = draw("differenced-normals", &as_central_differences(&normals, false))?;
     let (map_px, height_px, diff_px) = (rgba(skin_render)?, rgba(&height)?, rgba(&differenced)?);
-    let flip = |a: &(u32, u32, Vec<u8>), b: &(u32, u32, Vec<u8>)| {
-        skinkit_render::skin::compare::flip_mean(&a.2, &b.2, a.0, a.1)
-    };
+    let flip =
+        |a: &(u32, u32, Vec<u8>), b: &(u32, u32, Vec<u8>)| skinkit_render::compare::flip_mean(&a.2, &b.2, a.0, a.1);
     let figure = RoundTripFigure {
         image: dir.join("figure-height-round-trip.png").display().to_string(),
         flip_height_vs_map: flip(&map_px, &height_px),

@@ -1,71 +1,15 @@
-//! A frame: a scene uploaded once ([`Gpu::prepare_with`]) and drawn into a target by walking its
-//! pass graph in order ([`Gpu::draw`]); each pass encodes itself (`crate::pass`).
+//! A frame: a scene uploaded once ([`Gpu::prepare_with`]: its buffers, textures and the
+//! resources its passes write) and drawn into a target by walking its passes in order
+//! ([`Gpu::draw`]), each encoding itself ([`super::Pass`]), with GPU timestamps around each when
+//! asked ([`Gpu::draw_timed_passes`]).
 
-use super::timing::{PassTimer, timestamp_writes};
-use super::{DEPTH_FORMAT, Gpu, GpuError, OutputFormat, Rendered, Result, Target};
-use crate::graph::PassKind;
-use crate::pass::shadow::ShadowResources;
-use crate::pass::tsd::TsdResources;
-use crate::pass::uniforms::{Globals, globals, light_raw};
-use crate::passes::{self, Features, SkinSetup};
+use super::base::tone_code;
+use super::setup::SkinSetup;
+use super::uniforms::globals;
+use super::{FrameEncoder, PreparedScene, Upload, geometry};
+use crate::gpu::{Gpu, GpuError, OutputFormat, PassTimer, Rendered, Result, Target, timestamp_writes};
 use crate::shading::{RenderInputs, ToneCurve};
 use std::sync::atomic::Ordering;
-
-/// A scene uploaded to the GPU by [`Gpu::prepare`], ready for [`Gpu::draw`].
-pub struct PreparedScene {
-    pub(crate) globals: Globals,
-    pub(crate) uniforms: wgpu::Buffer,
-    pub(crate) bind_group: wgpu::BindGroup,
-    pub(crate) vertices: wgpu::Buffer,
-    pub(crate) vertex_skin: wgpu::Buffer,
-    pub(crate) indices: wgpu::Buffer,
-    pub(crate) index_count: u32,
-    pub(crate) background: [f32; 4],
-    pub(crate) features: Features,
-    /// The passes [`Gpu::draw`] runs, in order ([`SkinSetup::passes`]).
-    pub(crate) passes: Vec<PassKind>,
-    pub(crate) bounds: (glam::Vec3, f32),
-    pub(crate) shadow: Option<ShadowResources>,
-    pub(crate) tsd: Option<TsdResources>,
-}
-
-impl PreparedScene {
-    /// The shader features this scene's base pass was compiled with.
-    pub fn features(&self) -> Features {
-        self.features
-    }
-
-    /// The passes [`Gpu::draw`] runs for this scene, in order.
-    pub fn passes(&self) -> &[PassKind] {
-        &self.passes
-    }
-
-    /// Their names.
-    pub fn pass_names(&self) -> Vec<String> {
-        self.passes.iter().map(|p| p.name()).collect()
-    }
-}
-
-impl PreparedScene {
-    /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the
-    /// uniform block, which every draw writes anyway).
-    pub(crate) fn set_camera(&mut self, camera: &crate::shading::Camera) {
-        self.globals.scene.view_proj = camera.view_proj.to_cols_array_2d();
-        self.globals.scene.eye = camera.eye.to_array();
-    }
-
-    /// Sets the tone curve of the next [`Gpu::draw`] (the target's format may still impose one).
-    pub(crate) fn set_tone(&mut self, tone: ToneCurve) {
-        self.globals.base.tone = tone_code(tone);
-    }
-
-    /// Replaces light `index` (below the scene's light count) for the next [`Gpu::draw`].
-    pub fn set_light(&mut self, index: usize, light: &crate::shading::Light) {
-        if index < self.globals.scene.light_count as usize {
-            self.globals.scene.lights[index] = light_raw(light);
-        }
-    }
-}
 
 impl Gpu {
     /// Render `inputs` at `width` x `height` into `format` and read the pixels back:
@@ -105,7 +49,7 @@ impl Gpu {
             });
         }
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let bounds = passes::bounding_sphere(&inputs.vertices);
+        let bounds = geometry::bounding_sphere(&inputs.vertices);
         let globals = globals(inputs, skin);
         let uniforms = self.buffer(
             "base pass globals",
@@ -121,7 +65,12 @@ impl Gpu {
             Some((depth, opacity)) => (Some(depth), opacity.as_ref()),
             None => (None, None),
         };
-        let tsd = skin.tsd.as_ref().map(|t| self.tsd_resources(t, &textures, &uniforms, shadow_view, opacity_view));
+        let tsd = skin.tsd.as_ref().map(|t| {
+            let group = self.create_bind_group(&textures, &uniforms, shadow_view, opacity_view, None);
+            let mut tsd = self.tsd_resources(t, group);
+            tsd.blur_groups = self.blur_groups(t, &tsd.maps, &tsd.stretch);
+            tsd
+        });
         let light_map = match (&tsd, &textures.light_map) {
             (Some(tsd), _) => Some(tsd.maps[tsd.final_map].create_view(&Default::default())),
             (None, Some(map)) => Some(map.create_view(&Default::default())),
@@ -133,6 +82,9 @@ impl Gpu {
             if skin.vertex_skin.is_empty() { vec![[0.0; 2]; inputs.vertices.len()] } else { skin.vertex_skin.clone() };
         let vertex_skin = self.buffer("per-vertex skin", bytemuck::cast_slice(&skin_data), wgpu::BufferUsages::VERTEX);
         let indices = self.buffer("indices", bytemuck::cast_slice(&inputs.indices), wgpu::BufferUsages::INDEX);
+        let passes = skin.passes();
+        let upload = Upload { inputs, skin, uniforms: &uniforms };
+        let states = passes.0.iter().map(|pass| pass.prepare(self, &upload)).collect();
         self.pop_scope(scope, "scene upload")?;
         Ok(PreparedScene {
             globals,
@@ -144,29 +96,11 @@ impl Gpu {
             index_count: inputs.indices.len() as u32,
             background: inputs.background,
             features: skin.features,
-            passes: skin.passes(),
+            passes,
+            states,
             bounds,
             shadow,
             tsd,
-        })
-    }
-
-    /// An offscreen colour target with its depth buffer.
-    ///
-    /// # Errors
-    /// [`GpuError::BadOutputSize`] for a zero size or one above the device limit.
-    pub fn create_target(&self, width: u32, height: u32, format: OutputFormat) -> Result<Target> {
-        let limit = self.max_texture_side();
-        if width == 0 || height == 0 || width > limit || height > limit {
-            return Err(GpuError::BadOutputSize { width, height, limit });
-        }
-        Ok(Target {
-            color: self.texture("base pass colour target", width, height, format.texture_format()),
-            depth: self.texture("base pass depth", width, height, DEPTH_FORMAT),
-            readback: super::readback::readback_buffer(&self.device, width, height, format),
-            width,
-            height,
-            format,
         })
     }
 
@@ -194,12 +128,14 @@ impl Gpu {
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame encoder") });
         let run_tsd = scene.tsd.as_ref().is_some_and(|tsd| self.tsd_runs(scene, tsd, target));
         let mut ran = Vec::with_capacity(scene.passes.len());
-        for (slot, &kind) in scene.passes.iter().enumerate() {
+        for (slot, pass) in scene.passes.0.iter().enumerate() {
             let writes = timestamp_writes(timer, slot as u32);
-            let run = !kind.is_tsd() || run_tsd;
+            let run = !pass.culled_with_tsd() || run_tsd;
             ran.push(run);
             if run {
-                self.encode_pass(&mut encoder, kind, scene, target, writes);
+                let state = scene.states[slot].as_deref();
+                let mut frame = FrameEncoder { encoder: &mut encoder, scene, target, state };
+                pass.encode(self, &mut frame, writes);
             }
         }
         if let Some(tsd) = scene.tsd.as_ref().filter(|_| run_tsd) {
@@ -240,10 +176,44 @@ fn target_curve(format: OutputFormat, code: u32) -> ToneCurve {
     }
 }
 
-pub(crate) fn tone_code(curve: ToneCurve) -> u32 {
-    match curve {
-        ToneCurve::None => 0,
-        ToneCurve::Clamp => 1,
-        ToneCurve::Reinhard => 2,
+impl Gpu {
+    /// [`Gpu::draw`] with GPU timestamps around every pass: the frame's GPU time (first pass's
+    /// start to the last one's end), or `None` when the adapter has no `TIMESTAMP_QUERY` feature.
+    ///
+    /// # Errors
+    /// A wgpu validation error, a failed wait or a failed readback of the timestamps.
+    pub fn draw_timed(&self, scene: &PreparedScene, target: &Target) -> Result<Option<std::time::Duration>> {
+        Ok(self.draw_timed_passes(scene, target)?.map(|passes| passes.iter().map(|(_, d)| *d).sum()))
+    }
+
+    /// [`Gpu::draw`] with each pass's GPU time, named as [`PreparedScene::pass_names`] names them;
+    /// `None` without `TIMESTAMP_QUERY`.
+    ///
+    /// # Errors
+    /// As [`Gpu::draw_timed`].
+    pub fn draw_timed_passes(
+        &self,
+        scene: &PreparedScene,
+        target: &Target,
+    ) -> Result<Option<Vec<(String, std::time::Duration)>>> {
+        if !self.has_timestamps() {
+            self.draw(scene, target)?;
+            return Ok(None);
+        }
+        let names = scene.pass_names();
+        let timer = PassTimer::new(&self.device, names.len() as u32);
+        let ran = self.encode_and_submit(scene, target, Some(&timer))?;
+        let bytes = self.read_buffer(&timer.readback)?;
+        let tick = |i: usize| u64::from_le_bytes(bytes[8 * i..8 * i + 8].try_into().unwrap());
+        let period = self.queue.get_timestamp_period() as f64;
+        let passes = names
+            .into_iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let nanos = if ran[i] { tick(2 * i + 1).saturating_sub(tick(2 * i)) as f64 * period } else { 0.0 };
+                (name, std::time::Duration::from_nanos(nanos as u64))
+            })
+            .collect();
+        Ok(Some(passes))
     }
 }

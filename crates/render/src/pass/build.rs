@@ -1,5 +1,5 @@
-//! From a scene's pass graph ([`crate::graph::PassGraph`]) to what the GPU draws with
-//! ([`crate::passes::SkinSetup`]): per-vertex curvature and UV stretch, the diffuse, shadow and
+//! From a scene's pass graph ([`super::graph::PassGraph`]) to what the GPU draws with
+//! ([`super::setup::SkinSetup`]): per-vertex curvature and UV stretch, the diffuse, shadow and
 //! zonal tables (built on the CPU, cached in-process by their parameters, so a turntable builds
 //! each once), the environment's SH coefficients, the key light's shadow projection and the
 //! texture-space diffusion settings. Only what the graph asks for is computed.
@@ -11,22 +11,24 @@ use std::sync::{Arc, Mutex, OnceLock};
 use glam::Vec3;
 use skinkit_maps::io::{self, Limits};
 
-use super::lut::{DiffuseLut, DiffuseLutSpec};
-use super::options::{Sky, TsdKernel, Zonal};
-use super::profile::{VARIANCES_MM2, WEIGHTS};
-use super::sh::{self, Sh9, ZonalTable};
-use super::shadow::{ShadowLut, ShadowLutSpec};
-use crate::graph::PassGraph;
+use super::geometry;
+use super::graph::{PassGraph, TsdPlan};
+use super::setup::{self, ShadowSetup, SkinSetup, TranslucentCaster, TsdSetup};
+use crate::gpu::Table;
 use crate::load::{LoadError, Loaded};
-use crate::passes::{self, ShadowSetup, SkinSetup, Table, TsdSetup};
 use crate::scene::Scene;
 use crate::shading::Texture;
+use crate::skin::lut::{DiffuseLut, DiffuseLutSpec};
+use crate::skin::options::{Sky, TsdKernel, Zonal};
+use crate::skin::profile::{VARIANCES_MM2, WEIGHTS};
+use crate::skin::sh::{self, Sh9, ZonalTable};
+use crate::skin::shadow::{ShadowLut, ShadowLutSpec};
 
 /// 1/r range of the diffuse LUT and the zonal table, 1/mm (r >= 1 mm: ears and nostrils).
 pub(crate) const INV_R_RANGE: (f32, f32) = (0.0, 1.0);
 
-use super::sh::ZONAL_SAMPLES;
-use super::shadow::SHADOW_LUT_SIDE;
+use crate::skin::sh::ZONAL_SAMPLES;
+use crate::skin::shadow::SHADOW_LUT_SIDE;
 
 /// The luminance weights the TSD kernel is matched with (Gosselin et al.'s specular luminance).
 const LUMINANCE: [f64; 3] = [0.2125, 0.7154, 0.0721];
@@ -36,7 +38,7 @@ const LUMINANCE: [f64; 3] = [0.2125, 0.7154, 0.0721];
 /// # Errors
 /// An unreadable environment or kernel map (the error names the field and file), or a table
 /// whose parameters are refused.
-pub fn build(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSetup, LoadError> {
+pub fn setup(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSetup, LoadError> {
     let scene_file = scene.file.as_path();
     let inputs = &loaded.inputs;
     let pre = &scene.skin.preintegrated;
@@ -46,6 +48,7 @@ pub fn build(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSe
         mm_per_unit: scene.mm_per_unit,
         normal_blur: pre.normal_blur,
         blur_mip: pre.blur_mip,
+        effects: scene.effects.clone(),
         ..SkinSetup::default()
     };
     if graph.vertex_curvature {
@@ -73,8 +76,8 @@ pub fn build(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSe
     }
     if let Some(plan) = graph.shadow {
         let options = &scene.skin.shadow;
-        let (centre, radius) = passes::bounding_sphere(&inputs.vertices);
-        let (view_proj, texel) = passes::light_view_proj(&inputs.lights[plan.light], centre, radius, plan.size);
+        let (centre, radius) = geometry::bounding_sphere(&inputs.vertices);
+        let (view_proj, texel) = geometry::light_view_proj(&inputs.lights[plan.light], centre, radius, plan.size);
         setup.shadow = Some(ShadowSetup {
             light: plan.light,
             map_size: plan.size,
@@ -106,7 +109,7 @@ pub fn build(scene: &Scene, loaded: &Loaded, graph: &PassGraph) -> Result<SkinSe
 }
 
 /// The scene's translucent casters, loaded (only when the graph draws translucent shadows).
-fn translucent_casters(scene: &Scene, graph: &PassGraph) -> Result<Vec<passes::TranslucentCaster>, LoadError> {
+fn translucent_casters(scene: &Scene, graph: &PassGraph) -> Result<Vec<TranslucentCaster>, LoadError> {
     if !graph.features.translucent_shadows {
         return Ok(Vec::new());
     }
@@ -122,7 +125,7 @@ fn translucent_casters(scene: &Scene, graph: &PassGraph) -> Result<Vec<passes::T
                     error,
                 })?
                 .mesh;
-            Ok(passes::TranslucentCaster {
+            Ok(TranslucentCaster {
                 positions: mesh.positions.iter().map(|p| p.to_array()).collect(),
                 indices: mesh.indices,
                 opacity: t.opacity.to_array(),
@@ -138,8 +141,8 @@ fn refused(scene_file: &Path, field: &str, reason: String) -> LoadError {
 /// Per vertex: |mean curvature| in 1/mm (one smoothing pass) and mm per UV unit.
 pub fn vertex_skin(inputs: &crate::shading::RenderInputs, mm_per_unit: f32) -> Vec<[f32; 2]> {
     let positions: Vec<Vec3> = inputs.vertices.iter().map(|v| Vec3::from(v.position)).collect();
-    let curvature = super::curvature::vertex_curvature_smoothed(&positions, &inputs.indices, mm_per_unit, 1);
-    let stretch = passes::uv_stretch(&inputs.vertices, &inputs.indices, mm_per_unit);
+    let curvature = crate::skin::curvature::vertex_curvature_smoothed(&positions, &inputs.indices, mm_per_unit, 1);
+    let stretch = geometry::uv_stretch(&inputs.vertices, &inputs.indices, mm_per_unit);
     curvature.iter().zip(&stretch).map(|(&k, &s)| [k, s]).collect()
 }
 
@@ -233,7 +236,7 @@ pub(crate) fn luminance_variance() -> f32 {
         as f32
 }
 
-fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, LoadError> {
+fn tsd_setup(scene: &Scene, plan: TsdPlan) -> Result<TsdSetup, LoadError> {
     let options = &scene.skin.tsd;
     let kernel_map = match &options.kernel_map {
         None => None,
@@ -244,7 +247,7 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
     let to_size = plan.size as f32 / 512.0;
     let kernel_scale = match kernel_map {
         Some(_) => [options.kernel_scale[0] * to_size, options.kernel_scale[1] * to_size],
-        None => [passes::MAX_KERNEL_TEXELS, 0.0],
+        None => [setup::MAX_KERNEL_TEXELS, 0.0],
     };
     Ok(TsdSetup {
         size: plan.size,
@@ -253,8 +256,8 @@ fn tsd_setup(scene: &Scene, plan: crate::graph::TsdPlan) -> Result<TsdSetup, Loa
         kernel_map,
         kernel_scale,
         kernel_mm: match options.kernel {
-            TsdKernel::Single => super::poisson::kernel_mm_for(luminance_variance(), options.passes),
-            TsdKernel::Gaussians => super::tsd::GAUSSIANS_KERNEL_MM,
+            TsdKernel::Single => crate::skin::poisson::kernel_mm_for(luminance_variance(), options.passes),
+            TsdKernel::Gaussians => crate::skin::tsd::GAUSSIANS_KERNEL_MM,
         },
         curvature_gain: options.curvature_gain,
         backface_bias: options.backface_bias,

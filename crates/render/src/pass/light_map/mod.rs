@@ -1,12 +1,24 @@
 //! TSD's light map (`light_map.wgsl`): every light's diffuse irradiance in texture space, the
 //! blur's kernel size in alpha, and the stretch map (the kernel's widening along u and v).
 
-use crate::gpu::{
-    Gpu, MESH_BUFFERS, MeshPipeline, PipelineKey, PreparedScene, STRETCH_FORMAT, colour_attachment, depth_attachment,
-    depth_state,
-};
-use crate::pass::tsd::TsdResources;
-use crate::passes::{self, Features};
+use std::sync::Arc;
+
+use super::explain::{Context, Described};
+use super::setup::{self, TsdSetup};
+use super::{FrameEncoder, Pass, Shape};
+use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, STRETCH_FORMAT, colour_attachment, depth_attachment, depth_state};
+use crate::skin::tsd;
+
+/// TSD's light-map pass, after the pre-pass.
+struct TsdLightMap;
+
+/// The light-map pass, when `shape` runs texture-space diffusion.
+pub(crate) fn passes(shape: &Shape) -> Vec<Arc<dyn Pass>> {
+    match shape.tsd_blurs {
+        Some(_) => vec![Arc::new(TsdLightMap)],
+        None => Vec::new(),
+    }
+}
 
 /// What the light maps hold where no texel was drawn (the first blur dilates into them).
 pub(crate) const UNWRITTEN_TEXEL: wgpu::Color = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
@@ -28,9 +40,9 @@ pub(crate) struct LightMapUniforms {
 }
 
 /// The light map's uniforms (a unit-sized placeholder without texture-space diffusion).
-pub(crate) fn uniforms(tsd: Option<&passes::TsdSetup>) -> LightMapUniforms {
+pub(crate) fn uniforms(tsd: Option<&TsdSetup>) -> LightMapUniforms {
     let (size, kernel_mm, curvature_gain, max_radius, from_map) = match tsd {
-        Some(t) => (t.size as f32, t.kernel_mm, t.curvature_gain, passes::MAX_KERNEL_TEXELS, t.kernel_map.is_some()),
+        Some(t) => (t.size as f32, t.kernel_mm, t.curvature_gain, setup::MAX_KERNEL_TEXELS, t.kernel_map.is_some()),
         None => (1.0, 0.0, 0.0, 1.0, false),
     };
     LightMapUniforms {
@@ -46,43 +58,73 @@ pub(crate) fn uniforms(tsd: Option<&passes::TsdSetup>) -> LightMapUniforms {
 }
 
 /// The light map's pipeline: depth test "equal" against the pre-pass, so only kept texels shade.
-pub(crate) fn pipeline(features: Features, format: wgpu::TextureFormat) -> MeshPipeline<'static> {
+fn pipeline<'a>(
+    module: &'a wgpu::ShaderModule,
+    constants: &'a [(&'static str, f64)],
+    format: wgpu::TextureFormat,
+) -> MeshPipeline<'a> {
     MeshPipeline {
         label: "tsd light map pipeline",
+        module,
         vertex_entry: "vs_texture_space",
         buffers: &MESH_BUFFERS,
         fragment_entry: Some("fs_light_map"),
         target: Some(format),
         second_target: Some(STRETCH_FORMAT),
         depth: depth_state(false, wgpu::CompareFunction::Equal),
-        features,
+        constants,
     }
 }
 
-impl Gpu {
+impl Pass for TsdLightMap {
+    fn name(&self) -> String {
+        "tsd light map".into()
+    }
+
+    fn explain(&self, context: &Context) -> Described {
+        let what = "diffuse irradiance of every light into texture space (key light through the shadow map), kernel \
+                    size in alpha";
+        let mut described = Described::new(
+            what,
+            &["vertices", "indices", "uniforms", "normal map", "per-vertex curvature", "tsd depth"],
+            &[tsd::LIGHT_MAP_NAMES[0]],
+        );
+        if context.graph.shadow.is_some() {
+            described.reads.push("shadow map".into());
+        }
+        if context.scene.skin.tsd.kernel_map.is_some() {
+            described.reads.push("kernel map".into());
+        }
+        described
+    }
+
+    fn culled_with_tsd(&self) -> bool {
+        true
+    }
+
     /// TSD's light map (depth "equal": only texels the pre-pass kept).
-    pub(crate) fn encode_light_map(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &PreparedScene,
-        tsd: &TsdResources,
-        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
-    ) {
+    fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
+        let tsd = frame.scene.tsd();
         let depth_view = tsd.depth.create_view(&Default::default());
         let view = tsd.maps[0].create_view(&Default::default());
         let stretch = tsd.stretch.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd light map"),
             color_attachments: &[
                 Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL))),
                 Some(colour_attachment(&stretch, wgpu::LoadOp::Clear(UNSTRETCHED))),
             ],
             depth_stencil_attachment: Some(depth_attachment(&depth_view, wgpu::LoadOp::Load)),
-            timestamp_writes,
+            timestamp_writes: writes,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline(PipelineKey::LightMap(scene.features)));
-        self.draw_mesh(&mut pass, scene, &tsd.bind_group);
+        let features = frame.scene.features;
+        let pipeline = gpu.pipeline(format!("tsd light map {features:?}"), |gpu| {
+            let format = gpu.light_map_format();
+            gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &features.constants(), format))
+        });
+        pass.set_pipeline(&pipeline);
+        gpu.draw_mesh(&mut pass, frame.scene, &tsd.bind_group);
     }
 }

@@ -1,6 +1,6 @@
 // TSD's light map (vertex stage in tsd.wgsl). Part of the module that src/pass/mod.rs assembles.
 
-// The light map's uniforms (`LightMapUniforms` in src/pass/light_map.rs).
+// The light map's uniforms (`LightMapUniforms` in src/pass/light_map/mod.rs).
 struct LightMapUniforms {
     // Light-map side in texels.
     size: f32,

@@ -11,7 +11,7 @@ struct Lobe {
     n: vec4<f32>,
 }
 
-// The base pass's uniforms (`BaseUniforms` in src/pass/base.rs).
+// The base pass's uniforms (`BaseUniforms` in src/pass/base/mod.rs).
 struct BaseUniforms {
     // Lafortune rho_d.
     diffuse: vec3<f32>,

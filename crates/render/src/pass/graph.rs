@@ -5,71 +5,13 @@
 //! shadow map (the first with `shadows = true`, and only when `shadows` is listed) and at which
 //! size, which tables are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
 //! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse), and
-//! the ordered list of passes. The order itself is written once, in `ordered_passes`: the
-//! graph, the GPU encoder ([`crate::gpu::Gpu::draw`]), its timestamps and `--explain`
-//! ([`crate::load::plan`]) all walk that list. What was asked and cannot be built (a `shadows`
-//! effect with no shadow-casting light) is a note, never a silent omission.
+//! the frame's passes ([`super::PassList::of`], the one list, which the GPU encoder, its timestamps
+//! and `--explain` walk). What was asked and cannot be built (a `shadows` effect with no
+//! shadow-casting light) is a note, never a silent omission.
 
 use crate::effect::Effect;
 use crate::scene::Scene;
 use crate::skin::options::{Analytic, CurvatureSource};
-
-/// One pass of a frame, in the order `ordered_passes` gives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum PassKind {
-    /// Depth of the mesh seen from the key light.
-    ShadowMap,
-    /// Opacity of the translucent casters seen from the key light.
-    TranslucentShadows,
-    /// TSD's texture-space back-face and culling pre-pass.
-    TsdPrepass,
-    /// TSD's light map: every light's diffuse irradiance in texture space.
-    TsdLightMap,
-    /// TSD blur pass `i` (0-based) of the ping-pong pair.
-    TsdBlur(u32),
-    /// The base pass: texture-space bump mapping and the Lafortune BRDF into the target.
-    Base,
-}
-
-impl PassKind {
-    /// The pass's name, as `--explain` and the GPU timings print it.
-    pub fn name(self) -> String {
-        match self {
-            PassKind::ShadowMap => "shadow map".into(),
-            PassKind::TranslucentShadows => "translucent shadows".into(),
-            PassKind::TsdPrepass => "tsd back-face pre-pass".into(),
-            PassKind::TsdLightMap => "tsd light map".into(),
-            PassKind::TsdBlur(i) => format!("tsd blur {}", i + 1),
-            PassKind::Base => "base".into(),
-        }
-    }
-
-    /// Whether the pass belongs to texture-space diffusion (which frustum and distance culling
-    /// may skip as a whole).
-    pub(crate) fn is_tsd(self) -> bool {
-        matches!(self, PassKind::TsdPrepass | PassKind::TsdLightMap | PassKind::TsdBlur(_))
-    }
-}
-
-/// The passes of a frame, in execution order: the shadow map (and its translucent casters),
-/// texture-space diffusion's pre-pass, light map and `tsd_blurs` blurs, then the base pass. The
-/// one place the order is written.
-pub(crate) fn ordered_passes(shadow_map: bool, translucent: bool, tsd_blurs: Option<u32>) -> Vec<PassKind> {
-    let mut passes = Vec::new();
-    if shadow_map {
-        passes.push(PassKind::ShadowMap);
-        if translucent {
-            passes.push(PassKind::TranslucentShadows);
-        }
-    }
-    if let Some(blurs) = tsd_blurs {
-        passes.extend([PassKind::TsdPrepass, PassKind::TsdLightMap]);
-        passes.extend((0..blurs).map(PassKind::TsdBlur));
-    }
-    passes.push(PassKind::Base);
-    passes
-}
 
 /// The key light's shadow map, its size and filter decided once.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -110,8 +52,8 @@ pub struct PassGraph {
     pub vertex_curvature: bool,
     /// Texture-space diffusion, if it runs.
     pub tsd: Option<TsdPlan>,
-    /// The passes, in execution order (`ordered_passes`).
-    pub passes: Vec<PassKind>,
+    /// The passes, in execution order.
+    pub passes: super::PassList,
     /// Why something asked for is not built (no shadow-casting light, extra shadow lights).
     pub notes: Vec<String>,
 }
@@ -160,14 +102,19 @@ impl PassGraph {
             zonal_table,
             vertex_curvature,
             tsd,
-            passes: ordered_passes(shadows, translucent_shadows, tsd.map(|t| t.blurs)),
+            passes: super::PassList::of(&super::Shape {
+                shadow_map: shadows,
+                translucent: translucent_shadows,
+                tsd_blurs: tsd.map(|t| t.blurs),
+                effects: scene.effects.clone(),
+            }),
             notes,
         }
     }
 
     /// The pass names, in order.
     pub fn pass_names(&self) -> Vec<String> {
-        self.passes.iter().map(|p| p.name()).collect()
+        self.passes.names()
     }
 }
 

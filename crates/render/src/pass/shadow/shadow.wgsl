@@ -1,7 +1,7 @@
 // The key light's shadow map: the depth pass (vs_shadow) and the filtered lookup the base and
 // light-map passes read it with. Part of the module that src/pass/mod.rs assembles.
 
-// The shadow map's uniforms (`ShadowUniforms` in src/pass/shadow.rs).
+// The shadow map's uniforms (`ShadowUniforms` in src/pass/shadow/mod.rs).
 struct ShadowUniforms {
     // The key light's view-projection.
     view_proj: mat4x4<f32>,

@@ -1,6 +1,6 @@
 //! Every way skinkit draws skin's diffuse light, side by side: Lambert, the blog's closed form,
 //! our fit, the pre-integrated LUT at several sizes (and as the paper's ring defines it), texture-space diffusion at several blur
-//! counts and light-map sizes, and the exact texture-space reference ([`super::reference`]) they
+//! counts and light-map sizes, and the exact texture-space reference ([`crate::skin::reference`]) they
 //! are all measured against. [`Method::setup`] turns one method and a scene into what the GPU
 //! draws; [`flip_mean`] and [`rmse`] give the errors of a render against the reference's.
 //!
@@ -8,14 +8,15 @@
 //! shadow-casting light draws none); the pre-integrated methods add shadow scattering, as the
 //! paper's complete local model does.
 
-use super::options::{Analytic, TsdKernel};
-use super::profile::{Domain, Profile};
-use super::{reference, setup};
 use crate::effect::Effect;
-use crate::graph::PassGraph;
 use crate::load::{LoadError, Loaded};
-use crate::passes::{DiffuseMode, SkinSetup};
+use crate::pass::build;
+use crate::pass::graph::PassGraph;
+use crate::pass::setup::{DiffuseMode, SkinSetup};
 use crate::scene::Scene;
+use crate::skin::options::{Analytic, TsdKernel};
+use crate::skin::profile::{Domain, Profile};
+use crate::skin::reference;
 
 /// One way of drawing the diffuse term.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -137,7 +138,7 @@ impl Method {
     pub fn setup(&self, scene: &Scene, loaded: &Loaded) -> Result<SkinSetup, LoadError> {
         let scene = self.scene(scene);
         let graph = PassGraph::build(&scene);
-        let mut built = setup::build(&scene, loaded, &graph)?;
+        let mut built = build::setup(&scene, loaded, &graph)?;
         if let Self::Reference { size } = self {
             let (bake, scattered) = reference_light_map(&scene, loaded, *size);
             built.light_map = Some(reference::dilate(&bake.to_texture(&scattered), 4));

@@ -1,7 +1,7 @@
 // TSD's back-face pre-pass (vertex stage in tsd.wgsl). Part of the module that src/pass/mod.rs
 // assembles.
 
-// The pre-pass's uniforms (`PrepassUniforms` in src/pass/tsd_prepass.rs).
+// The pre-pass's uniforms (`PrepassUniforms` in src/pass/tsd_prepass/mod.rs).
 struct PrepassUniforms {
     // How far past edge-on a texel may face away and still be kept.
     backface_bias: f32,

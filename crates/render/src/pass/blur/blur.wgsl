@@ -6,7 +6,7 @@
 // a texel with an unwritten tap (alpha 1, the clear value) takes the tap of smallest kernel size
 // instead, so bilinear fetches across UV seams read lit texels, not black.
 
-// The blur's uniforms (`BlurUniforms` in src/pass/blur.rs).
+// The blur's uniforms (`BlurUniforms` in src/pass/blur/mod.rs).
 struct BlurUniforms {
     // 1 / light-map size.
     inv_size: vec2<f32>,

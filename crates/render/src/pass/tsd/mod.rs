@@ -3,8 +3,8 @@
 //! culling that decides whether they run this frame. The vertex stage of the pre-pass and the
 //! light-map pass is `tsd.wgsl`.
 
-use crate::gpu::{Gpu, PreparedScene, STRETCH_FORMAT, SceneTextures, Target, extent};
-use crate::passes;
+use super::{PreparedScene, geometry, setup};
+use crate::gpu::{Gpu, STRETCH_FORMAT, Target, extent};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Texture-space diffusion: the UV-space depth of the culling pre-pass, two light maps for the
@@ -27,16 +27,10 @@ pub(crate) struct TsdResources {
 }
 
 impl Gpu {
-    /// The light maps, their depth and bind groups for `tsd`, reading the shadow map (and the
-    /// translucent casters' opacity) when there is one.
-    pub(crate) fn tsd_resources(
-        &self,
-        tsd: &passes::TsdSetup,
-        textures: &SceneTextures,
-        uniforms: &wgpu::Buffer,
-        shadow: Option<&wgpu::TextureView>,
-        opacity: Option<&wgpu::TextureView>,
-    ) -> TsdResources {
+    /// The light maps and their depth for `tsd`, with `bind_group` for the texture-space passes
+    /// (one that reads the shadow map, and the translucent casters' opacity, when there is one);
+    /// the blur's bind groups are the blur pass's to add.
+    pub(crate) fn tsd_resources(&self, tsd: &setup::TsdSetup, bind_group: wgpu::BindGroup) -> TsdResources {
         let size = tsd.size;
         let depth = self.depth_texture("tsd texture-space depth", size, size, false);
         let map = |label: &str, format| {
@@ -58,8 +52,6 @@ impl Gpu {
             .map(|name| map(&format!("tsd {name}"), self.light_map_format()))
             .collect();
         let stretch = map("tsd stretch map", STRETCH_FORMAT);
-        let bind_group = self.create_bind_group(textures, uniforms, shadow, opacity, None);
-        let blur_groups = self.blur_groups(tsd, &maps, &stretch);
         TsdResources {
             final_map: crate::skin::tsd::final_map(tsd.kernel, tsd.blurs()),
             reuse_below_px: tsd.reuse_below_px,
@@ -67,7 +59,7 @@ impl Gpu {
             maps,
             stretch,
             bind_group,
-            blur_groups,
+            blur_groups: Vec::new(),
             ready: AtomicBool::new(false),
         }
     }
@@ -78,8 +70,8 @@ impl Gpu {
         let camera = glam::Mat4::from_cols_array_2d(&scene.globals.scene.view_proj);
         let eye = glam::Vec3::from_array(scene.globals.scene.eye);
         let (centre, radius) = scene.bounds;
-        let visible = passes::sphere_in_frustum(camera, centre, radius);
-        let small = passes::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;
+        let visible = geometry::sphere_in_frustum(camera, centre, radius);
+        let small = geometry::projected_diameter(camera, eye, centre, radius, target.height) < tsd.reuse_below_px;
         visible && !(small && tsd.ready.load(Ordering::Relaxed))
     }
 }

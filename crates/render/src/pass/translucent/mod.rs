@@ -1,16 +1,22 @@
 //! Translucent shadows (`translucent.wgsl`, Gosselin et al.): the translucent casters' summed
 //! opacity seen from the key light, tested against the shadow map's depth.
 
-use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, PipelineKey, colour_attachment, depth_state};
-use crate::pass::shadow::ShadowResources;
-use crate::passes::Features;
+use std::sync::Arc;
 
-/// One translucent caster's positions, per-vertex opacity and indices.
-pub(crate) struct CasterBuffers {
-    pub(crate) positions: wgpu::Buffer,
-    pub(crate) opacity: wgpu::Buffer,
-    pub(crate) indices: wgpu::Buffer,
-    pub(crate) count: u32,
+use super::explain::{Context, Described};
+use super::setup::Features;
+use super::{FrameEncoder, Pass, Shape};
+use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, colour_attachment, depth_state};
+
+/// The translucent casters' pass, drawn after the shadow map when the scene has casters.
+struct TranslucentShadows;
+
+/// The translucent casters' pass, when `shape` draws them.
+pub(crate) fn passes(shape: &Shape) -> Vec<Arc<dyn Pass>> {
+    match shape.shadow_map && shape.translucent {
+        true => vec![Arc::new(TranslucentShadows)],
+        false => Vec::new(),
+    }
 }
 
 const POSITION: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Float32x3];
@@ -23,32 +29,41 @@ const CASTER_BUFFERS: [Option<wgpu::VertexBufferLayout<'static>>; 2] = [
 ];
 
 /// The casters' pipeline: tested against the opaque depth, not writing it.
-pub(crate) fn pipeline() -> MeshPipeline<'static> {
+fn pipeline<'a>(module: &'a wgpu::ShaderModule, constants: &'a [(&'static str, f64)]) -> MeshPipeline<'a> {
     MeshPipeline {
         label: "translucent shadows pipeline",
+        module,
         vertex_entry: "vs_translucent",
         buffers: &CASTER_BUFFERS,
         fragment_entry: Some("fs_translucent"),
         target: Some(OPACITY_FORMAT),
         second_target: None,
         depth: depth_state(false, wgpu::CompareFunction::Less),
-        features: Features::default(),
+        constants,
     }
 }
 
-impl Gpu {
+impl Pass for TranslucentShadows {
+    fn name(&self) -> String {
+        "translucent shadows".into()
+    }
+
+    fn explain(&self, _: &Context) -> Described {
+        Described::new(
+            "translucent casters seen from the key light, their opacity added where no opaque surface is in front",
+            &["uniforms", "shadow map"],
+            &["shadow opacity"],
+        )
+    }
+
     /// Translucent casters into the opacity channels: cleared to 0, added up where the opaque
     /// depth does not hide them.
-    pub(crate) fn encode_translucent(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        shadow: &ShadowResources,
-        opacity: &wgpu::Texture,
-        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
-    ) {
+    fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
+        let shadow = frame.scene.shadow();
+        let opacity = shadow.opacity.as_ref().expect("translucent shadows are listed with their map");
         let depth = shadow.depth.create_view(&Default::default());
         let view = opacity.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("translucent shadows pass"),
             color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)))],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -56,11 +71,15 @@ impl Gpu {
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
-            timestamp_writes,
+            timestamp_writes: writes,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline(PipelineKey::Translucent));
+        let pipeline = gpu.pipeline("translucent shadows".into(), |gpu| {
+            let constants = Features::default().constants();
+            gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &constants))
+        });
+        pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &shadow.bind_group, &[]);
         for caster in &shadow.casters {
             pass.set_vertex_buffer(0, caster.positions.slice(..));

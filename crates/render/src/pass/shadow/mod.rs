@@ -1,11 +1,70 @@
 //! The key light's shadow map (`shadow.wgsl`): the mesh's depth seen from the light, and the
 //! filtered lookup the base and light-map passes read it with.
 
-use crate::gpu::{
-    Gpu, MeshPipeline, OPACITY_FORMAT, POSITION_BUFFER, PipelineKey, PreparedScene, SceneTextures, depth_state, extent,
-};
-use crate::pass::translucent::CasterBuffers;
-use crate::passes::{self, Features};
+use std::sync::Arc;
+
+use super::explain::{Context, Described};
+use super::setup::{Features, ShadowSetup};
+use super::textures::SceneTextures;
+use super::{FrameEncoder, Pass, Shape};
+use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, POSITION_BUFFER, depth_state, extent};
+
+/// The shadow map pass, drawn when the key light casts shadows.
+struct ShadowMap;
+
+/// The shadow map's pass, when `shape` draws one.
+pub(crate) fn passes(shape: &Shape) -> Vec<Arc<dyn Pass>> {
+    match shape.shadow_map {
+        true => vec![Arc::new(ShadowMap)],
+        false => Vec::new(),
+    }
+}
+
+impl Pass for ShadowMap {
+    fn name(&self) -> String {
+        "shadow map".into()
+    }
+
+    fn explain(&self, context: &Context) -> Described {
+        let key = context.graph.shadow.map_or(0, |s| s.light);
+        Described::new(
+            format!("depth of the mesh seen from light[{key}], bounding its sphere tightly"),
+            &["vertices", "indices", "uniforms"],
+            &["shadow map"],
+        )
+    }
+
+    fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
+        let shadow = frame.scene.shadow();
+        let view = shadow.depth.create_view(&Default::default());
+        let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow map pass"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let pipeline = gpu.pipeline("shadow map".into(), |gpu| {
+            let constants = Features::default().constants();
+            gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &constants))
+        });
+        pass.set_pipeline(&pipeline);
+        gpu.draw_mesh(&mut pass, frame.scene, &shadow.bind_group);
+    }
+}
+
+/// One translucent caster's positions, per-vertex opacity and indices.
+pub(crate) struct CasterBuffers {
+    pub(crate) positions: wgpu::Buffer,
+    pub(crate) opacity: wgpu::Buffer,
+    pub(crate) indices: wgpu::Buffer,
+    pub(crate) count: u32,
+}
 
 /// The key light's shadow map and the bind group its pass draws with (one that does not sample
 /// the map being written).
@@ -34,7 +93,7 @@ pub(crate) struct ShadowUniforms {
 
 /// The shadow map's uniforms; an identity placeholder without one (never read: the shadow
 /// branches are compiled out).
-pub(crate) fn uniforms(shadow: Option<&passes::ShadowSetup>) -> ShadowUniforms {
+pub(crate) fn uniforms(shadow: Option<&ShadowSetup>) -> ShadowUniforms {
     match shadow {
         Some(s) => ShadowUniforms {
             view_proj: s.view_proj.to_cols_array_2d(),
@@ -62,23 +121,24 @@ pub(crate) fn uniforms(shadow: Option<&passes::ShadowSetup>) -> ShadowUniforms {
 }
 
 /// The shadow map's pipeline: positions only, depth only.
-pub(crate) fn pipeline() -> MeshPipeline<'static> {
+fn pipeline<'a>(module: &'a wgpu::ShaderModule, constants: &'a [(&'static str, f64)]) -> MeshPipeline<'a> {
     MeshPipeline {
         label: "shadow map pipeline",
+        module,
         vertex_entry: "vs_shadow",
         buffers: &POSITION_BUFFER,
         fragment_entry: None,
         target: None,
         second_target: None,
         depth: depth_state(true, wgpu::CompareFunction::Less),
-        features: Features::default(),
+        constants,
     }
 }
 
 impl Gpu {
     pub(crate) fn shadow_resources(
         &self,
-        s: &passes::ShadowSetup,
+        s: &ShadowSetup,
         textures: &SceneTextures,
         uniforms: &wgpu::Buffer,
     ) -> ShadowResources {
@@ -120,29 +180,5 @@ impl Gpu {
             })
             .collect();
         ShadowResources { depth, bind_group, opacity, casters }
-    }
-
-    pub(crate) fn encode_shadow(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &PreparedScene,
-        shadow: &ShadowResources,
-        timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
-    ) {
-        let view = shadow.depth.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow map pass"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline(PipelineKey::Shadow));
-        self.draw_mesh(&mut pass, scene, &shadow.bind_group);
     }
 }

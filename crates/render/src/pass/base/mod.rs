@@ -1,12 +1,61 @@
 //! The base pass (`base.wgsl`): texture-space per-pixel bump mapping and the Lafortune BRDF into
 //! the target (Haro et al. 2001, section 5), with the skin effects it reads.
 
-use crate::gpu::{
-    Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, PipelineKey, PreparedScene, Target, depth_state, tone_code,
-};
-use crate::pass::uniforms::vec4;
-use crate::passes::{Features, SkinSetup, Table};
-use crate::shading::{MAX_LOBES, RenderInputs, SpecularMode};
+use std::sync::Arc;
+
+use super::explain::{Context, Described};
+use super::graph::PassGraph;
+use super::setup::{DiffuseMode, Features, SkinSetup};
+use super::{FrameEncoder, Pass, Shape};
+use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, Table, depth_state};
+use crate::shading::{MAX_LOBES, RenderInputs, SpecularMode, ToneCurve};
+use crate::skin::tsd;
+
+/// The base pass, last of every frame.
+struct Base;
+
+/// The base pass: every frame draws it.
+pub(crate) fn passes(_: &Shape) -> Vec<Arc<dyn Pass>> {
+    vec![Arc::new(Base)]
+}
+
+impl Pass for Base {
+    fn name(&self) -> String {
+        "base".into()
+    }
+
+    fn explain(&self, context: &Context) -> Described {
+        let mut described =
+            Described::new(describe_base(context.inputs, context.graph), &[], &["colour target", "depth"]);
+        described.reads = base_reads(context.graph);
+        described
+    }
+
+    /// The base pass into the frame's target.
+    fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
+        let (scene, target) = (frame.scene, frame.target);
+        let (format, features) = (target.format, scene.features);
+        let pipeline = gpu.pipeline(format!("base {format:?} {features:?}"), |gpu| {
+            gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &features.constants(), format))
+        });
+        let mut pass = begin_pass(frame.encoder, &target.color, &target.depth, scene.background, writes);
+        pass.set_pipeline(&pipeline);
+        gpu.draw_mesh(&mut pass, scene, &scene.bind_group);
+    }
+}
+
+/// The base pass's code of a tone curve (`tone` in `BaseUniforms`).
+pub(crate) fn tone_code(curve: ToneCurve) -> u32 {
+    match curve {
+        ToneCurve::None => 0,
+        ToneCurve::Clamp => 1,
+        ToneCurve::Reinhard => 2,
+    }
+}
+
+fn vec4(v: glam::Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
 
 /// One Lafortune lobe as the shader reads it (`Lobe` in base.wgsl).
 #[repr(C)]
@@ -79,32 +128,21 @@ pub(crate) fn uniforms(inputs: &RenderInputs, skin: &SkinSetup) -> BaseUniforms 
 }
 
 /// The base pass's pipeline for a target of `format`.
-pub(crate) fn pipeline(format: OutputFormat, features: Features) -> MeshPipeline<'static> {
+fn pipeline<'a>(
+    module: &'a wgpu::ShaderModule,
+    constants: &'a [(&'static str, f64)],
+    format: OutputFormat,
+) -> MeshPipeline<'a> {
     MeshPipeline {
         label: "base pass pipeline",
+        module,
         vertex_entry: "vs_main",
         buffers: &MESH_BUFFERS,
         fragment_entry: Some("fs_main"),
         target: Some(format.texture_format()),
         second_target: None,
         depth: depth_state(true, wgpu::CompareFunction::Less),
-        features,
-    }
-}
-
-impl Gpu {
-    /// The base pass into `target`.
-    pub(crate) fn encode_base(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &PreparedScene,
-        target: &Target,
-        writes: Option<wgpu::RenderPassTimestampWrites>,
-    ) {
-        let pipeline = self.pipeline(PipelineKey::Base(target.format, scene.features));
-        let mut pass = begin_pass(encoder, &target.color, &target.depth, scene.background, writes);
-        pass.set_pipeline(&pipeline);
-        self.draw_mesh(&mut pass, scene, &scene.bind_group);
+        constants,
     }
 }
 
@@ -138,4 +176,47 @@ fn begin_pass<'e>(
         occlusion_query_set: None,
         multiview_mask: None,
     })
+}
+
+fn base_reads(graph: &PassGraph) -> Vec<String> {
+    let mut reads: Vec<String> =
+        ["vertices", "indices", "uniforms", "normal map", "albedo"].iter().map(|s| s.to_string()).collect();
+    let optional = [
+        (graph.vertex_curvature, "per-vertex curvature"),
+        (graph.diffuse_lut, "diffuse LUT"),
+        (graph.zonal_table, "zonal table"),
+        (graph.shadow.is_some(), "shadow map"),
+        (graph.features.translucent_shadows, "shadow opacity"),
+        (graph.shadow_lut, "shadow LUT"),
+    ];
+    reads.extend(optional.into_iter().filter(|(on, _)| *on).map(|(_, name)| name.to_string()));
+    if let Some(tsd) = graph.tsd {
+        reads.push(tsd::LIGHT_MAP_NAMES[tsd::final_map(tsd.kernel, tsd.blurs)].into());
+    }
+    reads
+}
+
+fn describe_base(inputs: &RenderInputs, graph: &PassGraph) -> String {
+    let specular = match inputs.specular {
+        SpecularMode::Pixel => "per pixel",
+        SpecularMode::Vertex => "per vertex (the paper's look)",
+    };
+    format!(
+        "texture-space bump mapping and the Lafortune BRDF, lobes {specular}; diffuse: {}{}{}{}",
+        describe_diffuse(&graph.features),
+        if graph.features.shadows { "; key light shadowed" } else { "" },
+        if graph.features.shadow_scattering { " with shadow scattering" } else { "" },
+        if graph.features.sh_ambient { "; order-2 SH ambient" } else { "" },
+    )
+}
+
+fn describe_diffuse(features: &Features) -> &'static str {
+    match (features.diffuse, features.derivative_curvature) {
+        (DiffuseMode::Lambert, _) => "Lambert",
+        (DiffuseMode::Lut, false) => "pre-integrated LUT, per-vertex curvature, per-channel normals",
+        (DiffuseMode::Lut, true) => "pre-integrated LUT, derivative curvature, per-channel normals",
+        (DiffuseMode::Blog, _) => "the blog's closed-form pre-integrated curves",
+        (DiffuseMode::OwnFit, _) => "our closed-form fit of the pre-integrated LUT",
+        (DiffuseMode::LightMap, _) => "the blurred texture-space light map x albedo",
+    }
 }
