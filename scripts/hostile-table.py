@@ -1,42 +1,29 @@
 #!/usr/bin/env python3
-"""Turns scripts/hostile.sh's results (TSV) into the book's table of hostile inputs.
+"""Writes the book's tables of the reliability probes' hostile-input tests from their doc comments.
 
-usage: scripts/hostile-table.py [RESULTS.tsv] [--doc docs/book/src/scripts.md] [--probe2-only]
+usage: scripts/hostile-table.py [--doc docs/book/src/scripts.md]
 
-Replaces everything between the chapter's `<!-- hostile-table:begin -->` and
+Replaces what lies between the chapter's `<!-- hostile-table:begin -->` and
 `<!-- hostile-table:end -->` lines (the book's "For scripts" chapter, section "Hostile inputs")
-with a summary (inputs tried, failures handled, nothing lost) and one row per case; prints the
-Markdown instead when the file has no such lines or with `--doc -`. The table is generated, never typed: regenerate it after a run.
-
-Also replaces what lies between `<!-- probe2-table:begin -->` and `<!-- probe2-table:end -->`
-with the second probe's table (issue 42), read from the test sources: every test named
-`probe2_...`, its doc comment (`/// D4, D8: what it checks`; `also` where it names no defect) and its file. That part needs no run
-(the tests run in CI); `--probe2-only` writes it alone.
+with the first probe's table (issue 15): every test named `probe1_...` under tests/probe1_cli/,
+its doc comment (`/// 2.17a, 2.17b, D7, D11: what it checks`: the probe's rows, then its defects
+or `exit`), whether it is `#[ignore]`d as slow, and its file. Replaces what lies between
+`<!-- probe2-table:begin -->` and `<!-- probe2-table:end -->` with the second probe's (issue 42),
+read the same way from every test named `probe2_...` (`/// D4, D8: what it checks`; `also` where it
+names no defect). Prints the Markdown instead with `--doc -`. The tables are generated, never
+typed; CI fails when the chapter's differ from what this writes.
 """
 
-import csv
 import re
 import sys
 from pathlib import Path
 
 BEGIN = "<!-- hostile-table:begin -->"
 END = "<!-- hostile-table:end -->"
-CHECKS = ["exit", "line", "out", "temp", "inputs", "memory"]
 PROBE2_BEGIN = "<!-- probe2-table:begin -->"
 PROBE2_END = "<!-- probe2-table:end -->"
-
-
-def read(path):
-    lines = Path(path).read_text().splitlines()
-    meta = lines[0][2:] if lines and lines[0].startswith("# ") else "unknown run"
-    body = [line for line in lines if not line.startswith("# ")]
-    return meta, list(csv.DictReader(body, delimiter="\t"))
-
-
-def count(rows, check):
-    """(passed, checked) for one check column: `-` means the check does not apply."""
-    applied = [r for r in rows if r[check] not in ("-", "")]
-    return sum(r[check] == "pass" for r in applied), len(applied)
+ROW = re.compile(r"\d+\.\d+[a-z]?$")
+DEFECT = re.compile(r"(D\d+|exit)$")
 
 
 def cell(text, limit=110):
@@ -44,32 +31,53 @@ def cell(text, limit=110):
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def markdown(meta, rows):
-    run = [r for r in rows if r["verdict"] != "skip"]
-    passed = sum(r["verdict"] == "pass" for r in run)
-    failing = [r for r in run if r["want"] not in ("0", "-") and "0" not in r["want"].split("|")]
-    handled = sum(r["exit"] == "pass" and r["line"] in ("pass", "-") for r in failing)
+def documented_tests(path, prefix):
+    """(name, doc comment, ignore reason or None) of every `fn PREFIX...` in the file at `path`."""
+    lines = path.read_text().splitlines()
+    for i, line in enumerate(lines):
+        m = re.match(rf"\s*fn ({prefix}[a-z0-9_]+)\(", line)
+        if not m:
+            continue
+        doc, ignored, j = [], None, i - 1
+        while j >= 0 and (lines[j].strip().startswith("#[") or lines[j].strip().startswith("///")):
+            text = lines[j].strip()
+            if text.startswith("///"):
+                doc.insert(0, text[3:].strip())
+            elif text.startswith("#[ignore"):
+                ignored = re.sub(r'^#\[ignore(?: = "(.*)")?\]$', r"\1", text) or "ignored"
+            j -= 1
+        yield m.group(1), " ".join(doc), ignored
+
+
+def probe1_tests(root):
+    """(rows, defects, what it checks, slow reason or None, test, file) of every `fn probe1_...`."""
+    found = []
+    for path in sorted(root.glob("tests/probe1_cli/*.rs")):
+        for name, doc, ignored in documented_tests(path, "probe1_"):
+            head, _, what = doc.partition(": ")
+            tokens = head.split(", ")
+            rows = [t for t in tokens if ROW.match(t)]
+            defects = [t for t in tokens if DEFECT.match(t)]
+            if not what or not rows or len(rows) + len(defects) != len(tokens):
+                sys.exit(f"{path}: {name}: the doc comment must begin `ROW, ..., DEFECT, ...: what it checks`")
+            found.append((rows, defects, what, ignored, name, str(path.relative_to(root))))
+    return sorted(found, key=lambda t: [int(n) for n in re.findall(r"\d+", t[0][0])] + [t[0][0]])
+
+
+def probe1_markdown(root):
+    tests = probe1_tests(root)
+    slow = [t for t in tests if t[3]]
     out = [
-        f"Generated by `scripts/hostile-table.py` from `scripts/hostile.sh` ({meta}).",
+        f"Generated by `scripts/hostile-table.py` from the {len(tests)} tests named `probe1_...` "
+        f"(their doc comments): {len(tests) - len(slow)} run in CI with every test, {len(slow)} "
+        "(marked slow) only when asked for.",
         "",
-        "| measure | result |",
-        "| --- | --- |",
-        f"| inputs tried (cases run / skipped) | {len(run)} / {len(rows) - len(run)} |",
-        f"| cases passing every check | {passed} of {len(run)} |",
-        f"| failures handled: the expected exit code and one clean error line | {handled} of {len(failing)} |",
+        "| rows | defect | what the test checks | test |",
+        "| --- | --- | --- | --- |",
     ]
-    for check, what in [("inputs", "inputs unchanged (sha256)"), ("temp", "no temporary or hidden file left"),
-                        ("out", "nothing (or no half set) left at the output"), ("memory", "peak memory under the case's bound")]:
-        ok, n = count(run, check)
-        out.append(f"| {what} | {ok} of {n} |")
-    out += ["", "| row | defect | case | want | got | s | peak MiB | " + " | ".join(CHECKS) + " | result | first error line or note |",
-            "| --- | --- | --- | --- | --- | ---: | ---: | " + " | ".join("---" for _ in CHECKS) + " | --- | --- |"]
-    marks = {"pass": "ok", "fail": "**fail**", "-": "", "": ""}
-    for r in rows:
-        checks = " | ".join(marks.get(r[c], r[c]) for c in CHECKS)
-        verdict = {"pass": "pass", "fail": "**fail**"}.get(r["verdict"], r["verdict"])
-        out.append(f"| {r['row']} | {r['defect']} | {cell(r['case'], 60)} | {r['want'].replace('|', ' or ')} | "
-                   f"{r['got']} | {r['seconds']} | {r['peak_mib']} | {checks} | {verdict} | {cell(r['note'])} |")
+    for rows, defects, what, ignored, name, path in tests:
+        mark = f" **slow**: {cell(ignored.removeprefix('slow: '), 100)}" if ignored else ""
+        out.append(f"| {', '.join(rows)} | {', '.join(defects)} | {cell(what, 400)} | `{name}` ({path}){mark} |")
     return "\n".join(out) + "\n"
 
 
@@ -78,22 +86,13 @@ def probe2_tests(root):
     found = []
     files = sorted(root.glob("tests/**/*.rs")) + sorted(root.glob("crates/*/src/**/*.rs")) + sorted(root.glob("crates/*/tests/**/*.rs"))
     for path in files:
-        lines = path.read_text().splitlines()
-        for i, line in enumerate(lines):
-            m = re.match(r"\s*fn (probe2_[a-z0-9_]+)\(", line)
-            if not m:
-                continue
-            doc, j = [], i - 1
-            while j >= 0 and (lines[j].strip().startswith("#[") or lines[j].strip().startswith("///")):
-                if lines[j].strip().startswith("///"):
-                    doc.insert(0, lines[j].strip()[3:].strip())
-                j -= 1
-            text = re.sub(r"^Issue 42(, |: )", "", " ".join(doc))
+        for name, doc, _ in documented_tests(path, "probe2_"):
+            text = re.sub(r"^Issue 42(, |: )", "", doc)
             d = re.match(r"((?:D\d+(?:, )?)+):\s*(.*)", text)
             defects, what = (d.group(1), d.group(2)) if d else ("also", text)
             if not what:
-                sys.exit(f"{path}: {m.group(1)} has no doc comment saying what it checks")
-            found.append((defects, what, m.group(1), str(path.relative_to(root))))
+                sys.exit(f"{path}: {name} has no doc comment saying what it checks")
+            found.append((defects, what, name, str(path.relative_to(root))))
     missing = [f"D{n}" for n in range(1, 18) if not any(f"D{n}" in re.findall(r"D\d+", t[0]) for t in found)]
     if missing:
         sys.exit(f"no probe2_ test for {', '.join(missing)}")
@@ -126,25 +125,20 @@ def replace(text, begin, end, table, doc):
 def main(argv):
     args = argv[1:]
     doc = "docs/book/src/scripts.md"
-    if "--doc" in args:
-        i = args.index("--doc")
-        doc = args[i + 1]
-        del args[i : i + 2]
-    probe2_only = "--probe2-only" in args
-    args = [a for a in args if a != "--probe2-only"]
+    if args[:1] == ["--doc"] and len(args) == 2:
+        doc = args[1]
+    elif args:
+        sys.exit(__doc__)
     root = Path(__file__).resolve().parent.parent
-    probe2 = probe2_markdown(root)
-    results = args[0] if args else "target/hostile/results.tsv"
-    table = None if probe2_only else markdown(*read(results))
+    probe1, probe2 = probe1_markdown(root), probe2_markdown(root)
     if doc == "-":
-        sys.stdout.write((table or "") + "\n" + probe2)
+        sys.stdout.write(probe1 + "\n" + probe2)
         return
     text = Path(doc).read_text()
-    if table is not None:
-        text = replace(text, BEGIN, END, table, doc)
+    text = replace(text, BEGIN, END, probe1, doc)
     text = replace(text, PROBE2_BEGIN, PROBE2_END, probe2, doc)
     Path(doc).write_text(text)
-    print(f"{doc}: " + ("" if table is None else f"table of {results} and ") + "the second probe's table written")
+    print(f"{doc}: the tables of both probes written")
 
 
 if __name__ == "__main__":

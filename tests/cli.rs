@@ -24,6 +24,8 @@ mod lut_cli;
 mod mesh_face_cli;
 mod outputs_cli;
 #[cfg(unix)]
+mod probe1_cli;
+#[cfg(unix)]
 mod probe2_cli;
 mod raw_cli;
 mod render_cli;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::support::{bin, s, skinkit, stderr};
+use crate::support::{bin, s, skinkit, stderr, wait_for_signal_handler};
 
 /// What every complete capture folder holds; `report.json` marks it complete.
 const SET: [&str; 5] = ["normal.exr", "normal.png", "albedo.png", "confidence.png", "report.json"];
@@ -102,32 +102,6 @@ impl Rng {
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
         self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n.max(1)
-    }
-}
-
-/// Waits (up to 5 s) until process `pid` catches signal number `signo`: its handlers are installed
-/// a few ms after the start, later on a loaded machine (this binary's other tests run beside),
-/// and a signal before then would kill it with the default action. Returns at once when the
-/// process ignores the signal (inherited ignored, as in a script's background job, and kept so by
-/// the binary) or has exited. Linux only (`/proc/<pid>/status`); elsewhere it returns at once.
-fn wait_for_signal_handler(pid: u32, signo: u32) {
-    let bit = 1u64 << (signo - 1);
-    let mask = |status: &str, field: &str| {
-        let hex = status.lines().find_map(|l| l.strip_prefix(field)).map(str::trim);
-        hex.and_then(|m| u64::from_str_radix(m, 16).ok())
-    };
-    let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(5) {
-        let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else { return };
-        // Already exited (a zombie until waited for): nothing left to catch.
-        if status.lines().any(|l| l.starts_with("State:") && l.contains('Z')) {
-            return;
-        }
-        let (Some(caught), Some(ignored)) = (mask(&status, "SigCgt:"), mask(&status, "SigIgn:")) else { return };
-        if (caught | ignored) & bit != 0 {
-            return;
-        }
-        std::thread::sleep(Duration::from_millis(1));
     }
 }
 

@@ -72,3 +72,29 @@ pub fn mkfifo(path: &Path) {
     let made = Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
     assert!(made.success(), "mkfifo {}", path.display());
 }
+
+/// Waits (up to 5 s) until process `pid` catches signal number `signo`: its handlers are installed
+/// a few ms after the start, later on a loaded machine (this binary's other tests run beside),
+/// and a signal before then would kill it with the default action. Returns at once when the
+/// process ignores the signal (inherited ignored, as in a script's background job, and kept so by
+/// the binary) or has exited. Linux only (`/proc/<pid>/status`); elsewhere it returns at once.
+pub fn wait_for_signal_handler(pid: u32, signo: u32) {
+    let bit = 1u64 << (signo - 1);
+    let mask = |status: &str, field: &str| {
+        let hex = status.lines().find_map(|l| l.strip_prefix(field)).map(str::trim);
+        hex.and_then(|m| u64::from_str_radix(m, 16).ok())
+    };
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(5) {
+        let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else { return };
+        // Already exited (a zombie until waited for): nothing left to catch.
+        if status.lines().any(|l| l.starts_with("State:") && l.contains('Z')) {
+            return;
+        }
+        let (Some(caught), Some(ignored)) = (mask(&status, "SigCgt:"), mask(&status, "SigIgn:")) else { return };
+        if (caught | ignored) & bit != 0 {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
