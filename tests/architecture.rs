@@ -247,7 +247,7 @@ impl Crate {
             self.record(&path, found);
         }
         for (m, name) in children {
-            let child = [path.as_slice(), &[name.clone()]].concat();
+            let child = [path.as_slice(), std::slice::from_ref(&name)].concat();
             let child_dir = dir.join(&name);
             match &m.content {
                 Some((_, inner)) => self.load_items(files, source, inner, child, child_dir)?,
