@@ -10,6 +10,7 @@ use std::path::Path;
 use std::process::Output;
 
 mod accuracy_cli;
+mod architecture;
 mod batch_cli;
 mod demo_cli;
 mod docs_links;

@@ -22,52 +22,12 @@
 
 use skinkit_maps::{Photo, Samples};
 
-use crate::{Error, Result, Rig};
+use crate::{Error, Result};
 
 /// Readings under this fraction of full scale are taken as in the sensor's noise floor when a
-/// session's rig brackets a light (see the module docs; [`merge`] takes it as a parameter).
+/// session's rig brackets a light (see the module docs; [`merge`] takes it as a parameter, and a
+/// capture session merges at this floor).
 pub const FLOOR: f32 = 0.02;
-
-/// A session's photos, in rig order with each bracketed light's brackets consecutive, as one
-/// reading per light: bracketed lights merged ([`merge`] at [`FLOOR`]), the others unchanged;
-/// with the readings' names (a merged light's is its first bracket's, with the count).
-///
-/// # Errors
-/// [`Error::InvalidInput`] when the rig brackets a light and the session has an ambient frame
-/// (its exposure is not known), or as [`merge`] naming the light.
-pub fn merge_rig(
-    rig: &Rig,
-    photos: Vec<Photo>,
-    names: &[String],
-    ambient: bool,
-    saturation: f32,
-) -> Result<(Vec<Photo>, Vec<String>)> {
-    if rig.lights().iter().all(|l| l.exposures().is_empty()) {
-        return Ok((photos, names.to_vec()));
-    }
-    if ambient {
-        return Err(Error::InvalidInput(
-            "exposure brackets with an ambient frame are not supported yet (the frame's exposure is unknown)".into(),
-        ));
-    }
-    let mut photos = photos.into_iter();
-    let (mut merged, mut readings) = (Vec::new(), Vec::new());
-    let mut at = 0;
-    for (i, light) in rig.lights().iter().enumerate() {
-        let n = light.photo_count();
-        let group: Vec<Photo> = photos.by_ref().take(n).collect();
-        let name = &names[at];
-        at += n;
-        if light.exposures().is_empty() {
-            merged.extend(group);
-            readings.push(name.clone());
-        } else {
-            merged.push(merge(&group, light.exposures(), saturation, FLOOR, &format!("light {}", i + 1))?);
-            readings.push(format!("{name} (+{} brackets)", n - 1));
-        }
-    }
-    Ok((merged, readings))
-}
 
 /// Merges the brackets of one light: `photos[j]` taken with exposure time `times[j]` (any unit,
 /// only ratios matter), readings at or above `saturation` of full scale clipped, under `floor`

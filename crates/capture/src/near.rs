@@ -275,7 +275,7 @@ impl Pixel {
             let full = photo.samples().full_scale();
             let mut reading = DVec3::ZERO;
             let mut ok = true;
-            let saturated_at = readings::saturation_level(config, full);
+            let saturated_at = readings::saturation_level(config.saturation, full);
             for c in 0..channels {
                 let s = i * channels + c;
                 ok &= photo.samples().get(s) < saturated_at;

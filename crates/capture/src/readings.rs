@@ -11,8 +11,6 @@
 
 use nalgebra::Matrix3;
 
-use crate::solve::SolveConfig;
-
 /// Rec. 709 luminance weights: how RGB readings combine into the one used for the normal (and
 /// how a grey photo is divided by an RGB light intensity).
 pub const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -85,14 +83,15 @@ pub(crate) fn shadow_floor(shadows: Shadows, reference: f64) -> f64 {
 }
 
 /// The raw stored value at or above which a reading is saturated, for samples of `full_scale`
-/// (any channel, before ambient subtraction).
+/// and a solve's `saturation` fraction ([`crate::solve::SolveConfig::saturation`]; any channel,
+/// before ambient subtraction).
 #[inline(always)]
-pub(crate) fn saturation_level(config: &SolveConfig, full_scale: f32) -> f32 {
-    config.saturation * full_scale
+pub(crate) fn saturation_level(saturation: f32, full_scale: f32) -> f32 {
+    saturation * full_scale
 }
 
 /// `sigma_max / sigma_min` of a direction matrix `L` from its Gram matrix `L^T L` (infinite when
-/// singular): the condition number [`SolveConfig::max_condition`] bounds, for a subset of a rig's
+/// singular): the condition number [`crate::solve::SolveConfig::max_condition`] bounds, for a subset of a rig's
 /// lights (distant) or a pixel's own light directions (near).
 pub(crate) fn condition_of(gram: &Matrix3<f64>) -> f64 {
     let eig = gram.symmetric_eigenvalues();

@@ -26,7 +26,7 @@ use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 use skinkit_height::{Height, HeightOptions, HeightReport, Scale};
 
 use crate::solve::{self, PhotoStack, SolveConfig};
-use crate::{Error, Result, Rig, bracket, detrend, near};
+use crate::{Error, Result, Rig, detrend, near};
 
 mod folder;
 mod memory;
@@ -34,7 +34,7 @@ mod prepare;
 pub use folder::{PhotoFolder, RESERVED_STEMS, Session, Skipped, photos_in};
 pub use memory::memory_estimate;
 pub use prepare::corrections;
-use prepare::{flatten, raw_reading, unscale_albedo};
+use prepare::{flatten, merge_brackets, raw_reading, unscale_albedo};
 
 /// Everything that shapes a capture besides its files.
 #[derive(Clone, Debug)]
@@ -304,7 +304,7 @@ fn stacked(
         corrections.insert(0, raw_reading(options.raw));
     }
     let saturation = options.solve.saturation;
-    let (merged, readings) = bracket::merge_rig(rig, inputs.photos, &names, inputs.ambient.is_some(), saturation)
+    let (merged, readings) = merge_brackets(rig, inputs.photos, &names, inputs.ambient.is_some(), saturation)
         .map_err(|e| context(session.rig.display().to_string(), e))?;
     let (photos, ambient_frame, scale) = flatten(rig, merged, inputs.ambient, &readings, options)?;
     let mut stack = PhotoStack::new(photos, readings)?;

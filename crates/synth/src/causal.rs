@@ -13,10 +13,10 @@ use skinkit_maps::Grid;
 
 use crate::config::SynthConfig;
 use crate::exemplar::{ExemplarLevel, better};
+use crate::level::{Fallback, LevelSearch, ModeSearch, random_copies, shape};
 use crate::neighbourhood::Neighbourhood;
 use crate::schedule::LevelPlan;
 use crate::scoring::{Occurrence, Scorer, TreeQuery, coherence_candidates, tree_refine};
-use crate::synthesis::{Fallback, LevelSearch, ModeSearch, random_copies, shape};
 
 /// The causal scanline pass of one level: every texel, in scanline order, copies the exemplar
 /// texel whose causal neighbourhood is nearest. Sequential: each texel's neighbourhood holds the

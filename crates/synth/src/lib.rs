@@ -12,7 +12,9 @@
 //! * [`synthesis`]: [`synthesize`], [`synthesize_normals`], [`replay`].
 //! * `causal`, `correction` and `polish` (private): the scanline pass, the correction passes with
 //!   the copy cap, and seam polishing of the finest level by every window a texel lies in;
-//!   `scoring` (private) how all of them score a candidate (occurrence penalty, tree refinement).
+//!   `scoring` (private) how all of them score a candidate (occurrence penalty, tree refinement),
+//!   `level` (private) what they share of one level (its search structures and initial copies)
+//!   and `interleave` (private) the interleaved sub-passes the correction and polishing run in.
 //! * [`metrics`]: quality measures.
 //!
 //! Texels are `Vec3` throughout: colour as linear RGB, normals as unnormalised vectors (pyramid
@@ -38,7 +40,8 @@ mod correction;
 pub mod energy;
 pub mod error;
 pub mod exemplar;
-mod guard;
+mod interleave;
+mod level;
 pub mod map;
 pub mod metrics;
 pub mod neighbourhood;
@@ -51,8 +54,7 @@ pub mod synthesis;
 
 pub use config::{Search, Start, SynthConfig};
 pub use error::{Error, Result};
-pub use guard::Guards;
 pub use map::{Grown, Map};
 pub use report::{OptionsReport, QualityReport};
 pub use schedule::LevelPlan;
-pub use synthesis::{NormalSynthesis, Synthesis, replay, synthesize, synthesize_normals};
+pub use synthesis::{Guards, NormalSynthesis, Synthesis, replay, synthesize, synthesize_normals};

@@ -14,8 +14,8 @@ use glam::Vec3;
 use skinkit_maps::Grid;
 
 use crate::config::CORRECTION_STRIDE;
-use crate::correction::sub_pass;
 use crate::exemplar::{ExemplarLevel, better};
+use crate::interleave::sub_pass;
 use crate::metrics::{self, CopyBlocks};
 
 /// Runs `passes` polishing passes over a level with `n x n` windows, in the interleaved

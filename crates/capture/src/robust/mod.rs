@@ -38,9 +38,9 @@
 mod linalg;
 
 use glam::Vec3;
+use skinkit_maps::limits::MAX_LIGHTS;
 
 use crate::readings::{self, Shadows};
-use crate::solve::MAX_LIGHTS;
 use crate::{Error, Result};
 use linalg::Normal3;
 
@@ -88,7 +88,7 @@ pub struct RobustConfig {
     /// Smallest residual scale, as a fraction of `|g|` (keeps noise-free pixels well posed).
     pub scale_floor: f32,
     /// Smallest residual scale in reading units (full scale 1, unit light): the image's own noise
-    /// `sigma` (the solve measures it, `solve/noise.rs`), so no reading is rejected for noise
+    /// `sigma` (the solve measures it, `solve/plan/noise.rs`), so no reading is rejected for noise
     /// alone; 0 for none.
     pub noise_floor: f32,
     /// Fewest inliers for a valid pixel (at least 3).

@@ -6,7 +6,54 @@ use skinkit_maps::Photo;
 use skinkit_maps::raw::RawMode;
 
 use super::{CaptureOptions, context, read_photo};
-use crate::{Error, Result, Rig, flat, near, solve};
+use crate::{Error, Result, Rig, bracket, flat, near, solve};
+
+/// A session's photos, in rig order with each bracketed light's brackets consecutive, as one
+/// reading per light: bracketed lights merged ([`bracket::merge`] at [`bracket::FLOOR`]), the others unchanged;
+/// with the readings' names (a merged light's is its first bracket's, with the count).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the rig brackets a light and the session has an ambient frame
+/// (its exposure is not known), or as [`bracket::merge`] naming the light.
+pub(super) fn merge_brackets(
+    rig: &Rig,
+    photos: Vec<Photo>,
+    names: &[String],
+    ambient: bool,
+    saturation: f32,
+) -> Result<(Vec<Photo>, Vec<String>)> {
+    if rig.lights().iter().all(|l| l.exposures().is_empty()) {
+        return Ok((photos, names.to_vec()));
+    }
+    if ambient {
+        return Err(Error::InvalidInput(
+            "exposure brackets with an ambient frame are not supported yet (the frame's exposure is unknown)".into(),
+        ));
+    }
+    let mut photos = photos.into_iter();
+    let (mut merged, mut readings) = (Vec::new(), Vec::new());
+    let mut at = 0;
+    for (i, light) in rig.lights().iter().enumerate() {
+        let n = light.photo_count();
+        let group: Vec<Photo> = photos.by_ref().take(n).collect();
+        let name = &names[at];
+        at += n;
+        if light.exposures().is_empty() {
+            merged.extend(group);
+            readings.push(name.clone());
+        } else {
+            merged.push(bracket::merge(
+                &group,
+                light.exposures(),
+                saturation,
+                bracket::FLOOR,
+                &format!("light {}", i + 1),
+            )?);
+            readings.push(format!("{name} (+{} brackets)", n - 1));
+        }
+    }
+    Ok((merged, readings))
+}
 
 /// What capture's flat-field step will do to the photos, for the report and `rig check`.
 pub fn corrections(rig: &Rig, ambient: bool) -> Vec<String> {

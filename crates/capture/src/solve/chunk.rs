@@ -1,39 +1,19 @@
-//! The chunk kernels: structure-of-arrays accumulation over the lights, and output helpers.
+//! The chunk kernels: structure-of-arrays accumulation over the lights into a worker's
+//! [`Scratch`], and the output helpers that write a chunk's [`Out`] slices.
+
+use std::collections::HashMap;
 
 use glam::Vec3;
 use skinkit_maps::Grid;
 
-use super::plan::{Out, Scratch};
 use super::solution::AlbedoTexel;
 use super::sources::Sample;
+use super::subsets::SubsetSolve;
 use super::{CHUNK, RESIDUAL_SCALE};
 
 /// The texels of `grid` when it is `w x h` (to be overwritten), else a fresh zeroed vector.
 pub(super) fn take_sized<T: AlbedoTexel>(grid: Grid<T>, w: usize, h: usize) -> Vec<T> {
     if grid.size() == (w, h) { grid.into_vec() } else { T::fresh(w * h) }
-}
-
-/// `n` zeros from the allocator's zeroed allocation. Large sizes come straight from the OS as
-/// untouched zero pages, so the only touch of each page is the solve's write to it, made by the
-/// worker that owns the band (no separate fill pass).
-///
-/// Transparent huge pages were tried (`madvise(MADV_HUGEPAGE)`): they made the solve faster on
-/// average but the whole 4096x4096 capture slower and erratic (0.13 to 0.44 s detrends, from
-/// synchronous compaction), so the plain 4 KiB pages stay.
-pub(crate) fn fresh_zeroed(n: usize) -> Vec<f32> {
-    vec![0.0f32; n]
-}
-
-/// [`fresh_zeroed`] for `Vec3` texels.
-pub(crate) fn fresh_zeroed_vec3(n: usize) -> Vec<Vec3> {
-    const { assert!(size_of::<Vec3>() == 3 * size_of::<f32>() && align_of::<Vec3>() == align_of::<f32>()) };
-    let mut floats = std::mem::ManuallyDrop::new(fresh_zeroed(3 * n));
-    let (ptr, len, cap) = (floats.as_mut_ptr(), floats.len(), floats.capacity());
-    // SAFETY: `Vec3` is `#[repr(C)] { x, y, z: f32 }` (size and alignment checked above), so the
-    // allocation of `cap` zeroed floats, with `len == cap == 3 n` (`vec!` allocates exactly), has
-    // the layout of `n` zero `Vec3`s, and the old vector is never dropped.
-    debug_assert!(len == cap && len % 3 == 0);
-    unsafe { Vec::from_raw_parts(ptr.cast::<Vec3>(), len / 3, cap / 3) }
 }
 
 /// Copies the chunk's all-lights results (grey albedo) to the output.
@@ -56,15 +36,6 @@ pub(super) fn residual_factor(rr: f32, fitted: f32) -> f32 {
     // 1 / (1 + rho^2 / s^2) = rr / (rr + (rr - fitted) / s^2): one division.
     let excess = (rr - fitted).max(0.0) * (1.0 / (RESIDUAL_SCALE * RESIDUAL_SCALE));
     if rr > 0.0 { rr / (rr + excess) } else { 1.0 }
-}
-
-/// Stored values minus the ambient frame's, as f32.
-#[inline(always)]
-pub(super) fn raw_values<T: Sample>(v: &[T], ambient: Option<&[T]>, out: &mut [f32]) {
-    match ambient {
-        None => out.iter_mut().zip(v).for_each(|(o, x)| *o = x.value()),
-        Some(a) => out.iter_mut().zip(v.iter().zip(a)).for_each(|(o, (x, y))| *o = x.value() - y.value()),
-    }
 }
 
 /// `g += coefs_i * x_i` and `rr += (x_i * scales_i)^2` over all lights, `x_i` the rows of `s.r`.
@@ -128,4 +99,68 @@ pub(super) fn accumulate<T: Sample, const N: usize, const FIRST: bool>(
         }
         (gx[j], gy[j], gz[j], rr[j]) = (x, y, z, q);
     }
+}
+
+/// Per-worker scratch buffers, structure-of-arrays over one chunk.
+pub(super) struct Scratch {
+    pub(super) r: Vec<f32>,
+    pub(super) rgb: Vec<[f32; 3]>,
+    pub(super) sat: Vec<u8>,
+    pub(super) gx: [f32; CHUNK],
+    pub(super) gy: [f32; CHUNK],
+    pub(super) gz: [f32; CHUNK],
+    pub(super) rr: [f32; CHUNK],
+    pub(super) top: [f32; CHUNK],
+    pub(super) len: [f32; CHUNK],
+    pub(super) conf: [f32; CHUNK],
+    pub(super) dropped: [u32; CHUNK],
+    /// Batched subsets: usable lights per pixel (bit `i` for light `i`).
+    pub(super) bits: [u32; CHUNK],
+    /// Batched subsets: pixels still to solve, and those of the current group.
+    pub(super) pending: [u8; CHUNK],
+    pub(super) group: [u8; CHUNK],
+    /// Batched subsets: `g` and `sum r^2` of the current group.
+    pub(super) bx: [f32; CHUNK],
+    pub(super) by: [f32; CHUNK],
+    pub(super) bz: [f32; CHUNK],
+    pub(super) brr: [f32; CHUNK],
+    /// Batched subsets, robust: pixels whose subset fit does not agree, to be fitted.
+    pub(super) refit: [u8; CHUNK],
+    pub(super) refits: usize,
+    pub(super) cache: HashMap<u128, SubsetSolve>,
+}
+
+impl Scratch {
+    pub(super) fn new(k: usize, rgb: bool) -> Self {
+        Scratch {
+            r: vec![0.0; k * CHUNK],
+            rgb: if rgb { vec![[0.0; 3]; k * CHUNK] } else { Vec::new() },
+            sat: vec![0; k * CHUNK],
+            gx: [0.0; CHUNK],
+            gy: [0.0; CHUNK],
+            gz: [0.0; CHUNK],
+            rr: [0.0; CHUNK],
+            top: [0.0; CHUNK],
+            len: [0.0; CHUNK],
+            conf: [0.0; CHUNK],
+            dropped: [0; CHUNK],
+            bits: [0; CHUNK],
+            pending: [0; CHUNK],
+            group: [0; CHUNK],
+            bx: [0.0; CHUNK],
+            by: [0.0; CHUNK],
+            bz: [0.0; CHUNK],
+            brr: [0.0; CHUNK],
+            refit: [0; CHUNK],
+            refits: 0,
+            cache: HashMap::new(),
+        }
+    }
+}
+
+/// Output slices of one chunk.
+pub(super) struct Out<'o, A> {
+    pub(super) normals: &'o mut [Vec3],
+    pub(super) albedo: &'o mut [A],
+    pub(super) confidence: &'o mut [f32],
 }

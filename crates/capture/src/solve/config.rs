@@ -10,7 +10,7 @@ pub enum Method {
     LeastSquares,
     /// Drops shadowed and saturated readings as [`Method::Threshold`] does and keeps least squares
     /// on the rest where it explains them (relative residual within 2 %, or within what the
-    /// image's measured noise floor leaves: `noise.rs`); elsewhere the
+    /// image's measured noise floor leaves: `plan/noise.rs`); elsewhere the
     /// rank-trimmed fit of [`crate::robust`] (the brightest 40 % and darkest 10 % of the lit
     /// readings left out of the start, every light that agrees refitted).
     #[default]

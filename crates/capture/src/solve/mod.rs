@@ -21,9 +21,9 @@
 //!   solves least squares on the rest, by the same paths (all lights when nothing is dropped;
 //!   otherwise the cached subset pseudo-inverses, grouped and vectorised). That answer stands
 //!   where its relative residual is within [`crate::robust::AGREEMENT`] (2 %), widened to what the
-//!   image's own sensor noise leaves (measured on a sample of rows before solving, `noise.rs`,
+//!   image's own sensor noise leaves (measured on a sample of rows before solving, `plan/noise.rs`,
 //!   reported as [`Solution::noise`]): the lit readings agree with one Lambertian normal. Only the other pixels are fitted by
-//!   [`crate::robust::fit_pixel`] from their loaded readings (`fit.rs`; the fused kernel hands
+//!   [`crate::robust::fit_pixel`] from their loaded readings (`plan/fit.rs`; the fused kernel hands
 //!   such steps to the chunk path), so a cast shadow costs what it costs the threshold solve and
 //!   only highlights, inter-reflections and the like pay for the per-pixel fit.
 //! * [`Method::Threshold`] drops, per pixel, the readings that are shadowed or
@@ -70,19 +70,19 @@
 //! an earlier solution (large fresh maps cost a page fault per 4 KiB, which dominates the solve).
 
 //!
-//! The module's files follow its seams: [`PhotoStack`] (`stack.rs`), the parameters and
-//! results (`config.rs`, `solution.rs`), subset pseudo-inverses (`subsets.rs`), stored samples
-//! to readings (`sources.rs`), the per-solve plan and its all-lights chunk path (`plan.rs`), the
-//! paths of pixels that drop readings (`finish.rs`), the chunk kernels (`chunk.rs`), the fused
-//! AVX2 kernel (`fused.rs`) and the unit tests (`tests.rs`).
+//! The module's files follow its seams, each depending only on those listed before it (no module
+//! circles, issue 38): [`PhotoStack`] (`stack.rs`), the parameters (`config.rs`), subset
+//! pseudo-inverses (`subsets.rs`), stored samples to readings (`sources.rs`), the results and the
+//! fresh maps they are written into (`solution.rs`), the chunk kernels and their scratch buffers
+//! (`chunk.rs`), the fused AVX2 kernel (`fused.rs`), the per-solve plan and its all-lights chunk
+//! path (`plan.rs`) with the parts that extend it: the robust fit (`plan/fit.rs`), its noise
+//! floor (`plan/noise.rs`) and the paths of pixels that drop readings (`plan/finish.rs`); and the
+//! unit tests (`tests.rs`).
 
 mod chunk;
 mod config;
-mod finish;
-mod fit;
 #[cfg(target_arch = "x86_64")]
 mod fused;
-mod noise;
 mod plan;
 mod solution;
 mod sources;
@@ -96,11 +96,10 @@ use skinkit_maps::{Grid, NormalMap, Transfer};
 
 pub use crate::readings::SolveStats;
 use crate::readings::{LUMA, MIN_ALBEDO};
-pub(crate) use chunk::fresh_zeroed_vec3;
 pub use config::{Method, Progress, SolveConfig, no_progress};
-pub use noise::NoiseFloor;
 use plan::Plan;
-pub use solution::{AlbedoMap, Solution};
+pub(crate) use solution::fresh_zeroed_vec3;
+pub use solution::{AlbedoMap, NoiseFloor, Solution};
 pub use stack::PhotoStack;
 
 use crate::{Error, Result, Rig};

@@ -1,25 +1,28 @@
 //! The plan of one solve (built once, shared by the workers) and its all-lights chunk path.
 
-use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_maps::{Channels, Grid, NormalMap, Transfer};
 
-use super::chunk::{
-    accumulate_all, accumulate_rows, fresh_zeroed_vec3, raw_values, residual_factor, take_sized, write_all_lights,
-};
-use super::fit::Fit;
+use super::chunk::{Out, Scratch, accumulate_all, accumulate_rows, residual_factor, take_sized, write_all_lights};
 #[cfg(target_arch = "x86_64")]
 use super::fused;
-use super::solution::AlbedoTexel;
-use super::sources::{Linearise, Raw, Source, as_f32, as_u8, as_u16};
+use super::solution::{AlbedoTexel, fresh_zeroed_vec3};
+use super::sources::{Linearise, Raw, Source, as_f32, as_u8, as_u16, raw_values};
 use super::subsets::{SubsetSolve, Subsets, gram_form};
 use super::{
     AlbedoMap, BAND_ROWS, CHUNK, DENSE_MAX_LIGHTS, Method, PhotoStack, Progress, Solution, SolveConfig, SolveStats,
 };
 use crate::{Result, Rig, readings};
+use fit::Fit;
+
+// The parts of the plan that extend it with methods of their own: the robust fit and its noise
+// floor, and the paths of pixels that drop readings.
+mod finish;
+mod fit;
+mod noise;
 
 /// Everything a worker needs, built once per solve.
 pub(super) struct Plan<'a> {
@@ -55,70 +58,6 @@ pub(super) struct Plan<'a> {
     /// the same bits.
     pub(super) batch_subsets: bool,
     pub(super) mask: Option<&'a [bool]>,
-}
-
-/// Per-worker scratch buffers, structure-of-arrays over one chunk.
-pub(super) struct Scratch {
-    pub(super) r: Vec<f32>,
-    pub(super) rgb: Vec<[f32; 3]>,
-    pub(super) sat: Vec<u8>,
-    pub(super) gx: [f32; CHUNK],
-    pub(super) gy: [f32; CHUNK],
-    pub(super) gz: [f32; CHUNK],
-    pub(super) rr: [f32; CHUNK],
-    pub(super) top: [f32; CHUNK],
-    pub(super) len: [f32; CHUNK],
-    pub(super) conf: [f32; CHUNK],
-    pub(super) dropped: [u32; CHUNK],
-    /// Batched subsets: usable lights per pixel (bit `i` for light `i`).
-    pub(super) bits: [u32; CHUNK],
-    /// Batched subsets: pixels still to solve, and those of the current group.
-    pub(super) pending: [u8; CHUNK],
-    pub(super) group: [u8; CHUNK],
-    /// Batched subsets: `g` and `sum r^2` of the current group.
-    pub(super) bx: [f32; CHUNK],
-    pub(super) by: [f32; CHUNK],
-    pub(super) bz: [f32; CHUNK],
-    pub(super) brr: [f32; CHUNK],
-    /// Batched subsets, robust: pixels whose subset fit does not agree, to be fitted.
-    pub(super) refit: [u8; CHUNK],
-    pub(super) refits: usize,
-    pub(super) cache: HashMap<u128, SubsetSolve>,
-}
-
-impl Scratch {
-    pub(super) fn new(k: usize, rgb: bool) -> Self {
-        Scratch {
-            r: vec![0.0; k * CHUNK],
-            rgb: if rgb { vec![[0.0; 3]; k * CHUNK] } else { Vec::new() },
-            sat: vec![0; k * CHUNK],
-            gx: [0.0; CHUNK],
-            gy: [0.0; CHUNK],
-            gz: [0.0; CHUNK],
-            rr: [0.0; CHUNK],
-            top: [0.0; CHUNK],
-            len: [0.0; CHUNK],
-            conf: [0.0; CHUNK],
-            dropped: [0; CHUNK],
-            bits: [0; CHUNK],
-            pending: [0; CHUNK],
-            group: [0; CHUNK],
-            bx: [0.0; CHUNK],
-            by: [0.0; CHUNK],
-            bz: [0.0; CHUNK],
-            brr: [0.0; CHUNK],
-            refit: [0; CHUNK],
-            refits: 0,
-            cache: HashMap::new(),
-        }
-    }
-}
-
-/// Output slices of one chunk.
-pub(super) struct Out<'o, A> {
-    pub(super) normals: &'o mut [Vec3],
-    pub(super) albedo: &'o mut [A],
-    pub(super) confidence: &'o mut [f32],
 }
 
 impl<'a> Plan<'a> {

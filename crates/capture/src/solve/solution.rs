@@ -1,10 +1,10 @@
-//! What a solve returns: [`Solution`], [`AlbedoMap`] and the albedo texel types.
+//! What a solve returns: [`Solution`], [`AlbedoMap`], the [`NoiseFloor`] it measured, the albedo
+//! texel types and the fresh zeroed maps they are written into.
 
 use glam::Vec3;
 use skinkit_maps::{ColorMap, NormalMap, ScalarMap};
 
 use super::SolveStats;
-use super::chunk::{fresh_zeroed, fresh_zeroed_vec3};
 
 /// The result of [`solve`](super::solve()).
 #[derive(Clone, Debug)]
@@ -19,7 +19,18 @@ pub struct Solution {
     pub stats: SolveStats,
     /// [`Method::Robust`](super::Method::Robust): the noise floor measured before solving and the
     /// gate it set; `None` for other methods, 3 lights or too few usable pixels.
-    pub noise: Option<super::NoiseFloor>,
+    pub noise: Option<NoiseFloor>,
+}
+
+/// The noise the sample of an image shows.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NoiseFloor {
+    /// Noise of one reading (full scale 1, unit light), `sigma`.
+    pub sigma: f32,
+    /// The same relative to a pixel's `|r|` (median over the sample).
+    pub relative: f32,
+    /// Relative residual up to which least squares stands (at least `AGREEMENT`).
+    pub gate: f32,
 }
 
 /// A solution's albedo: one value per texel for grey photos (a third of the memory of RGB), or
@@ -121,4 +132,27 @@ impl AlbedoTexel for Vec3 {
     fn gray_slice(_: &mut [Self]) -> Option<&mut [f32]> {
         None
     }
+}
+
+/// `n` zeros from the allocator's zeroed allocation. Large sizes come straight from the OS as
+/// untouched zero pages, so the only touch of each page is the solve's write to it, made by the
+/// worker that owns the band (no separate fill pass).
+///
+/// Transparent huge pages were tried (`madvise(MADV_HUGEPAGE)`): they made the solve faster on
+/// average but the whole 4096x4096 capture slower and erratic (0.13 to 0.44 s detrends, from
+/// synchronous compaction), so the plain 4 KiB pages stay.
+pub(crate) fn fresh_zeroed(n: usize) -> Vec<f32> {
+    vec![0.0f32; n]
+}
+
+/// [`fresh_zeroed`] for `Vec3` texels.
+pub(crate) fn fresh_zeroed_vec3(n: usize) -> Vec<Vec3> {
+    const { assert!(size_of::<Vec3>() == 3 * size_of::<f32>() && align_of::<Vec3>() == align_of::<f32>()) };
+    let mut floats = std::mem::ManuallyDrop::new(fresh_zeroed(3 * n));
+    let (ptr, len, cap) = (floats.as_mut_ptr(), floats.len(), floats.capacity());
+    // SAFETY: `Vec3` is `#[repr(C)] { x, y, z: f32 }` (size and alignment checked above), so the
+    // allocation of `cap` zeroed floats, with `len == cap == 3 n` (`vec!` allocates exactly), has
+    // the layout of `n` zero `Vec3`s, and the old vector is never dropped.
+    debug_assert!(len == cap && len % 3 == 0);
+    unsafe { Vec::from_raw_parts(ptr.cast::<Vec3>(), len / 3, cap / 3) }
 }

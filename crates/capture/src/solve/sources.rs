@@ -3,7 +3,6 @@
 use glam::Vec3;
 use skinkit_maps::{Photo, Samples, Transfer};
 
-use super::chunk::raw_values;
 use super::{LUMA, SolveConfig};
 use crate::readings;
 
@@ -90,7 +89,7 @@ impl<'a> Source<'a> {
             ambient: ambient.map(Raw::of),
             scale: (Vec3::splat(unit) / intensity).into(),
             gray_scale: unit / luma,
-            saturated_at: readings::saturation_level(config, full),
+            saturated_at: readings::saturation_level(config.saturation, full),
         }
     }
 
@@ -184,5 +183,14 @@ pub(super) fn color<T: Sample>(
         sat[j] = s as u8;
         rgb[j] = c;
         r[j] = LUMA[0] * c[0] + LUMA[1] * c[1] + LUMA[2] * c[2];
+    }
+}
+
+/// Stored values minus the ambient frame's, as f32.
+#[inline(always)]
+pub(super) fn raw_values<T: Sample>(v: &[T], ambient: Option<&[T]>, out: &mut [f32]) {
+    match ambient {
+        None => out.iter_mut().zip(v).for_each(|(o, x)| *o = x.value()),
+        Some(a) => out.iter_mut().zip(v.iter().zip(a)).for_each(|(o, (x, y))| *o = x.value() - y.value()),
     }
 }

@@ -2,7 +2,7 @@
 
 use skinkit_maps::{Channels, Photo, Samples};
 
-use super::plan::{Out, Scratch};
+use super::chunk::{Out, Scratch};
 use super::subsets::{SubsetSolve, Subsets};
 use super::*;
 

@@ -1,4 +1,4 @@
-//! The image's own noise floor, for [`Method::Robust`](super::Method::Robust) (issue 39).
+//! The image's own noise floor, for [`Method::Robust`](crate::solve::Method::Robust) (issue 39).
 //!
 //! The robust solve keeps a pixel's least-squares answer when its relative residual
 //! `rho = |r - L g| / |r|` is small enough that there is nothing to reject. A fixed gate
@@ -25,8 +25,9 @@
 //! test never rejects a reading for noise alone. Chi-square quantiles by Wilson and Hilferty
 //! (1931): `nu (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3`.
 
-use super::CHUNK;
-use super::plan::{Plan, Scratch};
+use super::Plan;
+use crate::solve::chunk::Scratch;
+use crate::solve::{CHUNK, NoiseFloor, RESIDUAL_SCALE};
 
 /// Rows sampled for the estimate (evenly spaced), at most.
 const SAMPLE_ROWS: usize = 64;
@@ -39,17 +40,6 @@ const MIN_SAMPLES: usize = 64;
 const GATE_Z: f64 = 2.576;
 /// Median absolute deviation of a standard normal.
 const MAD_NORMAL: f64 = 0.6745;
-
-/// The noise the sample of an image shows.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NoiseFloor {
-    /// Noise of one reading (full scale 1, unit light), `sigma`.
-    pub sigma: f32,
-    /// The same relative to a pixel's `|r|` (median over the sample).
-    pub relative: f32,
-    /// Relative residual up to which least squares stands (at least `AGREEMENT`).
-    pub gate: f32,
-}
 
 /// Wilson-Hilferty quantile of chi-square with `nu` degrees of freedom at normal quantile `z`.
 pub(crate) fn chi2_quantile(nu: f64, z: f64) -> f64 {
@@ -85,7 +75,7 @@ struct Samples {
 impl Plan<'_> {
     /// Measures the noise floor of the stack on up to [`SAMPLE_ROWS`] rows; `None` with 3 lights
     /// (no residual) or too few usable pixels.
-    pub(super) fn noise_floor(&self, height: usize, agreement: f32) -> Option<NoiseFloor> {
+    pub(in crate::solve) fn noise_floor(&self, height: usize, agreement: f32) -> Option<NoiseFloor> {
         if self.k < 4 || height == 0 {
             return None;
         }
@@ -117,7 +107,7 @@ impl Plan<'_> {
             if !(p + j).is_multiple_of(stride) || !inside(j) || s.dropped[j] > 0 || s.conf[j] <= 0.0 || s.rr[j] <= 0.0 {
                 continue;
             }
-            let rho2 = (super::RESIDUAL_SCALE * super::RESIDUAL_SCALE) as f64 * (1.0 / s.conf[j] as f64 - 1.0);
+            let rho2 = (RESIDUAL_SCALE * RESIDUAL_SCALE) as f64 * (1.0 / s.conf[j] as f64 - 1.0);
             samples.residual.push(rho2 * s.rr[j] as f64);
             samples.rr.push(s.rr[j] as f64);
             if j == 0 || j + 1 >= n || !inside(j - 1) || !inside(j + 1) {

@@ -5,20 +5,20 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
-use super::chunk::residual_factor;
-#[cfg(target_arch = "x86_64")]
-use super::fused;
-use super::plan::{Out, Plan, Scratch};
-use super::solution::AlbedoTexel;
-use super::subsets::{SubsetSolve, Subsets};
-use super::{CHUNK, SolveStats};
+use super::Plan;
 use crate::readings;
+use crate::solve::chunk::{Out, Scratch, residual_factor};
+#[cfg(target_arch = "x86_64")]
+use crate::solve::fused;
+use crate::solve::solution::AlbedoTexel;
+use crate::solve::subsets::{SubsetSolve, Subsets};
+use crate::solve::{CHUNK, MAX_LIGHTS, SolveStats};
 
 impl Plan<'_> {
     /// Counts, per pixel, the readings that are shadowed or saturated (`s.dropped`), after
     /// [`Self::shadow_thresholds`].
     #[inline(always)]
-    pub(super) fn count_dropped(&self, n: usize, s: &mut Scratch) {
+    pub(in crate::solve) fn count_dropped(&self, n: usize, s: &mut Scratch) {
         self.shadow_thresholds(n, s);
         s.dropped[..n].fill(0);
         for i in 0..self.k {
@@ -46,7 +46,7 @@ impl Plan<'_> {
     /// 9 lights (a vectorised maximum; the fused kernel takes the same), else the 90th percentile
     /// by selection ([`readings::shadow_reference`]).
     #[inline(always)]
-    pub(super) fn shadow_thresholds(&self, n: usize, s: &mut Scratch) {
+    pub(in crate::solve) fn shadow_thresholds(&self, n: usize, s: &mut Scratch) {
         let top = &mut s.top[..n];
         if readings::reference_is_brightest(self.k) {
             top.fill(f32::NEG_INFINITY);
@@ -57,7 +57,7 @@ impl Plan<'_> {
                 }
             }
         } else {
-            let mut usable = [0.0f32; super::MAX_LIGHTS];
+            let mut usable = [0.0f32; MAX_LIGHTS];
             for (j, t) in top.iter_mut().enumerate() {
                 let mut m = 0;
                 for i in 0..self.k {
@@ -80,11 +80,11 @@ impl Plan<'_> {
     /// A fused step whose [`fused::STEP`] pixels at `p` all use the lights `bits`, solved in
     /// registers with that subset's columns ([`fused::subset_step`]) into `out`. Returns false,
     /// having counted nothing, when the chunk path must solve the step instead: with
-    /// [`Method::Robust`](super::Method::Robust), when a pixel's subset fit does not agree ([`super::fit::Fit::agrees`]).
+    /// [`Method::Robust`](crate::solve::Method::Robust), when a pixel's subset fit does not agree ([`super::fit::Fit::agrees`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn solve_step_subset<T: fused::Lanes>(
+    pub(in crate::solve) fn solve_step_subset<T: fused::Lanes>(
         &self,
         bits: u32,
         rows: &[&[T]],
@@ -129,7 +129,7 @@ impl Plan<'_> {
     }
 
     /// The bitmask of usable lights of pixel `j` (robust mode, after [`Self::count_dropped`]).
-    pub(super) fn usable_bits(&self, j: usize, s: &Scratch) -> u128 {
+    pub(in crate::solve) fn usable_bits(&self, j: usize, s: &Scratch) -> u128 {
         let threshold = s.top[j];
         (0..self.k).fold(0u128, |bits, i| {
             let ok = s.r[i * CHUNK + j] >= threshold && s.sat[i * CHUNK + j] == 0;
@@ -139,7 +139,7 @@ impl Plan<'_> {
 
     /// Normal, albedo, confidence and lights used for pixel `j`, solved from its usable lights,
     /// and the residual factor of that fit (0 when invalid) that [`super::fit::Fit::agrees`] tests.
-    pub(super) fn finish_subset(
+    pub(in crate::solve) fn finish_subset(
         &self,
         j: usize,
         s: &Scratch,
@@ -169,13 +169,13 @@ impl Plan<'_> {
     }
 
     /// [`Self::finish_subset`] for the `count` pixels listed in `s.pending` (robust, at most
-    /// [`DENSE_MAX_LIGHTS`](super::DENSE_MAX_LIGHTS) lights, `s.bits` filled), written to `out`: the pixels are grouped by
+    /// [`DENSE_MAX_LIGHTS`](crate::solve::DENSE_MAX_LIGHTS) lights, `s.bits` filled), written to `out`: the pixels are grouped by
     /// their subset (usually one or two per chunk, as shadows are coherent) and each group is
     /// solved with that subset's columns in registers, in the same operations and order as
     /// [`Self::solve_subset`], so the bits match the per-pixel path. With
-    /// [`Method::Robust`](super::Method::Robust), the pixels whose subset fit
+    /// [`Method::Robust`](crate::solve::Method::Robust), the pixels whose subset fit
     /// [`super::fit::Fit::agrees`] rejects are then fitted one at a time.
-    pub(super) fn finish_subsets<A: AlbedoTexel>(
+    pub(in crate::solve) fn finish_subsets<A: AlbedoTexel>(
         &self,
         mut count: usize,
         s: &mut Scratch,
@@ -217,7 +217,7 @@ impl Plan<'_> {
 
     /// Solves the `m` pixels of `s.group`, whose usable lights are `bits`, into `out`; with a
     /// robust fit, lists those whose fit does not agree in `s.refit`.
-    pub(super) fn solve_group<A: AlbedoTexel>(
+    pub(in crate::solve) fn solve_group<A: AlbedoTexel>(
         &self,
         bits: u32,
         m: usize,
@@ -285,16 +285,22 @@ impl Plan<'_> {
 
     /// The confidence factors of a pixel solved from `used` lights forming `subset`: the
     /// fraction of lights used times `min(1, cond(L_all) / cond(L_used))`.
-    pub(super) fn subset_weight(&self, used: usize, subset: &SubsetSolve) -> f32 {
+    pub(in crate::solve) fn subset_weight(&self, used: usize, subset: &SubsetSolve) -> f32 {
         used as f32 / self.k as f32 * (self.full.condition / subset.condition).min(1.0) as f32
     }
 
-    pub(super) fn full_bits(&self) -> u128 {
-        super::all_lights(self.k)
+    pub(in crate::solve) fn full_bits(&self) -> u128 {
+        crate::solve::all_lights(self.k)
     }
 
     /// `g = P_S r_S` and `sum r_S^2` for pixel `j` over the lights in `bits`.
-    pub(super) fn solve_subset(&self, j: usize, bits: u128, subset: &SubsetSolve, s: &Scratch) -> ([f32; 3], f32) {
+    pub(in crate::solve) fn solve_subset(
+        &self,
+        j: usize,
+        bits: u128,
+        subset: &SubsetSolve,
+        s: &Scratch,
+    ) -> ([f32; 3], f32) {
         let (mut g, mut rr) = ([0.0f32; 3], 0.0f32);
         let used = (0..self.k).filter(|i| bits >> i & 1 == 1);
         for (i, c) in used.zip(&subset.cols) {
@@ -306,7 +312,7 @@ impl Plan<'_> {
     }
 
     /// Per-channel least-squares albedo `sum r_ci d_i / sum d_i^2`, `d_i = n . L_i`, over `bits`.
-    pub(super) fn rgb_albedo(&self, j: usize, bits: u128, normal: Vec3, s: &Scratch) -> Vec3 {
+    pub(in crate::solve) fn rgb_albedo(&self, j: usize, bits: u128, normal: Vec3, s: &Scratch) -> Vec3 {
         let (mut num, mut den) = (Vec3::ZERO, 0.0f32);
         for (i, l) in self.lights.iter().enumerate().filter(|(i, _)| bits >> i & 1 == 1) {
             let d = normal.dot(*l);

@@ -17,7 +17,7 @@
 use glam::Vec3;
 use skinkit_maps::Grid;
 
-use crate::synthesis::{Synthesis, Texels, synthesize_unguarded};
+use super::{Synthesis, Texels, synthesize_unguarded};
 use crate::{Result, SynthConfig, metrics};
 
 /// What the guards measured on an output, as a synthesis returns it.
