@@ -3,10 +3,11 @@
 //! [`super::build`] computes what the same graph asks for.
 
 use super::graph::PassGraph;
+use super::{Context, Described};
 use crate::gpu::OutputFormat as TargetFormat;
 use crate::load::Loaded;
 use crate::scene::Scene;
-use crate::shading::{RenderInputs, Texture};
+use crate::shading::Texture;
 use crate::skin::tsd;
 
 /// One GPU resource a plan needs.
@@ -83,28 +84,6 @@ pub fn plan(scene: &Scene, loaded: &Loaded, graph: &PassGraph, width: u32, heigh
         })
         .collect();
     Plan { passes, resources, notes: graph.notes.clone() }
-}
-
-/// What a pass explains itself from.
-pub(crate) struct Context<'a> {
-    pub(crate) scene: &'a Scene,
-    pub(crate) inputs: &'a RenderInputs,
-    pub(crate) graph: &'a PassGraph,
-}
-
-/// What a pass does, reads and writes (resource names of [`Plan::resources`]).
-pub(crate) struct Described {
-    pub(crate) what: String,
-    pub(crate) reads: Vec<String>,
-    pub(crate) writes: Vec<String>,
-}
-
-impl Described {
-    /// A pass doing `what`, reading and writing the resources named.
-    pub(crate) fn new(what: impl Into<String>, reads: &[&str], writes: &[&str]) -> Described {
-        let names = |list: &[&str]| list.iter().map(|s| s.to_string()).collect();
-        Described { what: what.into(), reads: names(reads), writes: names(writes) }
-    }
 }
 
 /// Every GPU resource of `graph`, once.

@@ -40,7 +40,9 @@ pub use uniforms::{UNIFORM_BYTES, UniformLayout, uniform_layouts};
 
 use crate::effect::Effect;
 use crate::gpu::{Gpu, Target};
+use crate::scene::Scene;
 use crate::shading::RenderInputs;
+use graph::PassGraph;
 use setup::{Features, SkinSetup};
 
 /// The WGSL source of the mesh passes: the closed-form LUT fits, the shared part, then each
@@ -77,7 +79,7 @@ pub(crate) trait Pass: Send + Sync {
     fn name(&self) -> String;
 
     /// What it does, reads and writes, for `--explain`.
-    fn explain(&self, context: &explain::Context) -> explain::Described;
+    fn explain(&self, context: &Context) -> Described;
 
     /// Whether it is one of texture-space diffusion's passes, which frustum and distance culling
     /// skip together.
@@ -119,6 +121,28 @@ impl<'a> FrameEncoder<'a> {
     /// What this pass prepared ([`Pass::prepare`]), as the type it prepared.
     pub(crate) fn state<T: 'static>(&self) -> &'a T {
         self.state.and_then(|s| s.downcast_ref::<T>()).expect("a pass reads the state it prepared")
+    }
+}
+
+/// What a pass explains itself from.
+pub(crate) struct Context<'a> {
+    pub(crate) scene: &'a Scene,
+    pub(crate) inputs: &'a RenderInputs,
+    pub(crate) graph: &'a PassGraph,
+}
+
+/// What a pass does, reads and writes (resource names of [`explain::Plan::resources`]).
+pub(crate) struct Described {
+    pub(crate) what: String,
+    pub(crate) reads: Vec<String>,
+    pub(crate) writes: Vec<String>,
+}
+
+impl Described {
+    /// A pass doing `what`, reading and writing the resources named.
+    pub(crate) fn new(what: impl Into<String>, reads: &[&str], writes: &[&str]) -> Described {
+        let names = |list: &[&str]| list.iter().map(|s| s.to_string()).collect();
+        Described { what: what.into(), reads: names(reads), writes: names(writes) }
     }
 }
 

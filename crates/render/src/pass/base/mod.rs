@@ -3,10 +3,9 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
 use super::graph::PassGraph;
 use super::setup::{DiffuseMode, Features, SkinSetup};
-use super::{FrameEncoder, Pass, Shape};
+use super::{Context, Described, FrameEncoder, Pass, Shape};
 use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, Table, depth_state};
 use crate::shading::{MAX_LOBES, RenderInputs, SpecularMode, ToneCurve};
 use crate::skin::tsd;

@@ -4,10 +4,9 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
 use super::light_map::UNWRITTEN_TEXEL;
 use super::setup::{self, TsdSetup};
-use super::{FrameEncoder, Pass, Shape};
+use super::{Context, Described, FrameEncoder, Pass, Shape};
 use crate::gpu::{Gpu, colour_attachment};
 use crate::skin::options::TsdKernel;
 use crate::skin::tsd;

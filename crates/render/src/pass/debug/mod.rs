@@ -8,8 +8,7 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
-use super::{FrameEncoder, Pass, PassState, Shape, Upload, geometry};
+use super::{Context, Described, FrameEncoder, Pass, PassState, Shape, Upload, geometry};
 use crate::effect::Effect;
 use crate::gpu::{Gpu, OutputFormat, depth_state};
 use crate::shading::Vertex;

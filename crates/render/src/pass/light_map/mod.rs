@@ -3,9 +3,8 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
 use super::setup::{self, TsdSetup};
-use super::{FrameEncoder, Pass, Shape};
+use super::{Context, Described, FrameEncoder, Pass, Shape};
 use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, STRETCH_FORMAT, colour_attachment, depth_attachment, depth_state};
 use crate::skin::tsd;
 

@@ -3,10 +3,9 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
 use super::setup::{Features, ShadowSetup};
 use super::textures::SceneTextures;
-use super::{FrameEncoder, Pass, Shape};
+use super::{Context, Described, FrameEncoder, Pass, Shape};
 use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, POSITION_BUFFER, depth_state, extent};
 
 /// The shadow map pass, drawn when the key light casts shadows.

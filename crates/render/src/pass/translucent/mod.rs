@@ -3,9 +3,8 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
 use super::setup::Features;
-use super::{FrameEncoder, Pass, Shape};
+use super::{Context, Described, FrameEncoder, Pass, Shape};
 use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, colour_attachment, depth_state};
 
 /// The translucent casters' pass, drawn after the shadow map when the scene has casters.

@@ -3,9 +3,8 @@
 
 use std::sync::Arc;
 
-use super::explain::{Context, Described};
 use super::setup::TsdSetup;
-use super::{FrameEncoder, Pass, Shape};
+use super::{Context, Described, FrameEncoder, Pass, Shape};
 use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, depth_attachment, depth_state};
 
 /// TSD's back-face pre-pass, first of its passes.
