@@ -195,8 +195,9 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let in_rig = |e: Error| context(session.rig.display().to_string(), e);
     // A photo count that does not fit the rig names the folder's skipped entries (issue 42, D17):
     // a FIFO among the photos is the likely missing one.
-    rig.expect_photos(session.photos.len())
-        .map_err(|e| in_rig(Error::InvalidInput(folder::with_skipped(e.to_string(), &session.skipped))))?;
+    rig.expect_photos(session.photos.len()).map_err(|e| {
+        in_rig(Error::InvalidInput(folder::with_skipped(skinkit_maps::error::one_line(&e), &session.skipped)))
+    })?;
     // Solver options first, so that every error of the solve below is the rig's.
     options.solve.validate()?;
     check_rig(&session.rig, &rig, session.ambient.as_deref(), &options.solve)?;
@@ -383,7 +384,7 @@ fn integrate_height(normals: &NormalMap, mm_per_pixel: Option<f64>) -> Result<Op
     match skinkit_height::integrate(normals, &HeightOptions { scale, ..HeightOptions::default() }) {
         Ok(height) => Ok(Some(height)),
         Err(skinkit_height::Error::NoValidTexel { .. }) => Ok(None),
-        Err(e) => Err(Error::InvalidInput(e.to_string())),
+        Err(e) => Err(Error::InvalidInput(skinkit_maps::error::one_line(&e))),
     }
 }
 

@@ -142,7 +142,7 @@ fn tagged<T: Serialize>(kind: &str, value: &T) -> String {
     json.to_string()
 }
 
-/// The error and its causes on one line, each cause once ([`skinkit_maps::error::one_line`]).
+/// The error and its causes on one line, joined with `: ` ([`skinkit_maps::error::one_line`]).
 pub(crate) fn one_line(error: &anyhow::Error) -> String {
     skinkit_maps::error::one_line(error.as_ref())
 }
@@ -171,34 +171,34 @@ mod tests {
         std::io::Error::from(kind)
     }
 
-    /// Issue 15, D10: each cause once, whether a library error embeds its source's text, exposes
-    /// it as `source()`, or a context names the same file as the error below it.
+    /// Issue 15, D10 and issue 38: each cause once, because each error says only its own part
+    /// (a context what was being done, a library error the file) and its cause is `source()`.
     #[test]
     fn d10_error_chains_say_each_cause_once() {
         let os = std::io::Error::from_raw_os_error(2);
         let text = os.to_string();
-        // A context naming the file over an error naming it again.
-        let e = anyhow::Error::new(skinkit_maps::Error::Io { path: "a.png".into(), error: os })
-            .context("cannot read photo a.png");
-        assert_eq!(one_line(&e), format!("cannot read photo a.png: {text}"));
-        // A context over an io::Error chain that repeats its text.
+        // A context saying what was being done over a library error naming the file.
+        let e = anyhow::Error::new(skinkit_maps::Error::Io { path: "a.png".into(), error: os }).context("photo 3");
+        assert_eq!(one_line(&e), format!("photo 3: a.png: {text}"));
+        // A context naming the file over an `io::Error`, which names none.
         let inner = anyhow::Error::new(io_error(std::io::ErrorKind::IsADirectory));
         let kind_text = inner.to_string();
-        let e = inner.context(format!("x.png: {kind_text}")).context("cannot write x.png");
-        assert_eq!(one_line(&e), format!("cannot write x.png: {kind_text}"));
+        let e = inner.context("cannot create out");
+        assert_eq!(one_line(&e), format!("cannot create out: {kind_text}"));
         // Unrelated causes are all kept, in order.
         let e = anyhow::anyhow!("bad value").context("field b").context("scene.toml");
         assert_eq!(one_line(&e), "scene.toml: field b: bad value");
     }
 
+    /// The printer matches no text: a part that overlaps the one before is kept whole (a context
+    /// must not repeat what its cause says; the printer does not hide it when one does).
     #[test]
     fn a_cause_is_not_dropped_for_a_partial_overlap() {
-        // "photo 1" ends the line, but the cause opens with "photo 12": nothing is dropped.
         let e = anyhow::anyhow!("photo 12: too dark").context("photo 1");
         assert_eq!(one_line(&e), "photo 1: photo 12: too dark");
         let e = anyhow::anyhow!("2: too dark").context("light 12");
         assert_eq!(one_line(&e), "light 12: 2: too dark");
         let r: Result<(), _> = Err(anyhow::anyhow!("a.png: gone")).context("mask a.png");
-        assert_eq!(one_line(&r.unwrap_err()), "mask a.png: gone");
+        assert_eq!(one_line(&r.unwrap_err()), "mask a.png: a.png: gone");
     }
 }

@@ -193,8 +193,7 @@ pub fn render_into(
 /// Stages `frame` in `set` as `file`: the seconds of the write.
 fn stage(frame: &Frame, file: &Path, format: scene::OutputFormat, set: &mut OutputSet) -> Result<f64> {
     let t = Instant::now();
-    set.write_file(file, |p| write_image(p, frame, format))
-        .with_context(|| format!("cannot write {}", file.display()))?;
+    set.write_file(file, |p| write_image(p, frame, format)).context("cannot write")?;
     Ok(t.elapsed().as_secs_f64())
 }
 

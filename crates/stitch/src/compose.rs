@@ -367,13 +367,14 @@ fn synthesis_error(
 ) -> Error {
     let region = &layout.regions[i];
     Error::InvalidParameter(format!(
-        "{}: region `{}`: cannot synthesise {}x{} from its {ew}x{eh} exemplar (after resampling to {} mm per texel; exemplar_mm_per_texel = {}): {e}",
+        "{}: region `{}`: cannot synthesise {}x{} from its {ew}x{eh} exemplar (after resampling to {} mm per texel; exemplar_mm_per_texel = {}): {}",
         layout.origin.display(),
         region.name,
         rect.width,
         rect.height,
         mm,
-        region.exemplar_mm_per_texel
+        region.exemplar_mm_per_texel,
+        skinkit_maps::error::one_line(&e)
     ))
 }
 

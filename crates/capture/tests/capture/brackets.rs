@@ -143,7 +143,7 @@ fn a_rig_with_exposures_merges_the_session_brackets() {
     // Brackets missing from the folder: the count names the brackets.
     std::fs::remove_file(bracketed.path().join("24.png")).unwrap();
     let e = session::capture(&Session::from_dir(bracketed.path()).unwrap(), &CaptureOptions::default(), &|_| {})
-        .unwrap_err()
-        .to_string();
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("rig has 8 lights (24 photos with their brackets) but 23 photos were given"), "{e}");
 }

@@ -46,7 +46,7 @@ fn d9_a_photo_stack_over_the_memory_limit_is_refused_before_decoding() {
     let by_hand = 20 * px + (8 * px).max(12 * px);
     assert_eq!(session::memory_estimate(&files, None, &options).unwrap(), by_hand);
     let (result, peak) = peak_during(|| session::capture(&files, &options, &|_| {}));
-    let e = result.unwrap_err().to_string();
+    let e = result.map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
     assert!(e.contains("needs an estimated 8192 MiB") && e.contains("memory limit of 4096 MiB"), "{e}");
     assert!(e.contains(&dir.path().display().to_string()), "names the photos' folder: {e}");
     assert!(peak < 8 * MIB, "{} MiB held before refusing", peak / MIB);
@@ -197,7 +197,7 @@ fn d7_rig_check_refuses_exactly_what_capture_refuses() {
             assert_eq!(checked.is_ok(), captured.is_ok(), "condition {c}, limit {max_condition}");
             assert_eq!(checked.is_ok(), c <= max_condition, "condition {c}, limit {max_condition}");
             if let Err(e) = checked {
-                let e = e.to_string();
+                let e = skinkit_maps::error::one_line(&e);
                 assert!(e.contains(&path.display().to_string()) && e.contains("--max-condition"), "{e}");
             }
         }
@@ -210,7 +210,9 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rig.toml");
     let many = Rig::turntable(200, 45.0, 1.0).unwrap();
-    let e = session::check_rig(&path, &many, None, &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &many, None, &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("200 lights") && e.contains("at most 128") && e.contains("rig.toml"), "{e}");
     // Refused before any photo is read: these 200 photos are headers without pixels.
     many.save(&path).unwrap();
@@ -222,14 +224,20 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
         })
         .collect();
     let files = Session { rig: path.clone(), photos, mask: None, ambient: None, truth: None, skipped: Vec::new() };
-    let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
+    let e = session::capture(&files, &CaptureOptions::default(), &|_| {})
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("at most 128"), "{e}");
 
     let with_ambient = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(dir.path().join("nope.png")));
-    let e = session::check_rig(&path, &with_ambient, None, &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &with_ambient, None, &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("ambient") && e.contains("nope.png") && e.contains("rig.toml"), "{e}");
     let given = dir.path().join("gone.png");
-    let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("ambient frame") && e.contains("gone.png"), "the flag's file overrides the rig's: {e}");
 }
 
@@ -241,6 +249,8 @@ fn d13_an_ambient_that_is_not_an_image_is_refused_by_the_rig_check() {
     let path = dir.path().join("rig.toml");
     let rig = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(path.clone()));
     rig.save(&path).unwrap();
-    let e = session::check_rig(&path, &rig, None, &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &rig, None, &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("field `ambient` (the ambient frame)") && e.contains("not a readable image"), "{e}");
 }

@@ -143,7 +143,7 @@ fn malformed_raw_photos_are_errors_naming_the_file() {
     for (what, data) in cases {
         std::fs::write(dir.path().join("03.dng"), &data).unwrap();
         let files = Session::from_dir(dir.path()).unwrap();
-        let e = session::capture(&files, &options, &|_| {}).unwrap_err().to_string();
+        let e = session::capture(&files, &options, &|_| {}).map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
         eprintln!("{what}: {e}");
         assert!(e.contains("03.dng"), "{what}: {e}");
         if what == "oversized" {

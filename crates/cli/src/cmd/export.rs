@@ -101,11 +101,10 @@ fn gltf(args: GltfArgs, out: &Output) -> Result<i32> {
     for (i, file) in exported.files.iter().enumerate() {
         // The main file is `--out` as spelt (`HEAD.GLB` stays so); side files are named by the library.
         let path = if i == 0 { args.out.clone() } else { dir.join(&file.name) };
-        set.write_file(&path, |p| write_bytes(p, &file.bytes))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        set.write_file(&path, |p| write_bytes(p, &file.bytes)).context("cannot write")?;
         files.push(WrittenFile { path: path.display().to_string(), bytes: file.bytes.len() });
     }
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
+    out.swept(&set.commit().context("cannot write")?);
     let report = Report {
         scene: args.scene.display().to_string(),
         container,

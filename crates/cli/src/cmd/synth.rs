@@ -188,18 +188,16 @@ impl MapArgs {
     fn read(&self, path: &Path) -> Result<Map> {
         let limits = Limits::default();
         if self.is_color() {
-            Map::read_color(path, Transfer::from(self.transfer), &limits)
-                .with_context(|| format!("cannot read colour image {}", path.display()))
+            Map::read_color(path, Transfer::from(self.transfer), &limits).context("cannot read the colour image")
         } else {
-            Map::read_normals(path, self.encoding()?, &limits)
-                .with_context(|| format!("cannot read normal map {}", path.display()))
+            Map::read_normals(path, self.encoding()?, &limits).context("cannot read the normal map")
         }
     }
 
     /// Adds `path` to the output set and writes `map` there.
     fn write(&self, set: &mut OutputSet, path: &Path, map: &Map) -> Result<()> {
         let encoding = self.encoding()?;
-        set.write_file(path, |p| map.write(p, encoding)).with_context(|| format!("cannot write {}", path.display()))
+        set.write_file(path, |p| map.write(p, encoding)).context("cannot write")
     }
 }
 
@@ -385,7 +383,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
     if let Some(path) = &args.coords {
-        let context = || format!("cannot write coordinate map {}", path.display());
+        let context = || "cannot write the coordinate map";
         set.write_file(path, |p| coords::write(p, &coords)).with_context(context)?;
     }
     let height_map = match (&args.height, &output) {
@@ -410,7 +408,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     if let Some(path) = &args.report {
         pipeline::write_json_file(&mut set, path, &report)?;
     }
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", out_path.display()))?);
+    out.swept(&set.commit().context("cannot write")?);
     out.result(&report, || human(&report));
     Ok(invalid_exit(out, out_path, exemplar_path, invalid_texels, size))
 }
@@ -506,7 +504,7 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let replayed = source.replay(&coords).with_context(context)?;
     let mut set = OutputSet::files();
     args.map.write(&mut set, &args.out, &replayed)?;
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
+    out.swept(&set.commit().context("cannot write")?);
     let (width, height) = coords.size();
     let report = ReplayReport {
         coords: args.coords.display().to_string(),

@@ -374,21 +374,19 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
     let seconds = start.elapsed().as_secs_f64();
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let normal = dir.join("normal.png");
-    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16)
-        .with_context(|| format!("cannot write {}", normal.display()))?;
+    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16).context("cannot write")?;
     let albedo = dir.join("albedo.png");
     match &captured.solution.albedo {
         AlbedoMap::Gray(map) => io::write_scalar_png(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
         AlbedoMap::Rgb(map) => io::write_color_map(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
     }
-    .with_context(|| format!("cannot write {}", albedo.display()))?;
+    .context("cannot write")?;
     let coords_path = dir.join("coords.png");
-    coords::write(&coords_path, &grown.coords)
-        .with_context(|| format!("cannot write coordinate map {}", coords_path.display()))?;
+    coords::write(&coords_path, &grown.coords).context("cannot write the coordinate map")?;
     // The grown map's height, periodic so it tiles, in mm at the capture's pixel size.
     let mut set = skinkit_maps::OutputSet::files();
     crate::pipeline::grown_height(&mut set, &dir.join("height.exr"), &grown.normals, captured.report.mm_per_pixel)?;
-    set.commit().with_context(|| format!("cannot write {}", dir.join("height.exr").display()))?;
+    set.commit().context("cannot write")?;
     let quality = QualityReport::new(
         &Map::Normal(exemplar.clone()),
         &Map::Normal(grown.normals),
