@@ -81,7 +81,7 @@ fn family(method: &Method) -> &'static str {
 ///
 /// # Errors
 /// [`Error::Render`] when a scene cannot be loaded or drawn although an adapter was found.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let plan = plan(config);
     let sizes = plan.size.map_or("each scene's own size".to_owned(), |(w, h)| format!("{w}x{h}"));
     let setup = format!(
@@ -103,14 +103,14 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     };
     report.setup.push_str(&format!("; adapter {}", renderer.adapter_name()));
     let total = plan.scenes.len() * (plan.methods.len() + 1);
-    progress(0, total);
+    let tally = crate::Tally::start(progress, Stage::Rendering, total);
     let mut done = 0;
     for (file, short) in &plan.scenes {
         let scene_path = config.samples.join(format!("scenes/{file}.toml"));
         let prefix = if plan.scenes.len() > 1 { format!("{short}: ") } else { String::new() };
         let step = || {
             done += 1;
-            progress(done, total);
+            tally.done(done);
         };
         report.choices.extend(measure_scene(&renderer, &scene_path, &plan, &prefix, step)?);
     }

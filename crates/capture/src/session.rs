@@ -20,6 +20,7 @@ use serde::Serialize;
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::limits;
 use skinkit_maps::normal::AngularStats;
+use skinkit_maps::progress::Progress;
 use skinkit_maps::raw::RawMode;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 
@@ -182,12 +183,13 @@ struct Inputs {
 
 /// Reads every input of `session` and checks they fit together, solves (near point lights when
 /// the rig gives every lamp's position and the pixel size, else distant lights), detrends, and
-/// measures the result. Writes nothing. `progress` is told each stage as it starts.
+/// measures the result. Writes nothing. `progress` is told each [`Stage`] by name as it starts
+/// (stages of unknown length, 0 steps) and the end of the last.
 ///
 /// # Errors
 /// When a file is unreadable or the inputs do not fit together (rig and photo count, sizes,
 /// formats); the message names the file.
-pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(Stage) + Sync)) -> Result<Captured> {
+pub fn capture(session: &Session, options: &CaptureOptions, progress: &dyn Progress) -> Result<Captured> {
     let start = Instant::now();
     let mut timings = Timings::default();
     // Rig::load's errors name the rig file; later rig errors get it as context, once.
@@ -206,22 +208,22 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let ambient = ambient_frame(session, &rig);
     check_memory(session, &rig, ambient.as_ref().map(|(p, _)| p.as_path()), options)?;
 
-    progress(Stage::Decode);
+    progress.start(Stage::Decode.name(), 0);
     let Stacked { stack, names, corrections, scale, truth } =
         stacked(session, &rig, ambient.as_ref(), options, &mut timings)?;
     let (width, height) = (stack.width(), stack.height());
 
-    progress(Stage::Solve);
+    progress.start(Stage::Solve.name(), 0);
     let t = Instant::now();
     let (mut solution, near_lights) = solved(stack, &rig, options, scale).map_err(in_rig)?;
     timings.solve = t.elapsed().as_secs_f64();
 
-    progress(Stage::Detrend);
+    progress.start(Stage::Detrend.name(), 0);
     let t = Instant::now();
     detrend::detrend(&mut solution.normals, options.detrend_block);
     timings.detrend = t.elapsed().as_secs_f64();
 
-    progress(Stage::Statistics);
+    progress.start(Stage::Statistics.name(), 0);
     let t = Instant::now();
     let tilt = tilt_stats(&solution.normals);
     let error_vs_truth =
@@ -230,11 +232,12 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     warnings.extend(unsolved_warning(invalid, width * height));
     timings.stats = t.elapsed().as_secs_f64();
 
-    progress(Stage::Height);
+    progress.start(Stage::Height.name(), 0);
     let t = Instant::now();
     let mm_per_pixel = rig.mm_per_pixel().map(f64::from);
     let heights = integrate_height(&solution.normals, mm_per_pixel)?;
     timings.height = t.elapsed().as_secs_f64();
+    progress.finish();
     timings.total = start.elapsed().as_secs_f64();
     let solver = format!("{:?}{}", options.solve.method, if near_lights { " (near lights)" } else { "" });
     let report = CaptureReport {
@@ -271,7 +274,7 @@ fn solved(stack: PhotoStack, rig: &Rig, options: &CaptureOptions, scale: f32) ->
     let mut solution = if near_lights {
         near::solve(&stack, rig, &options.solve)?
     } else {
-        solve::solve(&stack, rig, &options.solve, &solve::no_progress)?
+        solve::solve(&stack, rig, &options.solve, &solve::NoProgress)?
     };
     drop(stack);
     unscale_albedo(&mut solution.albedo, scale);

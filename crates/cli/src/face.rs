@@ -142,12 +142,12 @@ pub fn build(
     let mut capture = |dir: &Path, region: &str| -> Result<NormalMap, skinkit_stitch::face::BoxError> {
         out.note(format!("capturing {} for region `{region}`", dir.display()));
         let files = Session::from_dir(dir)?;
-        Ok(session::capture(&files, &solve, &|_| {})?.solution.normals)
+        Ok(session::capture(&files, &solve, &skinkit_maps::progress::NoProgress)?.solution.normals)
     };
     let bar = out.progress(layout.regions.len() as u64, "regions");
-    let face = Face::build(layout, &options.face_options(out.memory_limit()), cache, &mut capture, &|_| bar.inc(1))
+    let face = Face::build(layout, &options.face_options(out.memory_limit()), cache, &mut capture, &bar)
         .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
-    bar.finish_and_clear();
+    bar.clear();
     Ok(face)
 }
 

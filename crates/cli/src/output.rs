@@ -2,11 +2,13 @@
 //! to stderr, nothing but errors with `--quiet`.
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 use skinkit_maps::limits;
+use skinkit_maps::progress::Progress;
 
 /// Flags every subcommand takes.
 #[derive(clap::Args, Debug, Clone)]
@@ -59,21 +61,22 @@ impl Output {
         self.memory_limit
     }
 
-    /// A progress bar on stderr over `len` steps, hidden with `--quiet`/`--json` or off a terminal.
-    pub fn progress(&self, len: u64, message: &str) -> ProgressBar {
-        let bar = if self.quiet || self.json {
-            ProgressBar::hidden()
-        } else {
-            ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr())
-        };
-        bar.set_style(
-            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        bar.set_message(message.to_owned());
-        bar.enable_steady_tick(Duration::from_millis(200));
-        bar
+    /// A progress bar on stderr over `len` steps, hidden with `--quiet`/`--json` or off a terminal;
+    /// each stage a library starts takes it over (its name and length).
+    pub fn progress(&self, len: u64, message: &str) -> Bar {
+        let visible = !self.quiet && !self.json;
+        Bar {
+            current: Mutex::new(BarState { bar: new_bar(visible, len, message), started: true }),
+            visible,
+            keep: false,
+        }
+    }
+
+    /// A progress bar per stage a library starts, each left on stderr, done, when the next starts
+    /// (synthesis shows every pyramid level so).
+    pub fn stage_bars(&self) -> Bar {
+        let visible = !self.quiet && !self.json;
+        Bar { current: Mutex::new(BarState { bar: ProgressBar::hidden(), started: false }), visible, keep: true }
     }
 
     /// A message for people, on stderr, unless quiet or json.
@@ -131,6 +134,83 @@ impl Output {
             println!("{}", human());
         }
     }
+}
+
+/// The one [`Progress`] of the command line, over indicatif: what a library reports and what the
+/// CLI's own loops count (`advance`) both move it.
+pub struct Bar {
+    current: Mutex<BarState>,
+    visible: bool,
+    /// A new bar per stage, the finished ones left on screen ([`Output::stage_bars`]).
+    keep: bool,
+}
+
+struct BarState {
+    bar: ProgressBar,
+    /// Whether `bar` is a stage's (else a placeholder before the first stage).
+    started: bool,
+}
+
+impl Bar {
+    fn bar(&self) -> ProgressBar {
+        self.current.lock().expect("progress bar lock").bar.clone()
+    }
+
+    /// Removes the bar from the terminal (the job is done).
+    pub fn clear(&self) {
+        self.bar().finish_and_clear();
+    }
+
+    /// Runs `f` with the bar hidden, so that lines `f` prints are not drawn over.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        self.bar().suspend(f)
+    }
+}
+
+impl Progress for Bar {
+    fn start(&self, name: &str, len: u64) {
+        let mut state = self.current.lock().expect("progress bar lock");
+        if self.keep {
+            if state.started {
+                state.bar.finish();
+            }
+            *state = BarState { bar: new_bar(self.visible, len, name), started: true };
+        } else {
+            state.bar.set_message(name.to_owned());
+            state.bar.set_length(len);
+            state.bar.set_position(0);
+        }
+    }
+
+    fn advance(&self, steps: u64) {
+        self.bar().inc(steps);
+    }
+
+    fn finish(&self) {
+        let bar = self.bar();
+        if self.keep {
+            bar.finish();
+        } else if let Some(len) = bar.length() {
+            bar.set_position(len);
+        }
+    }
+}
+
+/// A bar over `len` steps labelled `message`, drawn on stderr when `visible` (and a terminal).
+fn new_bar(visible: bool, len: u64, message: &str) -> ProgressBar {
+    let bar = if visible {
+        ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr())
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(message.to_owned());
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
 }
 
 /// `value` as one line of JSON with a `record` field naming its kind.

@@ -16,6 +16,7 @@ use skinkit_render::scene::{self, Scene};
 use skinkit_render::skin::compare::Method;
 
 use crate::output::Output;
+use skinkit_maps::progress::Progress;
 
 /// One written image.
 #[derive(Clone, Debug, Serialize)]
@@ -169,9 +170,9 @@ pub fn render_into(
         let render_seconds = t.elapsed().as_secs_f64();
         let write_seconds = stage(&frame, &file, format, set)?;
         images.push(Image { path: file.display().to_string(), camera: c, frame: f, render_seconds, write_seconds });
-        bar.inc(1);
+        bar.advance(1);
     }
-    bar.finish_and_clear();
+    bar.clear();
     let times = prepared.times();
     Ok(RenderReport {
         scene: job.scene.display().to_string(),

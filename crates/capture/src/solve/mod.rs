@@ -97,7 +97,7 @@ use skinkit_maps::{Grid, NormalMap, Transfer};
 pub use crate::readings::SolveStats;
 use crate::readings::{LUMA, MIN_ALBEDO};
 pub(crate) use chunk::fresh_zeroed_vec3;
-pub use config::{Method, Progress, SolveConfig, no_progress};
+pub use config::{Method, NoProgress, Progress, SolveConfig};
 pub use noise::NoiseFloor;
 use plan::Plan;
 pub use solution::{AlbedoMap, Solution};

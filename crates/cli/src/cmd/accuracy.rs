@@ -93,12 +93,8 @@ pub fn to_dir(config: &Config, stages: &[Stage], dir: &Path, out: &Output) -> Re
 /// One stage under its progress bar; a skipped stage is noted.
 fn measure_stage(stage: Stage, config: &Config, out: &Output) -> Result<StageReport> {
     let bar = out.progress(0, stage.name());
-    let progress = |_: Stage, done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
-    let report = skinkit_accuracy::measure(stage, config, &progress).with_context(|| format!("stage {stage}"))?;
-    bar.finish_and_clear();
+    let report = skinkit_accuracy::measure(stage, config, &bar).with_context(|| format!("stage {stage}"))?;
+    bar.clear();
     if let Some(reason) = &report.skipped {
         out.warn(format!("{stage}: skipped: {reason}"));
     } else {

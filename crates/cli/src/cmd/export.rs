@@ -89,12 +89,9 @@ fn gltf(args: GltfArgs, out: &Output) -> Result<i32> {
     let dir = args.out.parent().map(Path::to_path_buf).unwrap_or_default();
     check_outputs(&args, &scene, &dir, &stem, container)?;
     let options = ExportOptions { container, stem, normal_bits: args.normal_bits };
-    let bar = out.progress(5, "export");
-    let exported = export::export(&scene, &options, &|stage| {
-        bar.set_message(stage.to_owned());
-        bar.inc(1);
-    })?;
-    bar.finish_and_clear();
+    let bar = out.progress(0, "export");
+    let exported = export::export(&scene, &options, &bar)?;
+    bar.clear();
     exported.summary.warnings.iter().for_each(|w| out.warn(w));
     let mut set = OutputSet::files();
     let mut files = Vec::new();
