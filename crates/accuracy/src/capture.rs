@@ -54,7 +54,7 @@ fn plan(config: &Config) -> Plan {
 ///
 /// # Errors
 /// When the mold cannot be generated or photographed, or a solve is refused.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let plan = plan(config);
     let field = SkinParams::cheek(plan.side, plan.side, config.seed).generate()?;
     let setup = format!(
@@ -66,24 +66,24 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     );
     let mut report = StageReport::new(Stage::Capture, setup, "mean angular error (deg)", "seconds");
     let total = plan.lights.len() * plan.noise.len() * SOLVERS.len() + FLAT_CASES.len() + photos::CASES.len();
-    progress(0, total);
+    let tally = crate::Tally::start(progress, Stage::Capture, total);
     for &noise in &plan.noise {
         for &k in &plan.lights {
             let (stack, rig) = photograph(&field, k, noise, config.seed)?;
             for (name, method) in SOLVERS {
                 let choice = solve_choice(&stack, &rig, &field.normals, (name, method), k, noise, config.runs())?;
                 report.choices.push(choice);
-                progress(report.choices.len(), total);
+                tally.done(report.choices.len());
             }
         }
     }
     for case in FLAT_CASES {
         report.choices.push(flat_choice(&field, case, config)?);
-        progress(report.choices.len(), total);
+        tally.done(report.choices.len());
     }
     for case in photos::CASES {
         report.choices.push(photos::choice(&field, case, config)?);
-        progress(report.choices.len(), total);
+        tally.done(report.choices.len());
     }
     Ok(report)
 }
@@ -145,7 +145,7 @@ fn flat_choice(field: &skinkit_heightfield::Heightfield, case: &str, config: &Co
             lit.clone()
         };
         let stack = PhotoStack::new(photos, (1..=K).map(|i| format!("{i:02}.png")).collect())?;
-        Ok(solve::solve(&stack, &rig, &solve_config, &solve::no_progress)?.normals)
+        Ok(solve::solve(&stack, &rig, &solve_config, &solve::NoProgress)?.normals)
     };
     let (normals, seconds) = median_of(config.runs(), run);
     let stats = normals?.angular_error(&field.normals, None)?;
@@ -204,7 +204,7 @@ fn solve_choice(
     runs: usize,
 ) -> Result<Choice> {
     let config = SolveConfig { method, ..SolveConfig::default() };
-    let (solution, seconds) = median_of(runs, || solve::solve(stack, rig, &config, &solve::no_progress));
+    let (solution, seconds) = median_of(runs, || solve::solve(stack, rig, &config, &solve::NoProgress));
     let solution = solution?;
     let stats = solution.normals.angular_error(truth, None)?;
     let pixels = (truth.width() * truth.height()).max(1) as f64;

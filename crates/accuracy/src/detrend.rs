@@ -31,7 +31,7 @@ fn blocks(config: &Config) -> (usize, Vec<usize>) {
 ///
 /// # Errors
 /// When the molds cannot be generated.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let (side, blocks) = blocks(config);
     let flat = SkinParams { bulge: None, tilt: [0.0, 0.0], ..SkinParams::nose(side, side, config.seed) };
     let sigma = 0.3 * flat.extent_mm().0;
@@ -47,7 +47,7 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
         config.seed, TILT[0], TILT[1]
     );
     let mut report = StageReport::new(Stage::Detrend, setup, "mean angular error (deg)", "seconds");
-    progress(0, blocks.len());
+    let tally = crate::Tally::start(progress, Stage::Detrend, blocks.len());
     let truth_detail = detail(&truth);
     for (i, &block) in blocks.iter().enumerate() {
         let (out, seconds) = median_of(config.runs(), || {
@@ -70,7 +70,7 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
             seconds,
             config.runs(),
         ));
-        progress(i + 1, blocks.len());
+        tally.done(i + 1);
     }
     Ok(report)
 }
@@ -177,7 +177,7 @@ mod tests {
     #[test]
     fn detrending_removes_the_tilt_of_a_tilted_mold() {
         let config = Config { quick: true, seed: 3, samples: std::path::PathBuf::new() };
-        let report = measure(&config, &|_, _| {}).unwrap();
+        let report = measure(&config, &skinkit_maps::progress::NoProgress).unwrap();
         let off = &report.choices[0];
         let on = report.choices.iter().find(|c| c.label == "50").unwrap();
         assert!(on.metric("residual tilt (deg)").unwrap() < 0.5 * off.metric("residual tilt (deg)").unwrap());

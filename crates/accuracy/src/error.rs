@@ -5,22 +5,22 @@
 #[non_exhaustive]
 pub enum Error {
     /// A sample input is missing or unreadable.
-    #[error("{0}")]
+    #[error(transparent)]
     Maps(#[from] skinkit_maps::Error),
     /// Synthetic molds could not be generated or photographed.
-    #[error("{0}")]
+    #[error(transparent)]
     Heightfield(#[from] skinkit_heightfield::Error),
     /// The capture library refused a rig or a solve.
-    #[error("{0}")]
+    #[error(transparent)]
     Capture(#[from] skinkit_capture::Error),
     /// The synthesis library refused a configuration.
-    #[error("{0}")]
+    #[error(transparent)]
     Synth(#[from] skinkit_synth::Error),
     /// The stitching library refused a layout or its options.
-    #[error("{0}")]
+    #[error(transparent)]
     Stitch(#[from] skinkit_stitch::Error),
     /// The height library refused a map.
-    #[error("{0}")]
+    #[error(transparent)]
     Height(#[from] skinkit_height::Error),
     /// A scene could not be loaded or drawn (an adapter was found).
     #[error("rendering: {0}")]

@@ -40,7 +40,7 @@ fn side(config: &Config) -> usize {
 ///
 /// # Errors
 /// When a field cannot be generated or a map cannot be integrated.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let n = side(config);
     let cases = cases(n, config.seed)?;
     let setup = format!(
@@ -53,12 +53,12 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     let mut report = StageReport::new(Stage::Height, setup, ERROR, "seconds");
     let integrators = [Integrator::Periodic, Integrator::Neumann, Integrator::Masked];
     let total = cases.len() * integrators.len();
-    progress(0, total);
+    let tally = crate::Tally::start(progress, Stage::Height, total);
     for case in &cases {
         let default = Integrator::choose(case.wraps, case.normals.valid_count().abs_diff(n * n));
         for integrator in integrators {
             report.choices.push(measure_one(config, case, integrator, integrator == default)?);
-            progress(report.choices.len(), total);
+            tally.done(report.choices.len());
         }
     }
     Ok(report)

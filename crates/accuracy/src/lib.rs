@@ -9,7 +9,8 @@
 //!   stage (plotters, the bitmap backend, text in the bundled font).
 //!
 //! Everything random takes the run's seed, so the same seed gives the same numbers (times apart).
-//! Libraries never print: progress goes out through a callback (`stage`, `done`, `total`).
+//! Libraries never print: progress goes out through [`skinkit_maps::progress::Progress`], a stage
+//! per measured stage counted in choices.
 
 pub mod capture;
 pub mod choice;
@@ -25,6 +26,8 @@ mod timing;
 
 use std::path::PathBuf;
 use std::time::Instant;
+
+use skinkit_maps::progress::Progress;
 
 pub use choice::{Choice, Metric, Report, Stage, StageReport};
 pub use error::{Error, Result};
@@ -47,25 +50,42 @@ impl Config {
     }
 }
 
-/// Reports progress: `(stage, done, total)` choices of that stage.
-pub type Progress<'a> = &'a (dyn Fn(Stage, usize, usize) + Sync);
+/// A stage's progress told as the count of choices done so far: [`Progress`] is told the steps
+/// each count adds.
+pub(crate) struct Tally<'a> {
+    progress: &'a dyn Progress,
+    told: std::cell::Cell<usize>,
+}
+
+impl<'a> Tally<'a> {
+    /// Starts `stage`'s progress over `total` choices.
+    pub(crate) fn start(progress: &'a dyn Progress, stage: Stage, total: usize) -> Self {
+        progress.start(stage.name(), total as u64);
+        Tally { progress, told: std::cell::Cell::new(0) }
+    }
+
+    /// `done` choices of the stage are done.
+    pub(crate) fn done(&self, done: usize) {
+        self.progress.advance(done.saturating_sub(self.told.replace(done)) as u64);
+    }
+}
 
 /// Measures one stage. A stage whose inputs are missing fails; a rendering stage without a GPU
 /// adapter is returned as skipped, with the reason.
 ///
 /// # Errors
 /// When a stage's inputs cannot be read or a library refuses a configuration.
-pub fn measure(stage: Stage, config: &Config, progress: Progress<'_>) -> Result<StageReport> {
-    let each = |done: usize, total: usize| progress(stage, done, total);
+pub fn measure(stage: Stage, config: &Config, progress: &dyn Progress) -> Result<StageReport> {
     let start = Instant::now();
     let mut report = match stage {
-        Stage::Capture => capture::measure(config, &each)?,
-        Stage::Detrend => detrend::measure(config, &each)?,
-        Stage::Height => height::measure(config, &each)?,
-        Stage::Synthesis => synthesis::measure(config, &each)?,
-        Stage::Stitching => stitching::measure(config, &each)?,
-        Stage::Rendering => rendering::measure(config, &each)?,
+        Stage::Capture => capture::measure(config, progress)?,
+        Stage::Detrend => detrend::measure(config, progress)?,
+        Stage::Height => height::measure(config, progress)?,
+        Stage::Synthesis => synthesis::measure(config, progress)?,
+        Stage::Stitching => stitching::measure(config, progress)?,
+        Stage::Rendering => rendering::measure(config, progress)?,
     };
+    progress.finish();
     report.wall_seconds = start.elapsed().as_secs_f64();
     Ok(report)
 }
@@ -79,7 +99,7 @@ mod tests {
     fn a_stage_is_deterministic_under_its_seed() {
         let config = |seed| Config { quick: true, seed, samples: PathBuf::new() };
         let numbers = |seed| -> Vec<Vec<Metric>> {
-            let report = measure(Stage::Capture, &config(seed), &|_, _, _| {}).unwrap();
+            let report = measure(Stage::Capture, &config(seed), &skinkit_maps::progress::NoProgress).unwrap();
             report.choices.into_iter().map(|c| c.metrics).collect()
         };
         let first = numbers(5);

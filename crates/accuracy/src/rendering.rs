@@ -14,6 +14,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use skinkit_maps::error::one_line;
 use skinkit_render::compare::{self, Method};
 use skinkit_render::renderer::{Encoding, Frame, FrameOptions, Prepared, Renderer, Shading};
 use skinkit_render::scene::Scene;
@@ -80,7 +81,7 @@ fn family(method: &Method) -> &'static str {
 ///
 /// # Errors
 /// [`Error::Render`] when a scene cannot be loaded or drawn although an adapter was found.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let plan = plan(config);
     let sizes = plan.size.map_or("each scene's own size".to_owned(), |(w, h)| format!("{w}x{h}"));
     let setup = format!(
@@ -102,14 +103,14 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     };
     report.setup.push_str(&format!("; adapter {}", renderer.adapter_name()));
     let total = plan.scenes.len() * (plan.methods.len() + 1);
-    progress(0, total);
+    let tally = crate::Tally::start(progress, Stage::Rendering, total);
     let mut done = 0;
     for (file, short) in &plan.scenes {
         let scene_path = config.samples.join(format!("scenes/{file}.toml"));
         let prefix = if plan.scenes.len() > 1 { format!("{short}: ") } else { String::new() };
         let step = || {
             done += 1;
-            progress(done, total);
+            tally.done(done);
         };
         report.choices.extend(measure_scene(&renderer, &scene_path, &plan, &prefix, step)?);
     }
@@ -125,10 +126,10 @@ fn measure_scene(
     mut step: impl FnMut(),
 ) -> Result<Vec<Choice>> {
     let render_err = |e: &dyn std::fmt::Display| Error::Render(format!("{}: {e}", path.display()));
-    let scene = Scene::load(path).map_err(|e| render_err(&e))?;
+    let scene = Scene::load(path).map_err(|e| render_err(&one_line(&e)))?;
     let size = plan.size.unwrap_or((scene.output.size[0], scene.output.size[1]));
     let plain = FrameOptions { shading: Shading::Plain, ..FrameOptions::new(size.0, size.1, Encoding::Display) };
-    let mut base = renderer.prepare(&scene, &plain).map_err(|e| render_err(&e))?;
+    let mut base = renderer.prepare(&scene, &plain).map_err(|e| render_err(&one_line(&e)))?;
     let base = frame_seconds(renderer, &mut base, &scene, plan.frames).map_err(|e| render_err(&e))?;
     let reference = Method::Reference { size: plan.reference };
     let (mut prepared, ref_ldr) = prepare_and_draw(renderer, &scene, reference, size).map_err(|e| render_err(&e))?;
@@ -168,8 +169,8 @@ fn prepare_and_draw(
     (w, h): (u32, u32),
 ) -> std::result::Result<(Prepared, Frame), String> {
     let options = FrameOptions { shading: Shading::Method(method), ..FrameOptions::new(w, h, Encoding::Display) };
-    let mut prepared = renderer.prepare(scene, &options).map_err(|e| format!("{}: {e}", method.name()))?;
-    let frame = renderer.draw(&mut prepared, &scene.cameras[0]).map_err(|e| e.to_string())?;
+    let mut prepared = renderer.prepare(scene, &options).map_err(|e| format!("{}: {}", method.name(), one_line(&e)))?;
+    let frame = renderer.draw(&mut prepared, &scene.cameras[0]).map_err(|e| one_line(&e))?;
     Ok((prepared, frame))
 }
 
@@ -180,9 +181,9 @@ fn draw_linear(
     prepared: &mut Prepared,
     size: (u32, u32),
 ) -> std::result::Result<Frame, String> {
-    renderer.retarget(scene, prepared, size, Encoding::Linear).map_err(|e| e.to_string())?;
-    let frame = renderer.draw(prepared, &scene.cameras[0]).map_err(|e| e.to_string())?;
-    renderer.retarget(scene, prepared, size, Encoding::Display).map_err(|e| e.to_string())?;
+    renderer.retarget(scene, prepared, size, Encoding::Linear).map_err(|e| one_line(&e))?;
+    let frame = renderer.draw(prepared, &scene.cameras[0]).map_err(|e| one_line(&e))?;
+    renderer.retarget(scene, prepared, size, Encoding::Display).map_err(|e| one_line(&e))?;
     Ok(frame)
 }
 
@@ -194,11 +195,11 @@ fn frame_seconds(
     scene: &Scene,
     frames: usize,
 ) -> std::result::Result<f64, String> {
-    renderer.draw(prepared, &scene.cameras[0]).map_err(|e| e.to_string())?;
+    renderer.draw(prepared, &scene.cameras[0]).map_err(|e| one_line(&e))?;
     let mut times = Vec::new();
     for _ in 0..frames.max(1) {
         let t = Instant::now();
-        let passes = renderer.draw_timed(prepared).map_err(|e| e.to_string())?;
+        let passes = renderer.draw_timed(prepared).map_err(|e| one_line(&e))?;
         times.push(match passes {
             Some(passes) => passes.iter().map(|(_, d)| d.as_secs_f64()).sum(),
             None => t.elapsed().as_secs_f64(),

@@ -53,7 +53,7 @@ fn plan(config: &Config) -> ((usize, usize), Vec<Try>) {
 ///
 /// # Errors
 /// When the layout or a mold's truth cannot be read, or a choice is refused.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let ((w, h), tries) = plan(config);
     let original = Layout::load(&config.samples.join("face/layout.toml"))?;
     let mut layout = original.with_size(w, h)?;
@@ -69,10 +69,10 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
         config.seed
     );
     let mut report = StageReport::new(Stage::Stitching, setup, "mean normal jump (deg)", "seconds");
-    progress(0, tries.len());
+    let tally = crate::Tally::start(progress, Stage::Stitching, tries.len());
     for t in &tries {
         report.choices.push(stitch(&layout, &exemplars, t, config)?);
-        progress(report.choices.len(), tries.len());
+        tally.done(report.choices.len());
     }
     Ok(report)
 }
@@ -112,7 +112,7 @@ fn stitch(layout: &Layout, exemplars: &[NormalMap], t: &Try, config: &Config) ->
         seed: config.seed,
         seam_band: 4,
     };
-    let composed = compose(layout, exemplars, &options, &|_: &str| {})?;
+    let composed = compose(layout, exemplars, &options, &skinkit_maps::progress::NoProgress)?;
     let s = &composed.seconds;
     let seconds = s.partition + s.blend + s.seams;
     let summary = &composed.seams.summary;

@@ -59,7 +59,7 @@ fn exemplar(config: &Config, side: usize) -> Result<Grid<Vec3>> {
 ///
 /// # Errors
 /// When the sample mold cannot be read or a configuration is refused.
-pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<StageReport> {
+pub fn measure(config: &Config, progress: &dyn skinkit_maps::progress::Progress) -> Result<StageReport> {
     let (ex_side, side, knobs_tried) = plan(config);
     let ex = exemplar(config, ex_side)?;
     let ex_normals = NormalMap::from_grid(ex.clone());
@@ -73,11 +73,11 @@ pub fn measure(config: &Config, progress: &dyn Fn(usize, usize)) -> Result<Stage
     );
     let mut report = StageReport::new(Stage::Synthesis, setup, "energy", "seconds");
     let total: usize = knobs_tried.iter().map(|(_, v)| v.len()).sum();
-    progress(0, total);
+    let tally = crate::Tally::start(progress, Stage::Synthesis, total);
     for (knob, tries) in &knobs_tried {
         for (label, synth) in tries {
             report.choices.push(grow(&ex, &ex_normals, knob, label, synth, config.runs())?);
-            progress(report.choices.len(), total);
+            tally.done(report.choices.len());
         }
     }
     Ok(report)
@@ -92,8 +92,7 @@ fn grow(
     synth: &SynthConfig,
     runs: usize,
 ) -> Result<Choice> {
-    let quiet = |_: usize, _: f32| {};
-    let (grown, seconds) = median_of(runs, || synthesize(ex, synth, &quiet));
+    let (grown, seconds) = median_of(runs, || synthesize(ex, synth, &skinkit_maps::progress::NoProgress));
     let grown = grown?;
     let energy = window_energy(&grown.texels, ex, ENERGY_WINDOW, ENERGY_STRIDE);
     let copies = metrics::copy_statistics(&grown.coords, ex.size(), synth.exemplar_wrap);

@@ -94,7 +94,7 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let made_path = out_dir.join(resume::MADE_FROM);
     set.write(resume::MADE_FROM, |p| skinkit_maps::documents::write_json(p, &made))
         .with_context(|| format!("cannot write {}", made_path.display()))?;
-    let mut captured = session::capture(&files, options, &|_| {})?;
+    let mut captured = session::capture(&files, options, &skinkit_maps::progress::NoProgress)?;
     let signs = review::signs(&captured);
     review::write_previews(&previews, &captured, &signs)?;
     let swept = skinkit_capture::outputs::write(set, out_dir, &mut captured, options)?;

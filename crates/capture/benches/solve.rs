@@ -5,7 +5,7 @@
 //! rate shows.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use skinkit_capture::solve::{Method, SolveConfig, no_progress, solve, solve_into};
+use skinkit_capture::solve::{Method, NoProgress, SolveConfig, solve, solve_into};
 
 mod common;
 use common::{photos, photos_with, ring};
@@ -36,14 +36,14 @@ fn bench_solve(c: &mut Criterion) {
             if highlights { "_highlights" } else { "" }
         );
         // The kernel, writing into maps reused between iterations.
-        let mut out = solve(&stack, &rig, &config, &no_progress).unwrap();
+        let mut out = solve(&stack, &rig, &config, &NoProgress).unwrap();
         group.bench_with_input(BenchmarkId::new(format!("{name}_into"), size), &stack, |b, stack| {
-            b.iter(|| solve_into(stack, &rig, &config, &no_progress, &mut out).unwrap())
+            b.iter(|| solve_into(stack, &rig, &config, &NoProgress, &mut out).unwrap())
         });
         // With fresh output maps each time (page faults included).
         if method == Method::LeastSquares {
             group.bench_with_input(BenchmarkId::new(name, size), &stack, |b, stack| {
-                b.iter(|| solve(stack, &rig, &config, &no_progress).unwrap())
+                b.iter(|| solve(stack, &rig, &config, &NoProgress).unwrap())
             });
         }
     }
@@ -62,9 +62,9 @@ fn bench_solve_cached(c: &mut Criterion) {
         for method in [Method::LeastSquares, Method::Robust] {
             let stack = photos(size, &rig, false);
             let config = SolveConfig { method, ..SolveConfig::default() };
-            let mut out = solve(&stack, &rig, &config, &no_progress).unwrap();
+            let mut out = solve(&stack, &rig, &config, &NoProgress).unwrap();
             group.bench_with_input(BenchmarkId::new(format!("{method:?}_into"), size), &stack, |b, stack| {
-                b.iter(|| solve_into(stack, &rig, &config, &no_progress, &mut out).unwrap())
+                b.iter(|| solve_into(stack, &rig, &config, &NoProgress, &mut out).unwrap())
             });
         }
     }

@@ -3,7 +3,7 @@
 //! on other processes): `cargo bench -p skinkit-capture --bench solve_kernel -- [ls|robust|shadows]
 //! [iterations] [size]`, e.g. with `RAYON_NUM_THREADS=1 /usr/bin/time -f %U`.
 
-use skinkit_capture::solve::{Method, SolveConfig, no_progress, solve, solve_into};
+use skinkit_capture::solve::{Method, NoProgress, SolveConfig, solve, solve_into};
 
 mod common;
 use common::{photos, ring};
@@ -17,10 +17,10 @@ fn main() {
     let stack = photos(size, &rig, which == "shadows");
     let method = if which == "ls" { Method::LeastSquares } else { Method::Robust };
     let config = SolveConfig { method, ..SolveConfig::default() };
-    let mut out = solve(&stack, &rig, &config, &no_progress).unwrap();
+    let mut out = solve(&stack, &rig, &config, &NoProgress).unwrap();
     let start = std::time::Instant::now();
     for _ in 0..iterations {
-        solve_into(&stack, &rig, &config, &no_progress, &mut out).unwrap();
+        solve_into(&stack, &rig, &config, &NoProgress, &mut out).unwrap();
     }
     let secs = start.elapsed().as_secs_f64();
     println!(

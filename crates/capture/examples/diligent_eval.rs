@@ -19,7 +19,7 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_capture::robust::{Estimator, Lights, RobustConfig, fit_pixel};
-use skinkit_capture::solve::{Method, PhotoStack, SolveConfig, no_progress, solve};
+use skinkit_capture::solve::{Method, NoProgress, PhotoStack, SolveConfig, solve};
 use skinkit_capture::{Rig, import};
 use skinkit_maps::io::{read_normal_map, read_photo};
 use skinkit_maps::{Grid, Limits, NormalEncoding, NormalMap, Photo, Samples};
@@ -105,7 +105,7 @@ impl Object {
         let rig = Rig::new(lights, "subset")?;
         let config = SolveConfig { method, ..SolveConfig::default() };
         let start = Instant::now();
-        let solution = solve(&stack, &rig, &config, &no_progress)?;
+        let solution = solve(&stack, &rig, &config, &NoProgress)?;
         let secs = start.elapsed().as_secs_f64();
         if let Some(floor) = solution.noise {
             println!(

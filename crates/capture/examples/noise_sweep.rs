@@ -41,7 +41,7 @@ fn main() -> Result<(), Failure> {
             let mut floor = None;
             for method in [Method::LeastSquares, Method::Threshold, Method::Robust] {
                 let config = SolveConfig { method, ..SolveConfig::default() };
-                let solution = solve::solve(&stack, &rig, &config, &solve::no_progress)?;
+                let solution = solve::solve(&stack, &rig, &config, &solve::NoProgress)?;
                 errors.push(solution.normals.angular_error(&field.normals, None)?.mean);
                 floor = floor.or(solution.noise);
             }

@@ -22,13 +22,21 @@ pub enum Error {
     /// Image IO, from the `maps` crate.
     #[error(transparent)]
     Maps(#[from] skinkit_maps::Error),
-    /// What was being done or read (`photo 3`, `rig a.toml`) when `cause` happened; shown as
-    /// `context: cause` (the cause is part of the message, not a separate source).
-    #[error("{context}: {cause}")]
-    Context { context: String, cause: Box<Error> },
+    /// What was being done or read (`photo 3`, `rig a.toml`) when `cause` happened; the cause
+    /// is its `source()`, so a printed chain reads `context: cause`.
+    #[error("{context}")]
+    Context {
+        context: String,
+        #[source]
+        cause: Box<Error>,
+    },
     /// Reading or writing a file failed.
-    #[error("{path}: {error}")]
-    Io { path: PathBuf, error: std::io::Error },
+    #[error("{path}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        error: std::io::Error,
+    },
 }
 
 /// Result alias for the `capture` crate.

@@ -20,6 +20,7 @@ use serde::Serialize;
 use skinkit_maps::io::{self, Limits};
 use skinkit_maps::limits;
 use skinkit_maps::normal::AngularStats;
+use skinkit_maps::progress::Progress;
 use skinkit_maps::raw::RawMode;
 use skinkit_maps::{Grid, NormalEncoding, NormalMap, Photo, Transfer, Vec3};
 
@@ -182,12 +183,13 @@ struct Inputs {
 
 /// Reads every input of `session` and checks they fit together, solves (near point lights when
 /// the rig gives every lamp's position and the pixel size, else distant lights), detrends, and
-/// measures the result. Writes nothing. `progress` is told each stage as it starts.
+/// measures the result. Writes nothing. `progress` is told each [`Stage`] by name as it starts
+/// (stages of unknown length, 0 steps) and the end of the last.
 ///
 /// # Errors
 /// When a file is unreadable or the inputs do not fit together (rig and photo count, sizes,
 /// formats); the message names the file.
-pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(Stage) + Sync)) -> Result<Captured> {
+pub fn capture(session: &Session, options: &CaptureOptions, progress: &dyn Progress) -> Result<Captured> {
     let start = Instant::now();
     let mut timings = Timings::default();
     // Rig::load's errors name the rig file; later rig errors get it as context, once.
@@ -195,8 +197,9 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let in_rig = |e: Error| context(session.rig.display().to_string(), e);
     // A photo count that does not fit the rig names the folder's skipped entries (issue 42, D17):
     // a FIFO among the photos is the likely missing one.
-    rig.expect_photos(session.photos.len())
-        .map_err(|e| in_rig(Error::InvalidInput(folder::with_skipped(e.to_string(), &session.skipped))))?;
+    rig.expect_photos(session.photos.len()).map_err(|e| {
+        in_rig(Error::InvalidInput(folder::with_skipped(skinkit_maps::error::one_line(&e), &session.skipped)))
+    })?;
     // Solver options first, so that every error of the solve below is the rig's.
     options.solve.validate()?;
     check_rig(&session.rig, &rig, session.ambient.as_deref(), &options.solve)?;
@@ -205,22 +208,22 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     let ambient = ambient_frame(session, &rig);
     check_memory(session, &rig, ambient.as_ref().map(|(p, _)| p.as_path()), options)?;
 
-    progress(Stage::Decode);
+    progress.start(Stage::Decode.name(), 0);
     let Stacked { stack, names, corrections, scale, truth } =
         stacked(session, &rig, ambient.as_ref(), options, &mut timings)?;
     let (width, height) = (stack.width(), stack.height());
 
-    progress(Stage::Solve);
+    progress.start(Stage::Solve.name(), 0);
     let t = Instant::now();
     let (mut solution, near_lights) = solved(stack, &rig, options, scale).map_err(in_rig)?;
     timings.solve = t.elapsed().as_secs_f64();
 
-    progress(Stage::Detrend);
+    progress.start(Stage::Detrend.name(), 0);
     let t = Instant::now();
     detrend::detrend(&mut solution.normals, options.detrend_block);
     timings.detrend = t.elapsed().as_secs_f64();
 
-    progress(Stage::Statistics);
+    progress.start(Stage::Statistics.name(), 0);
     let t = Instant::now();
     let tilt = tilt_stats(&solution.normals);
     let error_vs_truth =
@@ -229,11 +232,12 @@ pub fn capture(session: &Session, options: &CaptureOptions, progress: &(dyn Fn(S
     warnings.extend(unsolved_warning(invalid, width * height));
     timings.stats = t.elapsed().as_secs_f64();
 
-    progress(Stage::Height);
+    progress.start(Stage::Height.name(), 0);
     let t = Instant::now();
     let mm_per_pixel = rig.mm_per_pixel().map(f64::from);
     let heights = integrate_height(&solution.normals, mm_per_pixel)?;
     timings.height = t.elapsed().as_secs_f64();
+    progress.finish();
     timings.total = start.elapsed().as_secs_f64();
     let solver = format!("{:?}{}", options.solve.method, if near_lights { " (near lights)" } else { "" });
     let report = CaptureReport {
@@ -270,7 +274,7 @@ fn solved(stack: PhotoStack, rig: &Rig, options: &CaptureOptions, scale: f32) ->
     let mut solution = if near_lights {
         near::solve(&stack, rig, &options.solve)?
     } else {
-        solve::solve(&stack, rig, &options.solve, &solve::no_progress)?
+        solve::solve(&stack, rig, &options.solve, &solve::NoProgress)?
     };
     drop(stack);
     unscale_albedo(&mut solution.albedo, scale);
@@ -383,7 +387,7 @@ fn integrate_height(normals: &NormalMap, mm_per_pixel: Option<f64>) -> Result<Op
     match skinkit_height::integrate(normals, &HeightOptions { scale, ..HeightOptions::default() }) {
         Ok(height) => Ok(Some(height)),
         Err(skinkit_height::Error::NoValidTexel { .. }) => Ok(None),
-        Err(e) => Err(Error::InvalidInput(e.to_string())),
+        Err(e) => Err(Error::InvalidInput(skinkit_maps::error::one_line(&e))),
     }
 }
 

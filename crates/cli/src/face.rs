@@ -111,7 +111,7 @@ pub fn face_to_dir(
 ) -> Result<FaceReport> {
     skinkit_maps::gate::out_folder("--out", dir)?;
     // Staged before the work, so an interrupt during it removes the staging folder.
-    let set = OutputSet::folder(dir, "report.json").with_context(|| format!("cannot write {}", dir.display()))?;
+    let set = OutputSet::folder(dir, "report.json").context("cannot write")?;
     let face = build(options, cache, out, &|layout: &Layout| check_face_out(dir, layout))?;
     let t = Instant::now();
     let (height, height_seconds) = face.write_folder(&set, dir)?;
@@ -119,8 +119,8 @@ pub fn face_to_dir(
     report.height_map = Some(height);
     report.seconds.height = height_seconds;
     report.peak_memory_mib = skinkit_maps::limits::peak_resident_mib();
-    pipeline::write_json_in(&set, "report.json", &dir.join("report.json"), &report)?;
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", dir.display()))?);
+    pipeline::write_json_in(&set, "report.json", &report)?;
+    out.swept(&set.commit().context("cannot write")?);
     Ok(report)
 }
 
@@ -142,12 +142,12 @@ pub fn build(
     let mut capture = |dir: &Path, region: &str| -> Result<NormalMap, skinkit_stitch::face::BoxError> {
         out.note(format!("capturing {} for region `{region}`", dir.display()));
         let files = Session::from_dir(dir)?;
-        Ok(session::capture(&files, &solve, &|_| {})?.solution.normals)
+        Ok(session::capture(&files, &solve, &skinkit_maps::progress::NoProgress)?.solution.normals)
     };
     let bar = out.progress(layout.regions.len() as u64, "regions");
-    let face = Face::build(layout, &options.face_options(out.memory_limit()), cache, &mut capture, &|_| bar.inc(1))
+    let face = Face::build(layout, &options.face_options(out.memory_limit()), cache, &mut capture, &bar)
         .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
-    bar.finish_and_clear();
+    bar.clear();
     Ok(face)
 }
 

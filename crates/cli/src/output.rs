@@ -2,11 +2,13 @@
 //! to stderr, nothing but errors with `--quiet`.
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 use skinkit_maps::limits;
+use skinkit_maps::progress::Progress;
 
 /// Flags every subcommand takes.
 #[derive(clap::Args, Debug, Clone)]
@@ -59,21 +61,22 @@ impl Output {
         self.memory_limit
     }
 
-    /// A progress bar on stderr over `len` steps, hidden with `--quiet`/`--json` or off a terminal.
-    pub fn progress(&self, len: u64, message: &str) -> ProgressBar {
-        let bar = if self.quiet || self.json {
-            ProgressBar::hidden()
-        } else {
-            ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr())
-        };
-        bar.set_style(
-            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        bar.set_message(message.to_owned());
-        bar.enable_steady_tick(Duration::from_millis(200));
-        bar
+    /// A progress bar on stderr over `len` steps, hidden with `--quiet`/`--json` or off a terminal;
+    /// each stage a library starts takes it over (its name and length).
+    pub fn progress(&self, len: u64, message: &str) -> Bar {
+        let visible = !self.quiet && !self.json;
+        Bar {
+            current: Mutex::new(BarState { bar: new_bar(visible, len, message), started: true }),
+            visible,
+            keep: false,
+        }
+    }
+
+    /// A progress bar per stage a library starts, each left on stderr, done, when the next starts
+    /// (synthesis shows every pyramid level so).
+    pub fn stage_bars(&self) -> Bar {
+        let visible = !self.quiet && !self.json;
+        Bar { current: Mutex::new(BarState { bar: ProgressBar::hidden(), started: false }), visible, keep: true }
     }
 
     /// A message for people, on stderr, unless quiet or json.
@@ -133,6 +136,83 @@ impl Output {
     }
 }
 
+/// The one [`Progress`] of the command line, over indicatif: what a library reports and what the
+/// CLI's own loops count (`advance`) both move it.
+pub struct Bar {
+    current: Mutex<BarState>,
+    visible: bool,
+    /// A new bar per stage, the finished ones left on screen ([`Output::stage_bars`]).
+    keep: bool,
+}
+
+struct BarState {
+    bar: ProgressBar,
+    /// Whether `bar` is a stage's (else a placeholder before the first stage).
+    started: bool,
+}
+
+impl Bar {
+    fn bar(&self) -> ProgressBar {
+        self.current.lock().expect("progress bar lock").bar.clone()
+    }
+
+    /// Removes the bar from the terminal (the job is done).
+    pub fn clear(&self) {
+        self.bar().finish_and_clear();
+    }
+
+    /// Runs `f` with the bar hidden, so that lines `f` prints are not drawn over.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        self.bar().suspend(f)
+    }
+}
+
+impl Progress for Bar {
+    fn start(&self, name: &str, len: u64) {
+        let mut state = self.current.lock().expect("progress bar lock");
+        if self.keep {
+            if state.started {
+                state.bar.finish();
+            }
+            *state = BarState { bar: new_bar(self.visible, len, name), started: true };
+        } else {
+            state.bar.set_message(name.to_owned());
+            state.bar.set_length(len);
+            state.bar.set_position(0);
+        }
+    }
+
+    fn advance(&self, steps: u64) {
+        self.bar().inc(steps);
+    }
+
+    fn finish(&self) {
+        let bar = self.bar();
+        if self.keep {
+            bar.finish();
+        } else if let Some(len) = bar.length() {
+            bar.set_position(len);
+        }
+    }
+}
+
+/// A bar over `len` steps labelled `message`, drawn on stderr when `visible` (and a terminal).
+fn new_bar(visible: bool, len: u64, message: &str) -> ProgressBar {
+    let bar = if visible {
+        ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr())
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(message.to_owned());
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
 /// `value` as one line of JSON with a `record` field naming its kind.
 fn tagged<T: Serialize>(kind: &str, value: &T) -> String {
     let mut json = serde_json::to_value(value).expect("serialisable record");
@@ -142,7 +222,7 @@ fn tagged<T: Serialize>(kind: &str, value: &T) -> String {
     json.to_string()
 }
 
-/// The error and its causes on one line, each cause once ([`skinkit_maps::error::one_line`]).
+/// The error and its causes on one line, joined with `: ` ([`skinkit_maps::error::one_line`]).
 pub(crate) fn one_line(error: &anyhow::Error) -> String {
     skinkit_maps::error::one_line(error.as_ref())
 }
@@ -171,34 +251,34 @@ mod tests {
         std::io::Error::from(kind)
     }
 
-    /// Issue 15, D10: each cause once, whether a library error embeds its source's text, exposes
-    /// it as `source()`, or a context names the same file as the error below it.
+    /// Issue 15, D10 and issue 38: each cause once, because each error says only its own part
+    /// (a context what was being done, a library error the file) and its cause is `source()`.
     #[test]
     fn d10_error_chains_say_each_cause_once() {
         let os = std::io::Error::from_raw_os_error(2);
         let text = os.to_string();
-        // A context naming the file over an error naming it again.
-        let e = anyhow::Error::new(skinkit_maps::Error::Io { path: "a.png".into(), error: os })
-            .context("cannot read photo a.png");
-        assert_eq!(one_line(&e), format!("cannot read photo a.png: {text}"));
-        // A context over an io::Error chain that repeats its text.
+        // A context saying what was being done over a library error naming the file.
+        let e = anyhow::Error::new(skinkit_maps::Error::Io { path: "a.png".into(), error: os }).context("photo 3");
+        assert_eq!(one_line(&e), format!("photo 3: a.png: {text}"));
+        // A context naming the file over an `io::Error`, which names none.
         let inner = anyhow::Error::new(io_error(std::io::ErrorKind::IsADirectory));
         let kind_text = inner.to_string();
-        let e = inner.context(format!("x.png: {kind_text}")).context("cannot write x.png");
-        assert_eq!(one_line(&e), format!("cannot write x.png: {kind_text}"));
+        let e = inner.context("cannot create out");
+        assert_eq!(one_line(&e), format!("cannot create out: {kind_text}"));
         // Unrelated causes are all kept, in order.
         let e = anyhow::anyhow!("bad value").context("field b").context("scene.toml");
         assert_eq!(one_line(&e), "scene.toml: field b: bad value");
     }
 
+    /// The printer matches no text: a part that overlaps the one before is kept whole (a context
+    /// must not repeat what its cause says; the printer does not hide it when one does).
     #[test]
     fn a_cause_is_not_dropped_for_a_partial_overlap() {
-        // "photo 1" ends the line, but the cause opens with "photo 12": nothing is dropped.
         let e = anyhow::anyhow!("photo 12: too dark").context("photo 1");
         assert_eq!(one_line(&e), "photo 1: photo 12: too dark");
         let e = anyhow::anyhow!("2: too dark").context("light 12");
         assert_eq!(one_line(&e), "light 12: 2: too dark");
         let r: Result<(), _> = Err(anyhow::anyhow!("a.png: gone")).context("mask a.png");
-        assert_eq!(one_line(&r.unwrap_err()), "mask a.png: gone");
+        assert_eq!(one_line(&r.unwrap_err()), "mask a.png: a.png: gone");
     }
 }

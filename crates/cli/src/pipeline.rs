@@ -28,17 +28,16 @@ pub fn grown_height(
     set.write_file(path, |p| {
         skinkit_height::deliver::write_height(p, &height, storage).map(|_| ()).map_err(skinkit_maps::Error::from)
     })
-    .with_context(|| format!("cannot write {}", path.display()))?;
+    .context("cannot write")?;
     Ok(height.report)
 }
 
-/// Writes a value as pretty JSON as `relative` of the folder set `set`; `shown` names it in errors.
+/// Writes a value as pretty JSON as `relative` of the folder set `set` (errors name its final path).
 ///
 /// # Errors
 /// When it cannot be written.
-pub fn write_json_in<T: Serialize>(set: &OutputSet, relative: &str, shown: &Path, value: &T) -> Result<()> {
-    set.write(relative, |p| documents::write_json(p, value))
-        .with_context(|| format!("cannot write {}", shown.display()))
+pub fn write_json_in<T: Serialize>(set: &OutputSet, relative: &str, value: &T) -> Result<()> {
+    set.write(relative, |p| documents::write_json(p, value)).context("cannot write")
 }
 
 /// Adds the loose file `path` to `set` and writes a value there as pretty JSON.
@@ -46,16 +45,15 @@ pub fn write_json_in<T: Serialize>(set: &OutputSet, relative: &str, shown: &Path
 /// # Errors
 /// When it cannot be written.
 pub fn write_json_file<T: Serialize>(set: &mut OutputSet, path: &Path, value: &T) -> Result<()> {
-    set.write_file(path, |p| documents::write_json(p, value))
-        .with_context(|| format!("cannot write {}", path.display()))
+    set.write_file(path, |p| documents::write_json(p, value)).context("cannot write")
 }
 
 /// Writes text (a page, a table), atomically.
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    documents::write_text(path, text).with_context(|| format!("cannot write {}", path.display()))
+    documents::write_text(path, text).context("cannot write")
 }
 
 /// Writes a value as pretty JSON, atomically.
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    documents::write_json(path, value).with_context(|| format!("cannot write {}", path.display()))
+    documents::write_json(path, value).context("cannot write")
 }

@@ -17,6 +17,7 @@ use skinkit_render::renderer::{Encoding, Frame, FrameOptions, Renderer, Shading}
 use skinkit_render::scene::{self, Scene};
 
 use crate::output::Output;
+use skinkit_maps::progress::Progress;
 
 /// One written image.
 #[derive(Clone, Debug, Serialize)]
@@ -170,9 +171,9 @@ pub fn render_into(
         let render_seconds = t.elapsed().as_secs_f64();
         let write_seconds = stage(&frame, &file, format, set)?;
         images.push(Image { path: file.display().to_string(), camera: c, frame: f, render_seconds, write_seconds });
-        bar.inc(1);
+        bar.advance(1);
     }
-    bar.finish_and_clear();
+    bar.clear();
     let times = prepared.times();
     Ok(RenderReport {
         scene: job.scene.display().to_string(),
@@ -194,8 +195,7 @@ pub fn render_into(
 /// Stages `frame` in `set` as `file`: the seconds of the write.
 fn stage(frame: &Frame, file: &Path, format: scene::OutputFormat, set: &mut OutputSet) -> Result<f64> {
     let t = Instant::now();
-    set.write_file(file, |p| write_image(p, frame, format))
-        .with_context(|| format!("cannot write {}", file.display()))?;
+    set.write_file(file, |p| write_image(p, frame, format)).context("cannot write")?;
     Ok(t.elapsed().as_secs_f64())
 }
 

@@ -32,9 +32,21 @@ pub enum Error {
     /// The input gate refused a file ([`crate::input`]).
     #[error(transparent)]
     Input(#[from] crate::input::InputError),
+    /// An output file whose folder could not be made ready: `path` is the output, `source`
+    /// what failed there (which names the folder).
+    #[error("{path}")]
+    Output {
+        path: PathBuf,
+        #[source]
+        source: Box<Error>,
+    },
     /// Reading or writing a file failed.
-    #[error("{path}: {error}")]
-    Io { path: PathBuf, error: std::io::Error },
+    #[error("{path}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        error: std::io::Error,
+    },
 }
 
 /// Result alias for the `maps` crate.
@@ -43,6 +55,10 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 impl Error {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io { path: path.into(), error: source }
+    }
+    /// `self`, met while making the folder of the output `path` ready.
+    pub(crate) fn for_output(self, path: impl Into<PathBuf>) -> Self {
+        Error::Output { path: path.into(), source: Box::new(self) }
     }
     pub(crate) fn decode(path: impl Into<PathBuf>, reason: impl ToString) -> Self {
         Error::Decode { path: path.into(), reason: reason.to_string() }
@@ -70,46 +86,25 @@ impl Error {
 pub(crate) const LAYOUTS_READ: &str = "its pixel layout is not one skinkit reads: PNG or TIFF of 8 or 16 bits \
      a sample, grey or RGB (alpha ignored), or float EXR with R, G and B channels";
 
-/// The error and its causes on one line, each cause once (issue 15, D10). Two rules:
-/// - a cause whose text the line already holds is skipped (a library error that embeds its
-///   source's text, as every skinkit error does, repeats nothing);
-/// - a cause that opens with what the line ends with drops that opening, so a context naming a
-///   file (`cannot write a.png`) and a library error naming it again (`a.png: Is a directory`)
-///   read `cannot write a.png: Is a directory`.
+/// The error and its causes on one line (issue 15, D10; issue 38): each error's `Display` says
+/// only its own part (what was being done, the file, the field) and its cause is its
+/// `source()`, so walking the chain and joining the parts with `: ` says each cause once.
+///
+/// ```
+/// use skinkit_maps::error::one_line;
+/// let io = std::io::Error::other("disk full");
+/// let e = skinkit_maps::Error::Io { path: "a.png".into(), error: io };
+/// assert_eq!(one_line(&e), "a.png: disk full");
+/// ```
 pub fn one_line(error: &(dyn std::error::Error + 'static)) -> String {
-    let mut line = String::new();
-    let mut cause = Some(error);
+    let mut line = error.to_string();
+    let mut cause = error.source();
     while let Some(e) = cause {
-        join_cause(&mut line, &e.to_string());
+        line.push_str(": ");
+        line.push_str(&e.to_string());
         cause = e.source();
     }
     line
-}
-
-/// Appends `cause` to `line` under the rules of [`one_line`].
-fn join_cause(line: &mut String, cause: &str) {
-    if cause.is_empty() || line.contains(cause) {
-        return;
-    }
-    let rest = match cause.split_once(": ") {
-        Some((head, rest)) if ends_with_word(line, head) => rest,
-        _ => cause,
-    };
-    if line.contains(rest) {
-        return;
-    }
-    if !line.is_empty() {
-        line.push_str(": ");
-    }
-    line.push_str(rest);
-}
-
-/// `line` ends with `word` as a whole word (after a space, a quote or bracket, or as all of it).
-fn ends_with_word(line: &str, word: &str) -> bool {
-    match line.strip_suffix(word) {
-        Some(before) => !line.is_empty() && before.chars().last().is_none_or(|c| " ([`'\"".contains(c)),
-        None => false,
-    }
 }
 
 #[cfg(test)]
@@ -125,5 +120,21 @@ mod tests {
         let e = Error::image(std::path::Path::new("03.png"), limit).to_string();
         assert!(e.starts_with("03.png: not a readable image: the image decoder's own limit"), "{e}");
         assert!(e.contains("--memory-limit does not change it"), "{e}");
+    }
+
+    /// A cause at each level: an error naming what was being done, a `maps` error naming the
+    /// file, and the OS error. Each part is said once, in order, joined with `: `.
+    #[test]
+    fn one_line_joins_a_three_level_chain_in_order() {
+        #[derive(Debug, thiserror::Error)]
+        #[error("photo 3")]
+        struct Reading(#[source] Error);
+        let os = std::io::Error::new(std::io::ErrorKind::PermissionDenied, "permission denied");
+        let e = Reading(Error::io("cheek/03.png", os));
+        assert_eq!(one_line(&e), "photo 3: cheek/03.png: permission denied");
+        // A transparent wrapper adds no part of its own.
+        let os = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
+        let wrapped = Error::Input(crate::input::InputError::Io { path: "rig.toml".into(), error: os });
+        assert_eq!(one_line(&wrapped), "rig.toml: gone");
     }
 }

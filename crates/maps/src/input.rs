@@ -115,8 +115,12 @@ pub enum InputError {
     )]
     TooLarge { path: PathBuf, kind: Kind, len: u64 },
     /// The file cannot be looked at, opened or read.
-    #[error("{path}: {error}")]
-    Io { path: PathBuf, error: std::io::Error },
+    #[error("{path}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        error: std::io::Error,
+    },
 }
 
 impl InputError {

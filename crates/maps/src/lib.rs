@@ -34,6 +34,7 @@ pub mod normal;
 pub mod output_set;
 pub mod photo;
 pub mod preview;
+pub mod progress;
 pub mod pyramid;
 pub mod raw;
 pub mod resample;

@@ -152,9 +152,9 @@ impl OutputSet {
         let staging = match self.stagings.iter().find(|(_, p)| *p == parent) {
             Some((staging, _)) => staging.clone(),
             None => {
-                self.create_parent(&parent)?;
+                self.create_parent(&parent).map_err(|e| e.for_output(target))?;
                 self.swept.extend(sweep_staging(&parent, FILES_LABEL));
-                self.new_staging(&parent, FILES_LABEL, &parent)?
+                self.new_staging(&parent, FILES_LABEL, &parent).map_err(|e| e.for_output(target))?
             }
         };
         self.swept.extend(sweep_old_temps(target));
@@ -403,7 +403,8 @@ fn check_destinations(moves: &[(PathBuf, PathBuf)]) -> Result<()> {
             )));
         }
         if let Some(dir) = to.parent().filter(|d| d.exists() && !d.is_dir()) {
-            return Err(Error::InvalidParameter(format!("{}: is a file, but outputs go in it", dir.display())));
+            let refused = Error::InvalidParameter(format!("{}: is a file, but outputs go in it", dir.display()));
+            return Err(refused.for_output(to));
         }
     }
     Ok(())
@@ -412,7 +413,7 @@ fn check_destinations(moves: &[(PathBuf, PathBuf)]) -> Result<()> {
 fn rename_all(moves: &[(PathBuf, PathBuf)]) -> Result<()> {
     for (from, to) in moves {
         if let Some(dir) = to.parent().filter(|d| !d.as_os_str().is_empty() && !d.exists()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e).for_output(to))?;
         }
         move_file(from, to).map_err(|e| Error::io(to, e))?;
     }

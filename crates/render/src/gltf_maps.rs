@@ -190,7 +190,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("x.glb");
         std::fs::write(&path, b"not a glTF file").unwrap();
-        let error = albedo(&path, &Limits::default()).unwrap_err().to_string();
+        let error = skinkit_maps::error::one_line(&albedo(&path, &Limits::default()).unwrap_err());
         assert!(error.contains("x.glb: not a readable glTF file"), "{error}");
     }
 }

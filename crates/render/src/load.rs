@@ -31,25 +31,26 @@ use crate::shading::{self, GreenAxis, RenderInputs, Texture, ToneCurve, Vertex};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LoadError {
-    /// A mesh could not be loaded: `scene.toml: mesh: head.obj: ...` (the scene file, its
-    /// field, then the mesh error, which names the mesh file).
-    #[error("{file}: {field}: {error}")]
+    /// A mesh could not be loaded: `scene.toml: mesh: head.obj: ...` (the scene file and its
+    /// field, then the mesh error as `source()`, which names the mesh file).
+    #[error("{file}: {field}")]
     Mesh {
         /// The scene file.
         file: String,
         /// `mesh` or `translucent[i].mesh`.
         field: String,
+        #[source]
         error: MeshError,
     },
-    /// A map could not be read: the scene file, its field, then the map error (which names the
-    /// map file). Errors here embed their cause's text and expose no `source()`, so a printed
-    /// chain says each cause once.
-    #[error("{file}: {field}: {error}")]
+    /// A map could not be read: the scene file and its field, then the map error as `source()`
+    /// (which names the map file).
+    #[error("{file}: {field}")]
     Map {
         /// The scene file.
         file: String,
         /// `normal_map.path` or `albedo`.
         field: &'static str,
+        #[source]
         error: skinkit_maps::Error,
     },
     /// A map file the scene names does not exist (yet).

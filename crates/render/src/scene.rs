@@ -78,8 +78,12 @@ pub const MISSING_MM_PER_UNIT: &str = "missing: how long one mesh unit is, in mi
 #[non_exhaustive]
 pub enum SceneError {
     /// The file could not be read.
-    #[error("{file}: {error}")]
-    Io { file: String, error: std::io::Error },
+    #[error("{file}")]
+    Io {
+        file: String,
+        #[source]
+        error: std::io::Error,
+    },
     /// The input gate refused the file or could not read it ([`skinkit_maps::input`]).
     #[error(transparent)]
     Input(#[from] skinkit_maps::input::InputError),

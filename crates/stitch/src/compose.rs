@@ -21,6 +21,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;
+use skinkit_maps::progress::{NoProgress, Progress};
 use skinkit_maps::resample::{resample_normals, scaled_size};
 use skinkit_maps::{Grid, NormalMap, limits};
 use skinkit_synth::SynthConfig;
@@ -134,8 +135,8 @@ pub fn region_seed(run: u64, region: usize, own: Option<u64>) -> u64 {
 }
 
 /// Stitches one synthesis per region of `layout` into a face map. `exemplars[i]` is region `i`'s
-/// normal map at the region's `exemplar_mm_per_texel`; `progress(name)` is called as each region's
-/// synthesis ends.
+/// normal map at the region's `exemplar_mm_per_texel`; `progress` is told one stage, `regions`,
+/// of a step per region, each as its synthesis ends.
 ///
 /// # Errors
 /// A count of exemplars that is not the count of regions, bad seed points or curve parameters, a
@@ -145,7 +146,7 @@ pub fn compose(
     layout: &Layout,
     exemplars: &[NormalMap],
     options: &ComposeOptions,
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &dyn Progress,
 ) -> Result<Composed> {
     let regions = layout.regions.len();
     if exemplars.len() != regions {
@@ -270,7 +271,7 @@ fn grow_regions(
     scales: &[(f64, Option<RegionScale>)],
     levels: usize,
     options: &ComposeOptions,
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &dyn Progress,
     seconds: &mut ComposeSeconds,
 ) -> Result<(Vec<(Piece, RegionReport)>, usize)> {
     let regions = layout.regions.len();
@@ -297,10 +298,11 @@ fn grow_regions(
     seconds.resample = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
+    progress.start("regions", regions as u64);
     let grow = |i: usize| {
         let grown = grow_region(layout, i, &resampled[i], bboxes[i], levels, texels[i], scales[i], options);
-        if let Ok((_, report)) = &grown {
-            progress(&report.name);
+        if grown.is_ok() {
+            progress.advance(1);
         }
         grown
     };
@@ -309,6 +311,7 @@ fn grow_regions(
     } else {
         (0..regions).map(grow).collect::<Result<_>>()?
     };
+    progress.finish();
     seconds.synthesis = t.elapsed().as_secs_f64();
     Ok((grown, if side_by_side { regions } else { 1 }))
 }
@@ -367,13 +370,14 @@ fn synthesis_error(
 ) -> Error {
     let region = &layout.regions[i];
     Error::InvalidParameter(format!(
-        "{}: region `{}`: cannot synthesise {}x{} from its {ew}x{eh} exemplar (after resampling to {} mm per texel; exemplar_mm_per_texel = {}): {e}",
+        "{}: region `{}`: cannot synthesise {}x{} from its {ew}x{eh} exemplar (after resampling to {} mm per texel; exemplar_mm_per_texel = {}): {}",
         layout.origin.display(),
         region.name,
         rect.width,
         rect.height,
         mm,
-        region.exemplar_mm_per_texel
+        region.exemplar_mm_per_texel,
+        skinkit_maps::error::one_line(&e)
     ))
 }
 
@@ -408,7 +412,7 @@ fn grow_region(
     let rect = spline::piece_rect(bbox, levels, layout.width, layout.height);
     let t = Instant::now();
     let config = SynthConfig { width: rect.width, height: rect.height, seed, ..options.synth.clone() };
-    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {})
+    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &NoProgress)
         .map_err(|e| synthesis_error(layout, i, mm_per_texel, rect, exemplar.size(), e))?;
     report.synthesis_seconds = t.elapsed().as_secs_f64();
     report.warnings = grown.warnings;

@@ -68,8 +68,12 @@ pub enum Error {
         source: skinkit_maps::Error,
     },
     /// Reading a file failed.
-    #[error("{}: {error}", path.display())]
-    Io { path: PathBuf, error: std::io::Error },
+    #[error("{}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        error: std::io::Error,
+    },
     /// A parameter the caller got wrong (curve parameters, seed points, sizes, ...).
     #[error("{0}")]
     InvalidParameter(String),

@@ -81,14 +81,14 @@ pub struct Face {
 
 impl Face {
     /// Grows and stitches `layout` (already sized and, on a mesh, placed on its surface): the
-    /// map's memory is checked before any exemplar is read or captured; `progress` is called with
-    /// each region's name as it is done.
+    /// map's memory is checked before any exemplar is read or captured; `progress` is told as
+    /// [`crate::compose::compose`] tells it.
     pub fn build(
         layout: Layout,
         options: &FaceOptions,
         cache: &mut ExemplarCache,
         capture: &mut Capture,
-        progress: &(dyn Fn(&str) + Sync),
+        progress: &dyn skinkit_maps::progress::Progress,
     ) -> Result<Face> {
         layout.check_placed()?;
         let amplitude = options.curve_amplitude.unwrap_or_else(|| ComposeOptions::default_amplitude(layout.width));

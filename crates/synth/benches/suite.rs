@@ -213,14 +213,13 @@ fn window_shares(output: &Texels, ex: &Exemplar, own: f64) {
 
 /// One skinkit synthesis of `ex` under `config`.
 fn run_skinkit(ex: &Exemplar, config: &SynthConfig) -> (Texels, Grid<[u32; 2]>) {
-    let quiet = |_: usize, _: f32| {};
     match &ex.texels {
         Texels::Normal(n) => {
-            let s = synthesize_normals(n, config, &quiet).expect("valid configuration");
+            let s = synthesize_normals(n, config, &skinkit_maps::progress::NoProgress).expect("valid configuration");
             (Texels::Normal(s.normals), s.coords)
         }
         Texels::Color(c) => {
-            let s = synthesize(c, config, &quiet).expect("valid configuration");
+            let s = synthesize(c, config, &skinkit_maps::progress::NoProgress).expect("valid configuration");
             (Texels::Color(s.texels), s.coords)
         }
     }

@@ -29,8 +29,6 @@ const MODES: [(&str, Search, usize); 6] = [
     ("kcoherence4_7x7", Search::KCoherence { k: 4, fallback: None, dims: 8, rerank: 8 }, 7),
 ];
 
-fn quiet(_: usize, _: f32) {}
-
 fn config(side: usize, search: Search, neighbourhood: usize) -> SynthConfig {
     SynthConfig { levels: 3, search, neighbourhood, seed: 1, ..SynthConfig::new(side, side) }
 }
@@ -49,7 +47,8 @@ fn report_energies(ex: &Grid<Vec3>) {
                 continue;
             }
             let start = Instant::now();
-            let s = synthesize(ex, &config(side, search, n), &quiet).expect("valid configuration");
+            let s = synthesize(ex, &config(side, search, n), &skinkit_maps::progress::NoProgress)
+                .expect("valid configuration");
             let seconds = start.elapsed().as_secs_f64();
             let e = window_energy(&s.texels, ex, 5, 2);
             let exact = *reference.get_or_insert(e);
@@ -60,7 +59,7 @@ fn report_energies(ex: &Grid<Vec3>) {
         let search = Search::K_COHERENCE;
         let c = SynthConfig { width: 4096, height: 2048, ..config(256, search, 5) };
         let start = Instant::now();
-        let s = synthesize(ex, &c, &quiet).expect("valid configuration");
+        let s = synthesize(ex, &c, &skinkit_maps::progress::NoProgress).expect("valid configuration");
         let seconds = start.elapsed().as_secs_f64();
         let e = window_energy(&s.texels, ex, 5, 16);
         eprintln!("4096x2048 {search:?}: {seconds:.2} s once, energy {e:.5} (every 16th texel)");
@@ -81,7 +80,7 @@ fn bench_synthesis(c: &mut Criterion) {
             }
             let cfg = config(side, search, n);
             group.bench_with_input(BenchmarkId::new(name, side), &cfg, |b, cfg| {
-                b.iter(|| synthesize(&ex, cfg, &quiet).expect("valid configuration"))
+                b.iter(|| synthesize(&ex, cfg, &skinkit_maps::progress::NoProgress).expect("valid configuration"))
             });
         }
     }

@@ -102,8 +102,6 @@ struct Cell {
     scores: Result<Scores, String>,
 }
 
-fn quiet(_: usize, _: f32) {}
-
 fn exemplar() -> Grid<Vec3> {
     let field = SkinParams::forehead(EXEMPLAR_SIDE, EXEMPLAR_SIDE, SEED).generate().expect("forehead preset generates");
     field.normals.grid().clone()
@@ -137,7 +135,7 @@ fn measure(ex: &Grid<Vec3>, ex_normals: &NormalMap, n: usize, levels: usize, mod
         // One run is enough for the slow cells (exact search, PCA-32): they are not noise-bound.
         while seconds.len() < RUNS && seconds.iter().all(|&t| t < SLOW_SECONDS) {
             let start = Instant::now();
-            last = Some(synthesize(ex, &config, &quiet).expect("valid configuration"));
+            last = Some(synthesize(ex, &config, &skinkit_maps::progress::NoProgress).expect("valid configuration"));
             seconds.push(start.elapsed().as_secs_f64());
         }
         (last.expect("at least one run"), seconds)

@@ -9,8 +9,6 @@ use skinkit_heightfield::SkinParams;
 use skinkit_maps::Grid;
 use skinkit_synth::{Search, Start, SynthConfig, synthesize, synthesize_normals};
 
-fn quiet(_: usize, _: f32) {}
-
 /// A structured colour exemplar with no exactly repeated neighbourhoods (the tests' `pattern`).
 fn pattern(w: usize, h: usize) -> Grid<Vec3> {
     Grid::from_fn(w, h, |x, y| {
@@ -116,10 +114,11 @@ fn main() {
     let colour = pattern(64, 64);
     for (name, is_normals, config) in cases() {
         let hash = if is_normals {
-            let s = synthesize_normals(&normals, &config, &quiet).expect("valid configuration");
+            let s = synthesize_normals(&normals, &config, &skinkit_maps::progress::NoProgress)
+                .expect("valid configuration");
             digest(s.normals.grid(), &s.coords)
         } else {
-            let s = synthesize(&colour, &config, &quiet).expect("valid configuration");
+            let s = synthesize(&colour, &config, &skinkit_maps::progress::NoProgress).expect("valid configuration");
             digest(&s.texels, &s.coords)
         };
         println!("{hash:016x} {name}");

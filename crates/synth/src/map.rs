@@ -83,8 +83,8 @@ impl Map {
         }
     }
 
-    /// Grows this exemplar under `config`; `progress(level, fraction)` as [`crate::synthesize`].
-    pub fn grow(&self, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Grown> {
+    /// Grows this exemplar under `config`, telling `progress` as [`crate::synthesize`] does.
+    pub fn grow(&self, config: &SynthConfig, progress: &dyn skinkit_maps::progress::Progress) -> Result<Grown> {
         Ok(match self {
             Map::Normal(n) => {
                 let s = crate::synthesize_normals(n, config, progress)?;

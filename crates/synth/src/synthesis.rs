@@ -80,6 +80,7 @@ use std::time::Instant;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use skinkit_maps::progress::Progress;
 use skinkit_maps::pyramid::{Border, gaussian};
 use skinkit_maps::{Grid, NormalMap};
 
@@ -128,12 +129,12 @@ pub struct NormalSynthesis {
     pub guards: Guards,
 }
 
-/// Grows `exemplar` into a `config.width x config.height` map. `progress(level, fraction)` is called
-/// after every output row (level 0 is the finest; levels run from the coarsest down).
+/// Grows `exemplar` into a `config.width x config.height` map. `progress` is told a stage per
+/// pyramid level (`level 2`, ..., `level 0`, the finest last), counted in output rows of each pass.
 ///
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
-pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Fn(usize, f32)) -> Result<Synthesis> {
+pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Progress) -> Result<Synthesis> {
     guard::guarded(exemplar, config, progress, Texels::Colour)
 }
 
@@ -184,7 +185,7 @@ impl Texels {
 pub(crate) fn synthesize_unguarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
-    progress: &dyn Fn(usize, f32),
+    progress: &dyn Progress,
     kind: Texels,
 ) -> Result<Synthesis> {
     let (ew, eh) = exemplar.size();
@@ -235,7 +236,7 @@ pub(crate) fn synthesize_unguarded(
 pub fn synthesize_normals(
     exemplar: &NormalMap,
     config: &SynthConfig,
-    progress: &dyn Fn(usize, f32),
+    progress: &dyn Progress,
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
     let mut s = guard::guarded(exemplar.grid(), config, progress, Texels::Normals)?;
@@ -302,7 +303,7 @@ fn synthesize_level(
     (w, h): (usize, usize),
     coarser_level: Option<(&Grid<Vec3>, &Grid<[u32; 2]>)>,
     config: &SynthConfig,
-    progress: &dyn Fn(usize, f32),
+    progress: &dyn Progress,
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
     let level = plan.level;
     let coarser = coarser_level.map(|(t, _)| t);
@@ -316,8 +317,11 @@ fn synthesize_level(
     );
     let search = build_search(pyramid, plan, coarser.is_some(), &ex, config);
     // Progress counts rows: `h` for the causal pass and `h` for each correction pass.
-    let total = (h * (usize::from(config.start == Start::Scanline) + plan.corrections)).max(1) as f32;
-    let report = |units: usize| progress(level, units as f32 / total);
+    let total = (h * (usize::from(config.start == Start::Scanline) + plan.corrections)).max(1);
+    progress.start(&format!("level {level}"), total as u64);
+    // The passes count rows done so far; the stage is told what each report adds.
+    let done = std::cell::Cell::new(0);
+    let report = |units: usize| progress.advance(units.saturating_sub(done.replace(units)) as u64);
     let (mut out, mut coords) = match (config.start, coarser_level) {
         (Start::Scanline, _) => causal_pass(plan, (w, h), coarser, &nb, &ex, &search, config, &report),
         (Start::Upsampled, None) => random_copies(ex.texels(), ex.margin(), w, h, config.seed, level),
@@ -329,6 +333,7 @@ fn synthesize_level(
         let level = CorrectionLevel { coarser, plan, nb: &full_nb, search: &search, config };
         level.run(&mut out, &mut coords, &report);
     }
+    progress.finish();
     (out, coords)
 }
 

@@ -125,7 +125,7 @@ fn solve_brackets(field: &Heightfield, (photos, intensity): &(Vec<Vec<Photo>>, f
         (PhotoStack::new(photos[1].clone(), names())?, rig_of(&lights, 1.0)?)
     };
     debug_assert_eq!(stack.width(), field.width());
-    Ok(solve::solve(&stack, &rig, &config, &solve::no_progress)?.normals)
+    Ok(solve::solve(&stack, &rig, &config, &solve::NoProgress)?.normals)
 }
 
 /// The RGB photos as 16-bit samples, or written as DNGs and decoded at half size, solved.
@@ -155,7 +155,7 @@ fn solve_raw(field: &Heightfield, dng: bool, seed: u64) -> Result<NormalMap> {
         });
     }
     let stack = PhotoStack::new(photos, names())?;
-    Ok(solve::solve(&stack, &rig_of(&lights, 1.0)?, &SolveConfig::default(), &solve::no_progress)?.normals)
+    Ok(solve::solve(&stack, &rig_of(&lights, 1.0)?, &SolveConfig::default(), &solve::NoProgress)?.normals)
 }
 
 #[cfg(test)]

@@ -125,7 +125,7 @@ fn entry(path: &Path) -> Option<std::result::Result<PathBuf, Skipped>> {
     match input::look(path, Kind::Image) {
         Ok(_) | Err(InputError::TooLarge { .. }) => Some(Ok(path.to_owned())),
         Err(_) if path.symlink_metadata().is_err() => None,
-        Err(e) => Some(Err(Skipped { path: path.to_owned(), reason: e.to_string() })),
+        Err(e) => Some(Err(Skipped { path: path.to_owned(), reason: skinkit_maps::error::one_line(&e) })),
     }
 }
 

@@ -1,4 +1,4 @@
-//! What a solve is asked to do: [`Method`], [`SolveConfig`] and progress reports.
+//! What a solve is asked to do: [`Method`], [`SolveConfig`], and where progress goes.
 
 use crate::readings::{SHADOW_ABS, SHADOW_REL, Shadows};
 use crate::{Error, Result};
@@ -99,16 +99,5 @@ impl SolveConfig {
     }
 }
 
-/// Receives the fraction of the solve done, in [0, 1], from worker threads.
-pub trait Progress: Sync {
-    fn report(&self, done: f32);
-}
-
-impl<F: Fn(f32) + Sync> Progress for F {
-    fn report(&self, done: f32) {
-        self(done)
-    }
-}
-
-/// A progress sink that ignores reports.
-pub fn no_progress(_done: f32) {}
+/// A solve reports one stage, `solve`, counted in rows, from worker threads.
+pub use skinkit_maps::progress::{NoProgress, Progress};

@@ -96,7 +96,7 @@ use skinkit_maps::{Grid, NormalMap, Transfer};
 
 pub use crate::readings::SolveStats;
 use crate::readings::{LUMA, MIN_ALBEDO};
-pub use config::{Method, Progress, SolveConfig, no_progress};
+pub use config::{Method, NoProgress, Progress, SolveConfig};
 use plan::Plan;
 pub(crate) use solution::fresh_zeroed_vec3;
 pub use solution::{AlbedoMap, NoiseFloor, Solution};

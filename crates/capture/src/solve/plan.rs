@@ -1,7 +1,5 @@
 //! The plan of one solve (built once, shared by the workers) and its all-lights chunk path.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_maps::{Channels, Grid, NormalMap, Transfer};
@@ -155,8 +153,7 @@ impl<'a> Plan<'a> {
     ) -> SolveStats {
         let (w, h) = (self.width, normals.len() / self.width);
         let subsets = Subsets::new(&self.lights, self.config.max_condition, self.config.cache_capacity);
-        let rows_done = AtomicUsize::new(0);
-        progress.report(0.0);
+        progress.start("solve", h as u64);
         let band = BAND_ROWS * w;
         let stats = normals
             .par_chunks_mut(band)
@@ -168,13 +165,12 @@ impl<'a> Plan<'a> {
                 |scratch, (b, ((n, a), c))| {
                     let stats =
                         self.solve_band(b * band, Out { normals: n, albedo: a, confidence: c }, scratch, &subsets);
-                    let done = rows_done.fetch_add(stats.pixels / w, Ordering::Relaxed) + stats.pixels / w;
-                    progress.report(done as f32 / h as f32);
+                    progress.advance((stats.pixels / w) as u64);
                     stats
                 },
             )
             .reduce(|| SolveStats::empty(self.k), SolveStats::merge);
-        progress.report(1.0);
+        progress.finish();
         stats
     }
 

@@ -214,7 +214,7 @@ fn non_finite_float_readings_give_invalid_pixels() {
     };
     for method in [Method::LeastSquares, Method::Robust] {
         let (stack, rig) = inputs(floats);
-        let sol = solve(&stack, &rig, &SolveConfig { method, ..SolveConfig::default() }, &no_progress).unwrap();
+        let sol = solve(&stack, &rig, &SolveConfig { method, ..SolveConfig::default() }, &NoProgress).unwrap();
         let finite = sol.normals.as_slice().iter().all(|v| v.is_finite())
             && sol.albedo.as_gray().unwrap().as_slice().iter().all(|v| v.is_finite());
         assert!(finite && sol.confidence.as_slice().iter().all(|c| c.is_finite()), "{method:?}");

@@ -49,7 +49,7 @@ fn intensity_clipping(field: &Heightfield) -> f32 {
 /// Mean angular error over the solved pixels, and how many pixels could not be solved.
 fn mean_error(field: &Heightfield, photos: Vec<Photo>, rig: &Rig) -> (f32, usize) {
     let stack = PhotoStack::new(photos, (1..=K).map(|i| format!("{i:02}")).collect()).unwrap();
-    let solution = solve::solve(&stack, rig, &SolveConfig::default(), &solve::no_progress).unwrap();
+    let solution = solve::solve(&stack, rig, &SolveConfig::default(), &solve::NoProgress).unwrap();
     let e = solution.normals.angular_error(&field.normals, None).unwrap();
     (e.mean, solution.stats.invalid_count)
 }
@@ -133,7 +133,7 @@ fn a_rig_with_exposures_merges_the_session_brackets() {
     std::fs::write(single.path().join("rig.toml"), rig(None)).unwrap();
     let capture = |dir: &Path| {
         let files = Session::from_dir(dir).unwrap();
-        session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap().report
+        session::capture(&files, &CaptureOptions::default(), &skinkit_maps::progress::NoProgress).unwrap().report
     };
     let (with, without) = (capture(bracketed.path()), capture(single.path()));
     assert_eq!(with.corrections, vec![format!("exposure brackets merged ({K} of {K} lights)")]);
@@ -142,8 +142,12 @@ fn a_rig_with_exposures_merges_the_session_brackets() {
     assert!(mean(&with) < mean(&without), "brackets {} against {}", mean(&with), mean(&without));
     // Brackets missing from the folder: the count names the brackets.
     std::fs::remove_file(bracketed.path().join("24.png")).unwrap();
-    let e = session::capture(&Session::from_dir(bracketed.path()).unwrap(), &CaptureOptions::default(), &|_| {})
-        .unwrap_err()
-        .to_string();
+    let e = session::capture(
+        &Session::from_dir(bracketed.path()).unwrap(),
+        &CaptureOptions::default(),
+        &skinkit_maps::progress::NoProgress,
+    )
+    .map_err(|e| skinkit_maps::error::one_line(&e))
+    .unwrap_err();
     assert!(e.contains("rig has 8 lights (24 photos with their brackets) but 23 photos were given"), "{e}");
 }

@@ -48,7 +48,7 @@ fn linear(photo: &Photo) -> Vec<f64> {
 
 fn mean_error(field: &Heightfield, photos: Vec<Photo>, rig: &Rig) -> f32 {
     let stack = PhotoStack::new(photos, (1..=K).map(|i| format!("{i:02}.png")).collect()).unwrap();
-    let solution = solve::solve(&stack, rig, &SolveConfig::default(), &solve::no_progress).unwrap();
+    let solution = solve::solve(&stack, rig, &SolveConfig::default(), &solve::NoProgress).unwrap();
     solution.normals.angular_error(&field.normals, None).unwrap().mean
 }
 
@@ -87,7 +87,8 @@ fn a_session_with_flats_in_its_rig_corrects_them() {
         std::fs::write(dir.path().join("rig.toml"), rig).unwrap();
         let files = Session::from_dir(dir.path()).unwrap();
         assert_eq!(files.photos.len(), K, "flats in their own folder are not photos");
-        let captured = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap();
+        let captured =
+            session::capture(&files, &CaptureOptions::default(), &skinkit_maps::progress::NoProgress).unwrap();
         (captured.report.error_vs_truth_degrees.unwrap().mean, captured.report.corrections)
     };
     let (with, corrections) = error(&rig_text);
@@ -174,7 +175,7 @@ fn a_vignetting_model_removes_lens_falloff() {
     // measured is how far it strays from its own mean (the render's is a constant 0.7).
     let albedo_error = |photos: Vec<Photo>| {
         let stack = PhotoStack::new(photos, (1..=K).map(|i| format!("{i:02}.png")).collect()).unwrap();
-        let solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::no_progress).unwrap();
+        let solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::NoProgress).unwrap();
         let solve::AlbedoMap::Gray(a) = solution.albedo else { panic!("grey photos give grey albedo") };
         let valid: Vec<f64> = a.as_slice().iter().filter(|v| **v > 0.0).map(|&v| v as f64).collect();
         let mean = valid.iter().sum::<f64>() / valid.len() as f64;

@@ -45,8 +45,8 @@ fn d9_a_photo_stack_over_the_memory_limit_is_refused_before_decoding() {
     let px = 16384u64 * 16384;
     let by_hand = 20 * px + (8 * px).max(12 * px);
     assert_eq!(session::memory_estimate(&files, None, &options).unwrap(), by_hand);
-    let (result, peak) = peak_during(|| session::capture(&files, &options, &|_| {}));
-    let e = result.unwrap_err().to_string();
+    let (result, peak) = peak_during(|| session::capture(&files, &options, &skinkit_maps::progress::NoProgress));
+    let e = result.map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
     assert!(e.contains("needs an estimated 8192 MiB") && e.contains("memory limit of 4096 MiB"), "{e}");
     assert!(e.contains(&dir.path().display().to_string()), "names the photos' folder: {e}");
     assert!(peak < 8 * MIB, "{} MiB held before refusing", peak / MIB);
@@ -62,7 +62,8 @@ fn d9_the_estimate_bounds_what_a_capture_holds() {
     // 256x256 16-bit grey (16 bytes a pixel) and the detrended copy (12).
     let px = 256 * 256;
     assert_eq!(estimate, 20 * px + 12 * px + (16 * px).max(12 * px));
-    let (captured, peak) = peak_during(|| session::capture(&files, &options, &|_| {}).unwrap());
+    let (captured, peak) =
+        peak_during(|| session::capture(&files, &options, &skinkit_maps::progress::NoProgress).unwrap());
     drop(captured);
     eprintln!(
         "cheek 256x256: estimate {estimate} bytes, heap peak {peak} bytes ({:.2})",
@@ -148,7 +149,8 @@ fn the_estimate_bounds_raw_bracketed_and_flat_fielded_captures() {
         let files = Session::from_dir(dir.path()).unwrap();
         let options = CaptureOptions::default();
         let estimate = session::memory_estimate(&files, None, &options).unwrap() as usize;
-        let (captured, peak) = peak_during(|| session::capture(&files, &options, &|_| {}).unwrap());
+        let (captured, peak) =
+            peak_during(|| session::capture(&files, &options, &skinkit_maps::progress::NoProgress).unwrap());
         assert_eq!(captured.report.width, side as usize, "{name}");
         drop(captured);
         let ratio = peak as f64 / estimate as f64;
@@ -193,11 +195,11 @@ fn d7_rig_check_refuses_exactly_what_capture_refuses() {
                 truth: None,
                 skipped: Vec::new(),
             };
-            let captured = session::capture(&files, &options, &|_| {});
+            let captured = session::capture(&files, &options, &skinkit_maps::progress::NoProgress);
             assert_eq!(checked.is_ok(), captured.is_ok(), "condition {c}, limit {max_condition}");
             assert_eq!(checked.is_ok(), c <= max_condition, "condition {c}, limit {max_condition}");
             if let Err(e) = checked {
-                let e = e.to_string();
+                let e = skinkit_maps::error::one_line(&e);
                 assert!(e.contains(&path.display().to_string()) && e.contains("--max-condition"), "{e}");
             }
         }
@@ -210,7 +212,9 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rig.toml");
     let many = Rig::turntable(200, 45.0, 1.0).unwrap();
-    let e = session::check_rig(&path, &many, None, &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &many, None, &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("200 lights") && e.contains("at most 128") && e.contains("rig.toml"), "{e}");
     // Refused before any photo is read: these 200 photos are headers without pixels.
     many.save(&path).unwrap();
@@ -222,14 +226,20 @@ fn d7_too_many_lights_and_a_missing_ambient_are_rig_errors() {
         })
         .collect();
     let files = Session { rig: path.clone(), photos, mask: None, ambient: None, truth: None, skipped: Vec::new() };
-    let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
+    let e = session::capture(&files, &CaptureOptions::default(), &skinkit_maps::progress::NoProgress)
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("at most 128"), "{e}");
 
     let with_ambient = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(dir.path().join("nope.png")));
-    let e = session::check_rig(&path, &with_ambient, None, &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &with_ambient, None, &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("ambient") && e.contains("nope.png") && e.contains("rig.toml"), "{e}");
     let given = dir.path().join("gone.png");
-    let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &with_ambient, Some(&given), &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("ambient frame") && e.contains("gone.png"), "the flag's file overrides the rig's: {e}");
 }
 
@@ -241,6 +251,8 @@ fn d13_an_ambient_that_is_not_an_image_is_refused_by_the_rig_check() {
     let path = dir.path().join("rig.toml");
     let rig = Rig::turntable(8, 45.0, 1.0).unwrap().with_ambient(Some(path.clone()));
     rig.save(&path).unwrap();
-    let e = session::check_rig(&path, &rig, None, &SolveConfig::default()).unwrap_err().to_string();
+    let e = session::check_rig(&path, &rig, None, &SolveConfig::default())
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("field `ambient` (the ambient frame)") && e.contains("not a readable image"), "{e}");
 }

@@ -33,7 +33,7 @@ fn near_solve_removes_the_bias_of_a_close_lamp() {
     for method in [Method::LeastSquares, Method::Robust] {
         let config = SolveConfig { method, ..SolveConfig::default() };
         let near = near::solve(&stack, &rig, &config).unwrap();
-        let directional = solve::solve(&stack, &rig, &config, &solve::no_progress).unwrap();
+        let directional = solve::solve(&stack, &rig, &config, &solve::NoProgress).unwrap();
         let near_err = near.normals.angular_error(&field.normals, None).unwrap();
         let dir_err = directional.normals.angular_error(&field.normals, None).unwrap();
         println!("{method:?}: near-light mean {:.4} deg, directional mean {:.3} deg", near_err.mean, dir_err.mean);

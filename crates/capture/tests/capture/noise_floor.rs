@@ -31,7 +31,7 @@ fn session(field: &Heightfield, k: usize, noise: f32, effects: bool) -> (PhotoSt
 }
 
 fn solve(stack: &PhotoStack, rig: &Rig, method: Method) -> Solution {
-    solve::solve(stack, rig, &SolveConfig { method, ..SolveConfig::default() }, &solve::no_progress).unwrap()
+    solve::solve(stack, rig, &SolveConfig { method, ..SolveConfig::default() }, &solve::NoProgress).unwrap()
 }
 
 fn mean_error(solution: &Solution, field: &Heightfield) -> f32 {

@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use skinkit_capture::detrend::detrend;
-use skinkit_capture::solve::{Method, PhotoStack, SolveConfig, no_progress, solve};
+use skinkit_capture::solve::{Method, NoProgress, PhotoStack, SolveConfig, solve};
 use skinkit_capture::{Light, Rig};
 use skinkit_maps::{Channels, Grid, NormalMap, Photo, Samples};
 
@@ -79,7 +79,7 @@ proptest! {
     fn least_squares_matches_a_naive_svd_solve((rig, w, h, readings, u16) in solve_case()) {
         let stack = photos(w, h, &readings, u16);
         let cfg = SolveConfig { method: Method::LeastSquares, ..SolveConfig::default() };
-        let sol = solve(&stack, &rig, &cfg, &no_progress).unwrap();
+        let sol = solve(&stack, &rig, &cfg, &NoProgress).unwrap();
         let l = light_matrix(&rig);
         let albedo = sol.albedo.as_gray().expect("grey photos give grey albedo");
         for p in 0..w * h {
@@ -109,7 +109,7 @@ proptest! {
         prop_assume!(lit && rig.lights().iter().all(|l| albedo * l.intensity().x < 0.99));
         let readings: Vec<Vec<f32>> =
             rig.lights().iter().map(|l| vec![albedo * l.intensity().x * normal.dot(l.direction()); 6]).collect();
-        let sol = solve(&photos(3, 2, &readings, false), &rig, &SolveConfig { method, ..SolveConfig::default() }, &no_progress)
+        let sol = solve(&photos(3, 2, &readings, false), &rig, &SolveConfig { method, ..SolveConfig::default() }, &NoProgress)
             .unwrap();
         for (p, n) in sol.normals.as_slice().iter().enumerate() {
             prop_assert!((*n - normal).length() < 1e-4, "{:?} pixel {}: {} vs {}", method, p, n, normal);

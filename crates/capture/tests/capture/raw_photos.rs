@@ -68,7 +68,7 @@ fn write_dngs(dir: &Path, photos: &[Vec<[f32; 3]>], cfa: [u8; 4], black: u16, wh
 fn capture_folder(dir: &Path, options: &CaptureOptions) -> Captured {
     let files = Session::from_dir(dir).unwrap();
     assert_eq!(files.photos.len(), K, "{}", dir.display());
-    session::capture(&files, options, &|_| {}).unwrap()
+    session::capture(&files, options, &skinkit_maps::progress::NoProgress).unwrap()
 }
 
 fn folder(lights: &[RenderLight], field: &Heightfield) -> tempfile::TempDir {
@@ -143,7 +143,9 @@ fn malformed_raw_photos_are_errors_naming_the_file() {
     for (what, data) in cases {
         std::fs::write(dir.path().join("03.dng"), &data).unwrap();
         let files = Session::from_dir(dir.path()).unwrap();
-        let e = session::capture(&files, &options, &|_| {}).unwrap_err().to_string();
+        let e = session::capture(&files, &options, &skinkit_maps::progress::NoProgress)
+            .map_err(|e| skinkit_maps::error::one_line(&e))
+            .unwrap_err();
         eprintln!("{what}: {e}");
         assert!(e.contains("03.dng"), "{what}: {e}");
         if what == "oversized" {

@@ -8,6 +8,7 @@ use skinkit_capture::session::{self, CaptureOptions, Session, Stage};
 use skinkit_capture::solve::Method;
 use skinkit_heightfield::{self as hf, SkinParams};
 use skinkit_maps::io::{self, PngLayout};
+use skinkit_maps::progress::Step;
 use skinkit_maps::{NormalEncoding, Samples};
 
 /// Renders a cheek mold of `size` pixels under the paper's turntable into `dir` (photos 01-08,
@@ -54,9 +55,15 @@ fn a_session_folder_is_captured_by_the_library_alone() {
         let mut options = CaptureOptions::default();
         options.solve.method = method;
         stages.lock().unwrap().clear();
-        let captured = session::capture(&files, &options, &|s| stages.lock().unwrap().push(s)).unwrap();
+        let record = |step: Step<'_>| {
+            if let Step::Start { name, .. } = step {
+                stages.lock().unwrap().push(name.to_owned());
+            }
+        };
+        let captured = session::capture(&files, &options, &record).unwrap();
         let stages = stages.lock().unwrap().clone();
-        assert_eq!(stages, [Stage::Decode, Stage::Solve, Stage::Detrend, Stage::Statistics, Stage::Height]);
+        let names = [Stage::Decode, Stage::Solve, Stage::Detrend, Stage::Statistics, Stage::Height].map(Stage::name);
+        assert_eq!(stages, names);
         let r = &captured.report;
         assert_eq!((r.width, r.height, r.light_count), (96, 96, 8));
         assert_eq!(r.solver, if method == Method::Robust { "robust" } else { "leastsquares" });
@@ -77,16 +84,20 @@ fn a_session_folder_is_captured_by_the_library_alone() {
 #[test]
 fn session_errors_name_the_file() {
     let dir = tempfile::tempdir().unwrap();
-    let e = Session::from_dir(dir.path()).unwrap_err().to_string();
+    let e = Session::from_dir(dir.path()).map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
     assert!(e.contains("no rig.toml"), "{e}");
     write_session(dir.path(), 16, 0.002);
     std::fs::remove_file(dir.path().join("08.png")).unwrap();
     let files = Session::from_dir(dir.path()).unwrap();
-    let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
+    let e = session::capture(&files, &CaptureOptions::default(), &skinkit_maps::progress::NoProgress)
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     assert!(e.contains("8 lights") && e.contains("7 photos") && e.contains("rig.toml"), "{e}");
     std::fs::write(dir.path().join("08.png"), b"not a png").unwrap();
     let files = Session::from_dir(dir.path()).unwrap();
-    let e = session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string();
+    let e = session::capture(&files, &CaptureOptions::default(), &skinkit_maps::progress::NoProgress)
+        .map_err(|e| skinkit_maps::error::one_line(&e))
+        .unwrap_err();
     // The photo's place in the rig, then its file, each once.
     assert!(e.starts_with("photo 8: ") && e.matches("08.png").count() == 1, "{e}");
 }
@@ -100,7 +111,9 @@ fn d11_rig_errors_name_the_rig_file() {
     let capture = |rig_text: &str| {
         std::fs::write(&rig_path, rig_text).unwrap();
         let files = Session::from_dir(dir.path()).unwrap();
-        session::capture(&files, &CaptureOptions::default(), &|_| {}).unwrap_err().to_string()
+        session::capture(&files, &CaptureOptions::default(), &skinkit_maps::progress::NoProgress)
+            .map_err(|e| skinkit_maps::error::one_line(&e))
+            .unwrap_err()
     };
     let rig_name = rig_path.display().to_string();
     // Eight lights within +-0.015 of the y = 0 plane: rank 3, but a condition number over 50.

@@ -4,7 +4,7 @@
 
 use glam::{DVec3, Vec3};
 use nalgebra::{DMatrix, DVector};
-use skinkit_capture::solve::{AlbedoMap, Method, PhotoStack, SolveConfig, no_progress, solve};
+use skinkit_capture::solve::{AlbedoMap, Method, NoProgress, PhotoStack, SolveConfig, solve};
 use skinkit_capture::{Light, Rig};
 use skinkit_maps::normal::angle_degrees;
 use skinkit_maps::{Channels, Photo, Samples};
@@ -85,7 +85,7 @@ fn runs_of_dropped_readings_match_a_naive_subset_solve() {
             .collect();
         let stack = PhotoStack::new(photos, (0..K).map(|i| format!("{i}.png")).collect()).unwrap();
         let config = SolveConfig { method: Method::Threshold, ..SolveConfig::default() };
-        let sol = solve(&stack, &rig, &config, &no_progress).unwrap();
+        let sol = solve(&stack, &rig, &config, &NoProgress).unwrap();
         let AlbedoMap::Gray(albedo) = &sol.albedo else { panic!("grey photos give grey albedo") };
         let mut counts = vec![0; K + 1];
         for y in 0..h {
@@ -111,7 +111,7 @@ fn runs_of_dropped_readings_match_a_naive_subset_solve() {
         assert!(counts[8] > 0 && counts[7] > 0 && counts[6] > 0 && counts[5] > 0, "width {w}: {counts:?}");
         // The robust solve drops the same readings, and its 2 % gate keeps every answer here
         // (the ripple leaves about 1 %), so it gives the same maps to the bit.
-        let robust = solve(&stack, &rig, &SolveConfig::default(), &no_progress).unwrap();
+        let robust = solve(&stack, &rig, &SolveConfig::default(), &NoProgress).unwrap();
         assert_eq!(robust.normals, sol.normals, "width {w}");
         assert_eq!(robust.albedo, sol.albedo, "width {w}");
         assert_eq!(robust.confidence, sol.confidence, "width {w}");

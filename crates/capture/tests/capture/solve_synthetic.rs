@@ -5,9 +5,10 @@ use glam::{DVec3, Vec3};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use skinkit_capture::solve::{AlbedoMap, Method, PhotoStack, Solution, SolveConfig, no_progress, solve, solve_into};
+use skinkit_capture::solve::{AlbedoMap, Method, NoProgress, PhotoStack, Solution, SolveConfig, solve, solve_into};
 use skinkit_capture::{Error, Light, Rig};
 use skinkit_maps::normal::angle_degrees;
+use skinkit_maps::progress::Step;
 use skinkit_maps::{Channels, Grid, Photo, Samples, Transfer};
 
 /// `k` lights evenly on a ring `theta` degrees from the camera axis.
@@ -69,7 +70,7 @@ fn config(method: Method) -> SolveConfig {
 }
 
 fn run(photos: Vec<Photo>, rig: &Rig, method: Method) -> Solution {
-    solve(&stack(photos), rig, &config(method), &no_progress).unwrap()
+    solve(&stack(photos), rig, &config(method), &NoProgress).unwrap()
 }
 
 /// Mean angle in degrees over texels where `keep` holds.
@@ -150,7 +151,7 @@ fn least_squares_matches_naive_solve_on_random_inputs() {
     let l = DMatrix::from_fn(k, 3, |i, j| rig.lights()[i].direction()[j] as f64);
     for photos in [float_photos(w, h, values.clone()), u16_photos(w, h, values.clone())] {
         let scale = if photos[0].bit_depth() == 16 { 65535.0 } else { 1.0 };
-        let sol = solve(&stack(photos.clone()), &rig, &config(Method::LeastSquares), &no_progress).unwrap();
+        let sol = solve(&stack(photos.clone()), &rig, &config(Method::LeastSquares), &NoProgress).unwrap();
         for p in 0..w * h {
             let r = DVector::from_fn(k, |i, _| {
                 photos[i].samples().get(p) as f64 / scale / rig.lights()[i].intensity().x as f64
@@ -237,7 +238,7 @@ fn results_do_not_depend_on_thread_count() {
     let st = stack(u16_photos(w, h, values));
     let with = |threads| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| solve(&st, &rig, &SolveConfig::default(), &no_progress).unwrap())
+        pool.install(|| solve(&st, &rig, &SolveConfig::default(), &NoProgress).unwrap())
     };
     let (a, b) = (with(1), with(2));
     let bits = |s: &Solution| {
@@ -260,8 +261,8 @@ fn ninety_six_lights_with_a_tiny_cache() {
     let st = stack(u16_photos(w, h, values));
     let small = SolveConfig { cache_capacity: 3, ..SolveConfig::default() };
     let large = SolveConfig { cache_capacity: 1 << 20, ..SolveConfig::default() };
-    let a = solve(&st, &rig, &small, &no_progress).unwrap();
-    let b = solve(&st, &rig, &large, &no_progress).unwrap();
+    let a = solve(&st, &rig, &small, &NoProgress).unwrap();
+    let b = solve(&st, &rig, &large, &NoProgress).unwrap();
     assert_eq!(a.normals, b.normals);
     assert_eq!(a.confidence, b.confidence);
     // Pixels facing the camera see every unshadowed light; the dropped ones are exactly the zeros.
@@ -319,24 +320,24 @@ fn solve_into_reuses_or_replaces_maps_with_the_same_results() {
     };
     for method in [Method::LeastSquares, Method::Robust] {
         let cfg = config(method);
-        let fresh_grey = solve(&stack(grey(31, 9)), &rig, &cfg, &no_progress).unwrap();
-        let fresh_rgb = solve(&stack(rgb(31, 9)), &rig, &cfg, &no_progress).unwrap();
+        let fresh_grey = solve(&stack(grey(31, 9)), &rig, &cfg, &NoProgress).unwrap();
+        let fresh_rgb = solve(&stack(rgb(31, 9)), &rig, &cfg, &NoProgress).unwrap();
         assert!(matches!(fresh_grey.albedo, AlbedoMap::Gray(_)) && matches!(fresh_rgb.albedo, AlbedoMap::Rgb(_)));
         let same = |a: &Solution, b: &Solution| {
             a.normals == b.normals && a.albedo == b.albedo && a.confidence == b.confidence && a.stats == b.stats
         };
         // Reused in place: a solution of the same stack, and one of a differently sized stack.
         let mut out = fresh_grey.clone();
-        solve_into(&stack(grey(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        solve_into(&stack(grey(31, 9)), &rig, &cfg, &NoProgress, &mut out).unwrap();
         assert!(same(&out, &fresh_grey), "{method:?}");
-        let mut out = solve(&stack(grey(12, 40)), &rig, &cfg, &no_progress).unwrap();
-        solve_into(&stack(grey(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        let mut out = solve(&stack(grey(12, 40)), &rig, &cfg, &NoProgress).unwrap();
+        solve_into(&stack(grey(31, 9)), &rig, &cfg, &NoProgress, &mut out).unwrap();
         assert!(same(&out, &fresh_grey), "{method:?}");
         // Kind switches both ways.
         let mut out = fresh_rgb.clone();
-        solve_into(&stack(grey(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        solve_into(&stack(grey(31, 9)), &rig, &cfg, &NoProgress, &mut out).unwrap();
         assert!(same(&out, &fresh_grey), "{method:?}");
-        solve_into(&stack(rgb(31, 9)), &rig, &cfg, &no_progress, &mut out).unwrap();
+        solve_into(&stack(rgb(31, 9)), &rig, &cfg, &NoProgress, &mut out).unwrap();
         assert!(same(&out, &fresh_rgb), "{method:?}");
         assert_eq!(fresh_rgb.albedo.to_color_map().get(3, 4), &fresh_rgb.albedo.get(3, 4));
         assert_eq!(fresh_grey.albedo.to_color_map().get(3, 4), &fresh_grey.albedo.get(3, 4));
@@ -376,7 +377,7 @@ fn ambient_frame_is_subtracted() {
     let amb = u16_photos(w, h, vec![ambient]).pop().unwrap();
     for method in [Method::LeastSquares, Method::Robust] {
         let st = stack(u16_photos(w, h, lit.clone())).with_ambient(amb.clone(), "dark.png").unwrap();
-        let sol = solve(&st, &rig, &config(method), &no_progress).unwrap();
+        let sol = solve(&st, &rig, &config(method), &NoProgress).unwrap();
         assert!(mean_error(&sol, &truth, lit_by_all(&truth, &rig)) < 0.05);
     }
 }
@@ -388,7 +389,7 @@ fn mask_excludes_texels() {
     let truth = bumps(w, h);
     let mask = Grid::from_fn(w, h, |x, _| x >= 10);
     let st = stack(u16_photos(w, h, render(&truth, 0.6, &rig))).with_mask(mask).unwrap();
-    let sol = solve(&st, &rig, &SolveConfig::default(), &no_progress).unwrap();
+    let sol = solve(&st, &rig, &SolveConfig::default(), &NoProgress).unwrap();
     assert_eq!(sol.stats.masked_count, 10 * h);
     assert_eq!(sol.stats.invalid_count, 10 * h);
     assert_eq!(sol.normals.get(3, 5), Vec3::ZERO);
@@ -454,9 +455,9 @@ fn bad_rigs_and_stacks_are_refused() {
     assert!(matches!(Rig::new(two, "two"), Err(Error::BadFile { .. })));
     // A condition number above the solver's bound is refused by the solve.
     let narrow = SolveConfig { max_condition: 1.5, ..SolveConfig::default() };
-    let err = solve(&stack(photos(8)), &ring(8, 20.0), &narrow, &no_progress).unwrap_err();
+    let err = solve(&stack(photos(8)), &ring(8, 20.0), &narrow, &NoProgress).unwrap_err();
     assert!(matches!(err, Error::BadRig(_)), "{err}");
-    let err = solve(&stack(photos(7)), &ring(8, 45.0), &SolveConfig::default(), &no_progress).unwrap_err();
+    let err = solve(&stack(photos(7)), &ring(8, 45.0), &SolveConfig::default(), &NoProgress).unwrap_err();
     assert_eq!(err.to_string(), "rig has 8 lights but 7 photos were given");
     let mut mixed = photos(3);
     mixed[2] = Photo::new(5, 3, Channels::Gray, Samples::F32(vec![0.0; 15])).unwrap();
@@ -475,11 +476,15 @@ fn bad_rigs_and_stacks_are_refused() {
 #[test]
 fn progress_reaches_one() {
     let rig = ring(8, 45.0);
-    let last = std::sync::Mutex::new(Vec::new());
+    let seen = std::sync::Mutex::new(Vec::new());
     let st = stack(float_photos(10, 40, render(&bumps(10, 40), 0.5, &rig)));
-    solve(&st, &rig, &SolveConfig::default(), &|f: f32| last.lock().unwrap().push(f)).unwrap();
-    let seen = last.into_inner().unwrap();
-    assert_eq!(seen.first(), Some(&0.0));
-    assert_eq!(seen.last(), Some(&1.0));
-    assert!(seen.iter().all(|f| (0.0..=1.0).contains(f)));
+    let record = |step: Step<'_>| seen.lock().unwrap().push(format!("{step:?}"));
+    solve(&st, &rig, &SolveConfig::default(), &record).unwrap();
+    let seen = seen.into_inner().unwrap();
+    // One stage of the image's 40 rows, every row told once, from whichever thread solved it.
+    assert_eq!(seen.first().map(String::as_str), Some("Start { name: \"solve\", len: 40 }"));
+    assert_eq!(seen.last().map(String::as_str), Some("Finish"));
+    let rows: u64 =
+        seen.iter().filter_map(|s| s.strip_prefix("Advance(")?.strip_suffix(')')?.parse::<u64>().ok()).sum();
+    assert_eq!(rows, 40);
 }

@@ -73,8 +73,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
 /// When a stage cannot read its samples or a file cannot be written.
 pub fn to_dir(config: &Config, stages: &[Stage], dir: &Path, out: &Output) -> Result<Report> {
     let start = Instant::now();
-    let set =
-        OutputSet::folder(dir, MARKER).with_context(|| format!("cannot write output folder {}", dir.display()))?;
+    let set = OutputSet::folder(dir, MARKER).context("cannot write the output folder")?;
     let mut reports = Vec::new();
     for &stage in stages {
         reports.push(measure_stage(stage, config, out)?);
@@ -87,19 +86,15 @@ pub fn to_dir(config: &Config, stages: &[Stage], dir: &Path, out: &Output) -> Re
         stages: reports,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
-    write_all(set, dir, &report)?;
+    write_all(set, &report)?;
     Ok(report)
 }
 
 /// One stage under its progress bar; a skipped stage is noted.
 fn measure_stage(stage: Stage, config: &Config, out: &Output) -> Result<StageReport> {
     let bar = out.progress(0, stage.name());
-    let progress = |_: Stage, done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
-    let report = skinkit_accuracy::measure(stage, config, &progress).with_context(|| format!("stage {stage}"))?;
-    bar.finish_and_clear();
+    let report = skinkit_accuracy::measure(stage, config, &bar).with_context(|| format!("stage {stage}"))?;
+    bar.clear();
     if let Some(reason) = &report.skipped {
         out.warn(format!("{stage}: skipped: {reason}"));
     } else {
@@ -108,8 +103,8 @@ fn measure_stage(stage: Stage, config: &Config, out: &Output) -> Result<StageRep
     Ok(report)
 }
 
-/// Writes the markdown, the plots and the JSON (last) into `dir`, all or nothing.
-fn write_all(set: OutputSet, dir: &Path, report: &Report) -> Result<()> {
+/// Writes the markdown, the plots and the JSON (last) into the set's folder, all or nothing.
+fn write_all(set: OutputSet, report: &Report) -> Result<()> {
     let bytes = |name: &str, data: &[u8]| -> Result<()> {
         set.write(name, |p| {
             write_atomic(p, |w| {
@@ -117,15 +112,15 @@ fn write_all(set: OutputSet, dir: &Path, report: &Report) -> Result<()> {
                 w.write_all(data).map_err(|e| skinkit_maps::Error::Io { path: p.to_owned(), error: e })
             })
         })
-        .with_context(|| format!("cannot write {}", dir.join(name).display()))
+        .context("cannot write")
     };
     bytes("accuracy.md", markdown::render(report).as_bytes())?;
     for stage in &report.stages {
         let png = plot::png(stage)?;
         bytes(&markdown::plot_name(stage), &png)?;
     }
-    write_json_in(&set, MARKER, &dir.join(MARKER), report)?;
-    set.commit().with_context(|| format!("cannot write output folder {}", dir.display()))?;
+    write_json_in(&set, MARKER, report)?;
+    set.commit().context("cannot write the output folder")?;
     Ok(())
 }
 

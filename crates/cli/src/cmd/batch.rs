@@ -39,6 +39,7 @@ use skinkit_batch::outcome::{self, Settings, lock};
 use skinkit_batch::scheduler::ShardSpec;
 use skinkit_batch::shard::{self, Shard};
 use skinkit_batch::{BatchReport, FaceOutcome, Job, SessionOutcome, Unit, page, review, units};
+use skinkit_maps::progress::Progress;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -237,9 +238,9 @@ fn capture_units(
         }
         bar.suspend(|| out.record("session", &outcome));
         lock(&finished).push(outcome);
-        bar.inc(1);
+        bar.advance(1);
     });
-    bar.finish_and_clear();
+    bar.clear();
     out.swept(&lock(&swept));
     let outcomes = lock(&finished).clone();
     let faces = faces(units, &outcomes, args.force, out);

@@ -7,6 +7,7 @@ use skinkit_capture::session::{self, Session};
 
 use crate::output::Output;
 use crate::solve_flags::SolveArgs;
+use skinkit_maps::progress::Progress;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -78,14 +79,11 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let files = Session { rig: args.rig, photos, mask: args.mask, ambient: args.ambient, truth: args.truth, skipped };
     check_out(&args.out, args.photos_from.as_deref(), &files)?;
     let set = skinkit_capture::outputs::output_set(&args.out)?;
-    let bar = out.progress(4, "capture");
-    let mut captured = session::capture(&files, &options, &|stage| {
-        bar.set_message(stage.name());
-        bar.inc(1);
-    })?;
-    bar.set_message("write");
+    let bar = out.progress(0, "capture");
+    let mut captured = session::capture(&files, &options, &bar)?;
+    bar.start("write", 0);
     let swept = skinkit_capture::outputs::write(set, &args.out, &mut captured, &options)?;
-    bar.finish_and_clear();
+    bar.clear();
     out.swept(&swept);
     for w in &captured.report.warnings {
         out.warn(w);

@@ -89,23 +89,19 @@ fn gltf(args: GltfArgs, out: &Output) -> Result<i32> {
     let dir = args.out.parent().map(Path::to_path_buf).unwrap_or_default();
     check_outputs(&args, &scene, &dir, &stem, container)?;
     let options = ExportOptions { container, stem, normal_bits: args.normal_bits };
-    let bar = out.progress(5, "export");
-    let exported = export::export(&scene, &options, &|stage| {
-        bar.set_message(stage.to_owned());
-        bar.inc(1);
-    })?;
-    bar.finish_and_clear();
+    let bar = out.progress(0, "export");
+    let exported = export::export(&scene, &options, &bar)?;
+    bar.clear();
     exported.summary.warnings.iter().for_each(|w| out.warn(w));
     let mut set = OutputSet::files();
     let mut files = Vec::new();
     for (i, file) in exported.files.iter().enumerate() {
         // The main file is `--out` as spelt (`HEAD.GLB` stays so); side files are named by the library.
         let path = if i == 0 { args.out.clone() } else { dir.join(&file.name) };
-        set.write_file(&path, |p| write_bytes(p, &file.bytes))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        set.write_file(&path, |p| write_bytes(p, &file.bytes)).context("cannot write")?;
         files.push(WrittenFile { path: path.display().to_string(), bytes: file.bytes.len() });
     }
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
+    out.swept(&set.commit().context("cannot write")?);
     let report = Report {
         scene: args.scene.display().to_string(),
         container,

@@ -113,32 +113,31 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let storage = ExrStorage { zip: args.zip, half: args.half };
     let mut set = OutputSet::files();
     let mut png = None;
-    let written = |path: &PathBuf| format!("cannot write {}", path.display());
     set.write_file(&args.out, |p| {
         deliver::write_height(p, &height, storage).map(|s| png = s).map_err(skinkit_maps::Error::from)
     })
-    .with_context(|| written(&args.out))?;
+    .context("cannot write")?;
     if let Some(path) = &args.png {
         set.write_file(path, |p| {
             deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(skinkit_maps::Error::from)
         })
-        .with_context(|| written(path))?;
+        .context("cannot write")?;
     }
     if args.cavity.is_some() || args.bands.is_some() {
         let bands = deliver::bands(&height);
         if let Some(path) = &args.cavity {
             let cavity = deliver::cavity(&bands);
             set.write_file(path, |p| deliver::write_cavity_png(p, &cavity).map_err(skinkit_maps::Error::from))
-                .with_context(|| written(path))?;
+                .context("cannot write")?;
         }
         if let Some(path) = &args.bands {
             set.write_file(path, |p| {
                 deliver::write_bands_exr(p, &height, &bands, storage).map_err(skinkit_maps::Error::from)
             })
-            .with_context(|| written(path))?;
+            .context("cannot write")?;
         }
     }
-    out.swept(&set.commit().with_context(|| written(&args.out))?);
+    out.swept(&set.commit().context("cannot write")?);
     let (width, rows) = normals.size();
     let seconds = height.report.seconds;
     let report = Report {

@@ -98,8 +98,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     if let Some(path) = &args.report {
         crate::pipeline::write_json_file(&mut set, path, &report)?;
     }
-    let first = report.images.first().map(|i| i.path.clone()).unwrap_or_default();
-    out.swept(&set.commit().with_context(|| format!("cannot write {first}"))?);
+    out.swept(&set.commit().context("cannot write")?);
     out.result(&report, || human(&report));
     Ok(0)
 }

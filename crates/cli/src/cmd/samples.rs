@@ -15,6 +15,7 @@ use skinkit_maps::io::{self, PngLayout};
 use skinkit_maps::{NormalEncoding, Samples, Vec3};
 
 use crate::output::Output;
+use skinkit_maps::progress::Progress;
 
 /// The sample regions and the heightfield preset each uses.
 pub const REGIONS: &[&str] = &["forehead", "forehead-edge", "nose", "cheek"];
@@ -140,7 +141,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     for region in regions {
         let dir = args.out.join(region);
         write_region(region, &dir, &args, &rig)?;
-        bar.inc(1);
+        bar.advance(1);
         written.push(Written {
             region: region.to_string(),
             folder: dir.display().to_string(),
@@ -148,7 +149,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
             height: args.size,
         });
     }
-    bar.finish_and_clear();
+    bar.clear();
     out.result(&written, || {
         written.iter().map(|w| format!("{}: {}", w.region, w.folder)).collect::<Vec<_>>().join("\n")
     });

@@ -60,18 +60,16 @@ pub fn run_stitch(args: StitchArgs, out: &Output) -> Result<i32> {
     let t = Instant::now();
     // One set: the map, the labels and the report appear together or not at all.
     let mut set = OutputSet::files();
-    let written = |path: &Path| format!("cannot write {}", path.display());
-    set.write_file(&args.out, |p| files::write_normal_map(p, &face.composed.normals))
-        .with_context(|| written(&args.out))?;
+    set.write_file(&args.out, |p| files::write_normal_map(p, &face.composed.normals)).context("cannot write")?;
     if let Some(path) = &args.labels {
-        set.write_file(path, |p| files::write_labels(p, &face.composed.labels)).with_context(|| written(path))?;
+        set.write_file(path, |p| files::write_labels(p, &face.composed.labels)).context("cannot write")?;
     }
     let mut report = face.report(&args.out, t.elapsed().as_secs_f64(), start.elapsed().as_secs_f64());
     report.peak_memory_mib = skinkit_maps::limits::peak_resident_mib();
     if let Some(path) = &args.report {
         pipeline::write_json_file(&mut set, path, &report)?;
     }
-    out.swept(&set.commit().with_context(|| written(&args.out))?);
+    out.swept(&set.commit().context("cannot write")?);
     out.result(&report, || human(&report));
     Ok(0)
 }

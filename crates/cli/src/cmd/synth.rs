@@ -9,12 +9,10 @@
 //! are refused when `--coords` is asked for.
 
 use skinkit_maps::format::ImageFormat;
-use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indicatif::ProgressBar;
 use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::Limits;
@@ -24,9 +22,6 @@ use skinkit_synth::{Grown, Map, OptionsReport, QualityReport, Search, SynthConfi
 use crate::flags::{self, Green, MapKind, TransferArg};
 use crate::output::Output;
 use crate::pipeline;
-
-/// Steps of each level's progress bar (the library reports a fraction per output row).
-const PROGRESS_STEPS: u64 = 1000;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -188,18 +183,16 @@ impl MapArgs {
     fn read(&self, path: &Path) -> Result<Map> {
         let limits = Limits::default();
         if self.is_color() {
-            Map::read_color(path, Transfer::from(self.transfer), &limits)
-                .with_context(|| format!("cannot read colour image {}", path.display()))
+            Map::read_color(path, Transfer::from(self.transfer), &limits).context("cannot read the colour image")
         } else {
-            Map::read_normals(path, self.encoding()?, &limits)
-                .with_context(|| format!("cannot read normal map {}", path.display()))
+            Map::read_normals(path, self.encoding()?, &limits).context("cannot read the normal map")
         }
     }
 
     /// Adds `path` to the output set and writes `map` there.
     fn write(&self, set: &mut OutputSet, path: &Path, map: &Map) -> Result<()> {
         let encoding = self.encoding()?;
-        set.write_file(path, |p| map.write(p, encoding)).with_context(|| format!("cannot write {}", path.display()))
+        set.write_file(path, |p| map.write(p, encoding)).context("cannot write")
     }
 }
 
@@ -318,33 +311,6 @@ fn config(args: &Args, (width, height): (usize, usize)) -> SynthConfig {
     }
 }
 
-/// One progress bar per pyramid level, each created when its level starts.
-struct LevelBars<'a> {
-    out: &'a Output,
-    current: RefCell<Option<(usize, ProgressBar)>>,
-}
-
-impl LevelBars<'_> {
-    fn update(&self, level: usize, fraction: f32) {
-        let mut current = self.current.borrow_mut();
-        if current.as_ref().is_none_or(|(l, _)| *l != level) {
-            if let Some((_, bar)) = current.take() {
-                bar.finish();
-            }
-            *current = Some((level, self.out.progress(PROGRESS_STEPS, &format!("level {level}"))));
-        }
-        if let Some((_, bar)) = current.as_ref() {
-            bar.set_position((fraction.clamp(0.0, 1.0) * PROGRESS_STEPS as f32).round() as u64);
-        }
-    }
-
-    fn finish(&self) {
-        if let Some((_, bar)) = self.current.borrow_mut().take() {
-            bar.finish();
-        }
-    }
-}
-
 fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let start = Instant::now();
     let (Some(exemplar_path), Some(out_path), Some(size)) = (&args.exemplar, &args.out, args.size) else {
@@ -368,11 +334,9 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     }
     let context = || format!("cannot synthesise from {}", exemplar_path.display());
     let (validated, adjusted) = requested.validate(ew, eh).with_context(context)?;
-    let bars = LevelBars { out, current: RefCell::new(None) };
-    let progress = |level: usize, fraction: f32| bars.update(level, fraction);
+    let bars = out.stage_bars();
     let Grown { map: output, coords, warnings, level_seconds, guards } =
-        exemplar.grow(&requested, &progress).with_context(context)?;
-    bars.finish();
+        exemplar.grow(&requested, &bars).with_context(context)?;
     // The default level count adapts to the exemplar without a word; a `--levels` the exemplar
     // cannot hold is worth a warning (the report gives the levels used either way).
     for w in warnings.iter().filter(|w| args.levels.is_some() || !adjusted.contains(w)) {
@@ -385,7 +349,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let mut set = OutputSet::files();
     args.map.write(&mut set, out_path, &output)?;
     if let Some(path) = &args.coords {
-        let context = || format!("cannot write coordinate map {}", path.display());
+        let context = || "cannot write the coordinate map";
         set.write_file(path, |p| coords::write(p, &coords)).with_context(context)?;
     }
     let height_map = match (&args.height, &output) {
@@ -410,7 +374,7 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     if let Some(path) = &args.report {
         pipeline::write_json_file(&mut set, path, &report)?;
     }
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", out_path.display()))?);
+    out.swept(&set.commit().context("cannot write")?);
     out.result(&report, || human(&report));
     Ok(invalid_exit(out, out_path, exemplar_path, invalid_texels, size))
 }
@@ -506,7 +470,7 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let replayed = source.replay(&coords).with_context(context)?;
     let mut set = OutputSet::files();
     args.map.write(&mut set, &args.out, &replayed)?;
-    out.swept(&set.commit().with_context(|| format!("cannot write {}", args.out.display()))?);
+    out.swept(&set.commit().context("cannot write")?);
     let (width, height) = coords.size();
     let report = ReplayReport {
         coords: args.coords.display().to_string(),

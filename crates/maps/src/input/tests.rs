@@ -53,6 +53,6 @@ fn text_that_is_not_utf8_is_refused_in_std_words() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("a.toml");
     std::fs::write(&path, b"\xff\xfe").unwrap();
-    let e = read_to_string(&path, Kind::Toml).unwrap_err().to_string();
-    assert!(e.ends_with("stream did not contain valid UTF-8"), "{e}");
+    let e = crate::error::one_line(&read_to_string(&path, Kind::Toml).unwrap_err());
+    assert!(e.ends_with("a.toml: stream did not contain valid UTF-8"), "{e}");
 }

@@ -153,14 +153,19 @@ struct Inputs {
 }
 
 /// Exports `scene` (its mesh, albedo, normal map and BRDF; lights and cameras are not exported).
-/// `progress` is told each stage's name as it starts.
+/// `progress` is told each stage by name as it starts (`mesh`, `albedo`, `normal map`, `tangents`,
+/// `assemble`), and the end of the last.
 ///
 /// # Errors
 /// A mesh or map that cannot be read (named as `skinkit render` names it), a texture or document
 /// that cannot be encoded, a GLB over 4 GiB.
-pub fn export(scene: &Scene, options: &ExportOptions, progress: &dyn Fn(&str)) -> Result<Exported> {
+pub fn export(
+    scene: &Scene,
+    options: &ExportOptions,
+    progress: &dyn skinkit_maps::progress::Progress,
+) -> Result<Exported> {
     let inputs = read_inputs(scene, options, progress)?;
-    progress("tangents");
+    progress.start("tangents", 0);
     let mesh = &inputs.mesh;
     let tangents = frames::tangents(mesh, FrameMethod::MikkTSpace);
     let metres_per_unit = scene.mm_per_unit / 1000.0;
@@ -177,7 +182,7 @@ pub fn export(scene: &Scene, options: &ExportOptions, progress: &dyn Fn(&str)) -
         base_color_factor: material::base_color_factor(scene.albedo.as_ref(), &scene.brdf),
         roughness: roughness.roughness,
     };
-    progress("assemble");
+    progress.start("assemble", 0);
     let files = assemble(scene, options, &geometry, &spec, &inputs)?;
     let info = |p: &Png| TextureInfo { width: p.width, height: p.height, bits: p.bits };
     let summary = ExportSummary {
@@ -191,18 +196,23 @@ pub fn export(scene: &Scene, options: &ExportOptions, progress: &dyn Fn(&str)) -
         invalid_normals: inputs.invalid_normals,
         warnings: inputs.warnings,
     };
+    progress.finish();
     Ok(Exported { files, summary })
 }
 
 /// Reads the mesh and maps the way [`crate::load::load`] does and encodes the maps as PNG.
-fn read_inputs(scene: &Scene, options: &ExportOptions, progress: &dyn Fn(&str)) -> Result<Inputs> {
+fn read_inputs(
+    scene: &Scene,
+    options: &ExportOptions,
+    progress: &dyn skinkit_maps::progress::Progress,
+) -> Result<Inputs> {
     let encode_error = |what: &str, reason| ExportError::Encode { file: scene.name(), what: what.into(), reason };
-    progress("mesh");
+    progress.start("mesh", 0);
     let loaded =
         Mesh::load(&scene.mesh).map_err(|error| LoadError::Mesh { file: scene.name(), field: "mesh".into(), error })?;
     let mut warnings = loaded.warnings;
     let limits = Limits::default();
-    progress("albedo");
+    progress.start("albedo", 0);
     let albedo = match &scene.albedo {
         Some(Albedo::Map(path)) => {
             let texture = crate::load::read_scene_albedo(scene, path, &limits)?;
@@ -210,7 +220,7 @@ fn read_inputs(scene: &Scene, options: &ExportOptions, progress: &dyn Fn(&str)) 
         }
         _ => None,
     };
-    progress("normal map");
+    progress.start("normal map", 0);
     let (normal, invalid_normals) = match &scene.normal_map {
         None => (None, 0),
         Some(spec) => {

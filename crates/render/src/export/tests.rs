@@ -57,7 +57,8 @@ fn tangent_handedness_follows_the_uv_layout() {
     for (mirrored, w) in [(false, 1.0), (true, -1.0)] {
         let dir = tempfile::tempdir().unwrap();
         let scene = scene(dir.path(), &quad_obj(mirrored), false);
-        let exported = export(&scene, &options(Container::Glb, NormalBits::Eight), &|_| {}).unwrap();
+        let exported =
+            export(&scene, &options(Container::Glb, NormalBits::Eight), &skinkit_maps::progress::NoProgress).unwrap();
         let tangents = glb_tangents(&exported.files[0].bytes);
         assert_eq!(tangents.len(), 4);
         for t in tangents {
@@ -76,7 +77,8 @@ fn tangent_handedness_follows_the_uv_layout() {
 fn a_glb_holds_the_mesh_in_metres_and_both_textures() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene(dir.path(), &quad_obj(false), true);
-    let exported = export(&scene, &options(Container::Glb, NormalBits::Sixteen), &|_| {}).unwrap();
+    let exported =
+        export(&scene, &options(Container::Glb, NormalBits::Sixteen), &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(exported.files.len(), 1);
     assert_eq!(exported.files[0].name, "quad.glb");
     let s = &exported.summary;
@@ -101,7 +103,7 @@ fn a_gltf_names_its_side_files_by_relative_uris() {
     let scene = scene(dir.path(), &quad_obj(false), true);
     let mut opts = options(Container::Gltf, NormalBits::Eight);
     opts.stem = "my head".into();
-    let exported = export(&scene, &opts, &|_| {}).unwrap();
+    let exported = export(&scene, &opts, &skinkit_maps::progress::NoProgress).unwrap();
     let names: Vec<&str> = exported.files.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["my head.gltf", "my head.bin", "my head-albedo.png", "my head-normal.png"]);
     let json = String::from_utf8(exported.files[0].bytes.clone()).unwrap();
@@ -113,7 +115,9 @@ fn a_missing_map_names_the_scene_and_field() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene(dir.path(), &quad_obj(false), true);
     std::fs::remove_file(dir.path().join("n.png")).unwrap();
-    let error = export(&scene, &options(Container::Glb, NormalBits::Eight), &|_| {}).unwrap_err().to_string();
+    let error = export(&scene, &options(Container::Glb, NormalBits::Eight), &skinkit_maps::progress::NoProgress)
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("scene.toml: normal_map.path:") && error.contains("n.png does not exist"), "{error}");
 }
 
@@ -140,7 +144,8 @@ fn a_scene_reads_its_maps_back_from_the_exported_material() {
     let normals = skinkit_maps::io::read_normal_map(&dir.path().join("n.png"), Default::default(), &limits).unwrap();
     let albedo = crate::load::read_albedo(&dir.path().join("a.png"), &limits).unwrap();
     for container in [Container::Glb, Container::Gltf] {
-        let exported = export(&scene, &options(container, NormalBits::Eight), &|_| {}).unwrap();
+        let exported =
+            export(&scene, &options(container, NormalBits::Eight), &skinkit_maps::progress::NoProgress).unwrap();
         let out = dir.path().join(format!("{container:?}"));
         std::fs::create_dir(&out).unwrap();
         let file = write_files(&out, &exported);
@@ -162,7 +167,8 @@ fn a_scene_reads_its_maps_back_from_the_exported_material() {
 fn a_material_without_the_texture_is_named_in_the_error() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene(dir.path(), &quad_obj(false), false);
-    let exported = export(&scene, &options(Container::Glb, NormalBits::Eight), &|_| {}).unwrap();
+    let exported =
+        export(&scene, &options(Container::Glb, NormalBits::Eight), &skinkit_maps::progress::NoProgress).unwrap();
     let file = write_files(dir.path(), &exported);
     let error = crate::gltf_maps::normal_map(&file, &Limits::default()).unwrap_err().to_string();
     assert!(
@@ -183,7 +189,8 @@ fn zero_area_uv_triangles_give_finite_unit_tangents() {
     // Every vertex at one UV: no triangle has UV area.
     let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0.5 0.5\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\nf 1/1/1 3/1/1 4/1/1\n";
     let scene = scene(dir.path(), obj, false);
-    let exported = export(&scene, &options(Container::Glb, NormalBits::Eight), &|_| {}).unwrap();
+    let exported =
+        export(&scene, &options(Container::Glb, NormalBits::Eight), &skinkit_maps::progress::NoProgress).unwrap();
     for t in glb_tangents(&exported.files[0].bytes) {
         assert!(t.is_finite() && (t.truncate().length() - 1.0).abs() < 1e-5 && t.w.abs() == 1.0, "{t}");
         assert!(t.truncate().dot(Vec3::Z).abs() < 1e-5, "the tangent is orthogonal to the normal: {t}");

@@ -39,8 +39,12 @@ const MAX_GLTF_DEPTH: usize = 256;
 #[non_exhaustive]
 pub enum MeshError {
     /// The file could not be read.
-    #[error("{file}: {error}")]
-    Io { file: String, error: std::io::Error },
+    #[error("{file}")]
+    Io {
+        file: String,
+        #[source]
+        error: std::io::Error,
+    },
     /// The input gate refused the file or could not read it ([`skinkit_maps::input`]).
     #[error(transparent)]
     Input(#[from] skinkit_maps::input::InputError),

@@ -43,8 +43,12 @@ pub enum LutFileError {
     #[error(transparent)]
     Write(#[from] skinkit_maps::Error),
     /// The file could not be read.
-    #[error("{path}: {error}")]
-    Io { path: String, error: std::io::Error },
+    #[error("{path}")]
+    Io {
+        path: String,
+        #[source]
+        error: std::io::Error,
+    },
     /// The input gate refused the file or could not read it ([`skinkit_maps::input`]).
     #[error(transparent)]
     Input(#[from] skinkit_maps::input::InputError),

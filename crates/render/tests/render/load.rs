@@ -135,7 +135,7 @@ fn more_lights_than_the_pass_shades_are_refused_by_name() {
     );
     let path = tmp.path().join("scene.toml");
     std::fs::write(&path, text).unwrap();
-    let e = Scene::load(&path).unwrap_err().to_string();
+    let e = Scene::load(&path).map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
     assert!(
         e.contains("scene.toml") && e.contains("light") && e.contains("5 lights") && e.contains("at most 4"),
         "{e}"
@@ -247,7 +247,7 @@ fn contradicting_or_incomplete_effects_are_refused_by_name() {
         );
         let path = tmp.path().join("bad.toml");
         std::fs::write(&path, &text).unwrap();
-        Scene::load(&path).unwrap_err().to_string()
+        Scene::load(&path).map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err()
     };
     let e = refused("effects = [\"preintegrated\", \"tsd\"]");
     assert!(e.contains("bad.toml") && e.contains("preintegrated") && e.contains("tsd"), "{e}");
@@ -294,14 +294,15 @@ fn d11_render_errors_name_the_scene_file_and_field() {
             "albedo" => format!("albedo = \"{}\"", notes.display()),
             _ => format!("[normal_map]\npath = \"{}\"", notes.display()),
         };
-        let e = load(&scene(tmp.path(), &body), 64, 64, 8192).unwrap_err().to_string();
+        let e =
+            load(&scene(tmp.path(), &body), 64, 64, 8192).map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
         assert!(e.starts_with(&format!("{scene_file}: {field}: {}: ", notes.display())), "{e}");
         assert_eq!(e.matches("notes.png").count(), 1, "{e}");
     }
     // The mesh is removed after the scene was read: the scene, `mesh`, the mesh file, the OS.
     let scene = scene(tmp.path(), "");
     std::fs::remove_file(tmp.path().join("quad.obj")).unwrap();
-    let e = load(&scene, 64, 64, 8192).unwrap_err().to_string();
+    let e = load(&scene, 64, 64, 8192).map_err(|e| skinkit_maps::error::one_line(&e)).unwrap_err();
     let want = format!("{scene_file}: mesh: {}: ", tmp.path().join("quad.obj").display());
     assert!(e.starts_with(&want), "{e}");
     assert_eq!(e.matches("(os error 2)").count(), 1, "{e}");

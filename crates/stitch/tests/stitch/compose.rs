@@ -59,7 +59,7 @@ fn options(amplitude: f64, blend: bool) -> ComposeOptions {
 #[test]
 fn three_regions_give_a_unit_map_with_every_region_present() {
     let l = layout(THREE);
-    let c = compose(&l, &exemplars(), &options(6.0, true), &|_| {}).unwrap();
+    let c = compose(&l, &exemplars(), &options(6.0, true), &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(c.normals.size(), (192, 96));
     assert!(c.normals.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-5));
     for (i, r) in c.regions.iter().enumerate() {
@@ -92,9 +92,9 @@ seed = 4
     let l = layout(text);
     let ex = SkinParams::forehead(64, 64, 1).generate().unwrap().normals;
     let o = options(4.0, true);
-    let c = compose(&l, std::slice::from_ref(&ex), &o, &|_| {}).unwrap();
+    let c = compose(&l, std::slice::from_ref(&ex), &o, &skinkit_maps::progress::NoProgress).unwrap();
     let alone = SynthConfig { width: 96, height: 80, seed: region_seed(o.seed, 0, Some(4)), ..o.synth.clone() };
-    let direct = skinkit_synth::synthesize_normals(&ex, &alone, &|_, _| {}).unwrap();
+    let direct = skinkit_synth::synthesize_normals(&ex, &alone, &skinkit_maps::progress::NoProgress).unwrap();
     assert!(c.normals.grid().as_slice() == direct.normals.grid().as_slice(), "the spline changed a lone region");
 }
 
@@ -104,7 +104,7 @@ fn same_inputs_same_bits_on_one_and_two_threads() {
     let ex = exemplars();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| compose(&l, &ex, &options(6.0, true), &|_| {}).unwrap())
+        pool.install(|| compose(&l, &ex, &options(6.0, true), &skinkit_maps::progress::NoProgress).unwrap())
     };
     let (one, two) = (run(1), run(2));
     assert!(one.normals.grid().as_slice() == two.normals.grid().as_slice());
@@ -123,8 +123,8 @@ fn the_spline_hides_boundaries_that_hard_labels_show() {
     // is not what tells them apart on maps this small.
     let l = layout(THREE);
     let ex = exemplars();
-    let hard = compose(&l, &ex, &options(6.0, false), &|_| {}).unwrap();
-    let soft = compose(&l, &ex, &options(6.0, true), &|_| {}).unwrap();
+    let hard = compose(&l, &ex, &options(6.0, false), &skinkit_maps::progress::NoProgress).unwrap();
+    let soft = compose(&l, &ex, &options(6.0, true), &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(hard.levels, 1);
     let (h, s) = (&hard.seams.summary, &soft.seams.summary);
     assert!(s.mean_jump_degrees < 0.7 * h.mean_jump_degrees, "{s:?} vs {h:?}");
@@ -141,7 +141,7 @@ fn texels_outside_the_coverage_mask_are_invalid_and_cost_nothing() {
     skinkit_maps::io::write_scalar_png(&dir.path().join("mask.png"), &mask, 8).unwrap();
     let text = format!("coverage = \"mask.png\"\n{THREE}");
     let l = Layout::parse(&text, &dir.path().join("layout.toml")).unwrap();
-    let c = compose(&l, &exemplars(), &options(6.0, true), &|_| {}).unwrap();
+    let c = compose(&l, &exemplars(), &options(6.0, true), &skinkit_maps::progress::NoProgress).unwrap();
     for y in 0..96 {
         for x in 0..192 {
             let n = c.normals.get(x, y);
@@ -160,7 +160,8 @@ fn texels_outside_the_coverage_mask_are_invalid_and_cost_nothing() {
 
 #[test]
 fn an_exemplar_count_that_does_not_match_is_an_error() {
-    let e = compose(&layout(THREE), &exemplars()[..2], &options(0.0, true), &|_| {}).unwrap_err();
+    let e = compose(&layout(THREE), &exemplars()[..2], &options(0.0, true), &skinkit_maps::progress::NoProgress)
+        .unwrap_err();
     assert!(e.to_string().contains("3 regions but 2 exemplars"), "{e}");
 }
 
@@ -184,18 +185,18 @@ points = [[0.75, 0.5]]
     let ex = exemplars();
     let ex = &ex[..2];
     // Automatic levels follow the narrowest region (12 texels: 2 levels).
-    let auto = compose(&l, ex, &options(0.0, true), &|_| {}).unwrap();
+    let auto = compose(&l, ex, &options(0.0, true), &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(auto.levels, 2);
     assert!(auto.normals.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-5));
     // More levels than the map holds: every piece is then the whole map, where the spline's
     // pyramids clamp at their edges (documented in spline.rs), so the result stays a unit map.
     let deep = ComposeOptions { levels: Some(9), ..options(0.0, true) };
-    let c = compose(&l, ex, &deep, &|_| {}).map_err(|e| e.to_string()).unwrap();
+    let c = compose(&l, ex, &deep, &skinkit_maps::progress::NoProgress).map_err(|e| e.to_string()).unwrap();
     assert_eq!(c.levels, 9);
     assert!(c.regions.iter().all(|r| r.piece.is_some_and(|p| (p.width, p.height) == (24, 12))));
     assert!(c.normals.grid().as_slice().iter().all(|n| (n.length() - 1.0).abs() < 1e-5));
     // A level count outside the spline's range is refused.
     let absurd = ComposeOptions { levels: Some(64), ..options(0.0, true) };
-    let e = compose(&l, ex, &absurd, &|_| {}).map(|_| ()).unwrap_err().to_string();
+    let e = compose(&l, ex, &absurd, &skinkit_maps::progress::NoProgress).map(|_| ()).unwrap_err().to_string();
     assert!(e.contains("levels = 64"), "{e}");
 }

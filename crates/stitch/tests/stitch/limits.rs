@@ -56,7 +56,7 @@ fn d1_huge_exemplar_scale_is_refused_before_allocating() {
     let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 512, 256, 1e9, "");
-    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}));
+    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &skinkit_maps::progress::NoProgress));
     let e = result.unwrap_err().to_string();
     assert!(e.contains("layout.toml: region `b`: exemplar_mm_per_texel"), "{e}");
     assert!(e.contains("over the limit of 268435456 texels"), "{e}");
@@ -70,7 +70,7 @@ fn d1_an_exemplar_whose_synthesis_cannot_fit_is_refused_before_resampling() {
     // the probe saw allocated) before the synthesis estimate refused it.
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 512, 256, 3.0, "");
-    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}));
+    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &skinkit_maps::progress::NoProgress));
     let e = result.unwrap_err().to_string();
     assert!(e.contains("region `b`") && e.contains("15360x15360") && e.contains("needs an estimated"), "{e}");
     assert!(peak < 64 * MIB, "{} MiB held before refusing", peak / MIB);
@@ -83,7 +83,7 @@ fn d6_a_coverage_bomb_is_refused_from_its_header() {
     // A real 32768x32768 8-bit PNG of zeros would be about 1 MB; its header is all it takes.
     header_only_png(&dir.path().join("bomb.png"), 32768, 32768);
     let l = layout(dir.path(), 512, 256, 0.05, "coverage = \"bomb.png\"");
-    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}));
+    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &skinkit_maps::progress::NoProgress));
     let e = result.unwrap_err().to_string();
     assert!(e.contains("coverage") && e.contains("bomb.png is 32768x32768 but the map is 512x256"), "{e}");
     assert!(peak < 4 * MIB, "{} MiB held before refusing", peak / MIB);
@@ -94,7 +94,7 @@ fn d6_a_map_at_the_size_limit_is_refused_before_anything_is_allocated() {
     let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 32768, 32768, 0.05, "");
-    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}));
+    let (result, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &skinkit_maps::progress::NoProgress));
     let e = result.unwrap_err().to_string();
     // 2^30 texels at 28 bytes: 28 GiB.
     assert!(e.contains("layout.toml: size: a 32768x32768 face map needs an estimated 28672 MiB"), "{e}");
@@ -108,7 +108,8 @@ fn d6_the_map_floor_is_below_what_a_compose_holds() {
     let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let l = layout(dir.path(), 128, 64, 0.05, "");
-    let (composed, peak) = peak_during(|| compose(&l, &exemplars(), &options(), &|_| {}).unwrap());
+    let (composed, peak) =
+        peak_during(|| compose(&l, &exemplars(), &options(), &skinkit_maps::progress::NoProgress).unwrap());
     let floor = 128 * 64 * MAP_BYTES_PER_TEXEL as usize;
     eprintln!("128x64 map: floor {floor} bytes, heap peak {peak} bytes ({:.1}x)", peak as f64 / floor as f64);
     assert!(peak >= floor, "the floor {floor} is above the measured peak {peak}");
@@ -123,13 +124,13 @@ fn regions_that_fit_the_limit_only_one_at_a_time_grow_one_at_a_time_to_the_same_
     // of the limit that admits one (below 2E) cannot admit both beside the map.
     let l = layout(dir.path(), 256, 128, 0.05, "");
     let same = vec![NormalMap::flat(64, 64), NormalMap::flat(64, 64)];
-    let roomy = compose(&l, &same, &options(), &|_| {}).unwrap();
+    let roomy = compose(&l, &same, &options(), &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(roomy.regions_at_once, 2);
     let mut limit = 1u64 << 20;
     let tight = loop {
         let tight_options =
             ComposeOptions { synth: SynthConfig { memory_limit: limit, ..options().synth }, ..options() };
-        match compose(&l, &same, &tight_options, &|_| {}) {
+        match compose(&l, &same, &tight_options, &skinkit_maps::progress::NoProgress) {
             Ok(composed) => break composed,
             Err(e) => assert!(e.to_string().contains("needs an estimated"), "{e}"),
         }

@@ -47,7 +47,7 @@ fn regions_on_a_mesh_are_grown_at_their_measured_scale() {
         synth: SynthConfig { levels: 2, ..SynthConfig::default() },
         ..ComposeOptions::default()
     };
-    let e = compose(&layout, &ex(), &options, &|_| {}).unwrap_err().to_string();
+    let e = compose(&layout, &ex(), &options, &skinkit_maps::progress::NoProgress).unwrap_err().to_string();
     assert!(e.contains("region `a`: positions") && e.contains("mesh"), "{e}");
 
     let placed = layout.on_surface(plane()).unwrap();
@@ -57,7 +57,7 @@ fn regions_on_a_mesh_are_grown_at_their_measured_scale() {
     // The whole mesh: 200 mm² on 64 x 32 texels.
     assert!((placed.mm_per_texel - (200.0f64 / 2048.0).sqrt()).abs() < 1e-9, "{}", placed.mm_per_texel);
 
-    let c = compose(&placed, &ex(), &options, &|_| {}).unwrap();
+    let c = compose(&placed, &ex(), &options, &skinkit_maps::progress::NoProgress).unwrap();
     // Straight boundary at u = 0.25: the left quad is region a's, the right quad region b's.
     let expected = [(100.0f64 / 512.0).sqrt(), (100.0f64 / 1536.0).sqrt()];
     for (r, want) in c.regions.iter().zip(expected) {
@@ -115,7 +115,7 @@ fn udim_tiles_are_one_continuous_map() {
     let ex = vec![SkinParams::forehead(64, 64, 1).generate().unwrap().normals; 2];
     let options =
         ComposeOptions { synth: SynthConfig { levels: 2, ..SynthConfig::default() }, ..ComposeOptions::default() };
-    let c = compose(&placed, &ex, &options, &|_| {}).unwrap();
+    let c = compose(&placed, &ex, &options, &skinkit_maps::progress::NoProgress).unwrap();
     let tiles = atlas.split(c.normals.grid()).unwrap();
     assert_eq!(tiles.iter().map(|t| t.0).collect::<Vec<_>>(), atlas.tiles);
     // Across a tile boundary neighbouring texels differ as much as neighbours within a tile.

@@ -102,7 +102,7 @@ fn captured(region: &str) -> NormalMap {
         })
         .collect();
     let stack = PhotoStack::new(photos, names).expect("sample stack");
-    let mut solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::no_progress).expect("solves");
+    let mut solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::NoProgress).expect("solves");
     detrend::detrend(&mut solution.normals, DETREND_BLOCK);
     let n = &solution.normals;
     NormalMap::from_unit_grid(Grid::from_fn(SIDE, SIDE, |x, y| n.get(x, y))).expect("unit or zero")

@@ -118,13 +118,14 @@ pub struct Speed {
 
 pub fn speed(spec: &str) -> Speed {
     let ex = SkinParams::forehead(SIDE, SIDE, 1).generate().expect("preset generates").normals;
-    let quiet = |_: usize, _: f32| {};
     let texels = Texels::Normal(ex.clone());
     eprintln!("speed: peer 512x512, 2 runs...");
     let peer_512 = timed(2, || drop(peer::run(&texels, 512, 512, 1)));
     let config = parse_config(spec, 512, 512, 1);
     eprintln!("speed: skinkit 512x512, 3 runs...");
-    let ours_512 = timed(3, || drop(skinkit_synth::synthesize_normals(&ex, &config, &quiet).expect("valid")));
+    let ours_512 = timed(3, || {
+        drop(skinkit_synth::synthesize_normals(&ex, &config, &skinkit_maps::progress::NoProgress).expect("valid"))
+    });
     let mut sizes = vec![(1024, 1024), (2048, 2048), (4096, 2048)];
     if std::env::var("SYNTH_SUITE_LARGE").is_ok_and(|v| v == "1") {
         sizes.push((8192, 8192));
@@ -133,7 +134,9 @@ pub fn speed(spec: &str) -> Speed {
     for (w, h) in sizes {
         eprintln!("speed: skinkit {w}x{h}...");
         let config = parse_config(spec, w, h, 1);
-        let seconds = timed(1, || drop(skinkit_synth::synthesize_normals(&ex, &config, &quiet).expect("valid")));
+        let seconds = timed(1, || {
+            drop(skinkit_synth::synthesize_normals(&ex, &config, &skinkit_maps::progress::NoProgress).expect("valid"))
+        });
         rows.push((w, h, seconds, config.memory_estimate(SIDE, SIDE), peak_resident()));
     }
     Speed { peer_512, ours_512, sizes: rows }

@@ -52,7 +52,7 @@ const HISTOGRAM_MIN_TEXELS: usize = 64 * 64;
 pub(crate) fn guarded(
     exemplar: &Grid<Vec3>,
     config: &SynthConfig,
-    progress: &dyn Fn(usize, f32),
+    progress: &dyn skinkit_maps::progress::Progress,
     kind: Texels,
 ) -> Result<Synthesis> {
     let what = kind.name();

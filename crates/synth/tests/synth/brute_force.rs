@@ -10,7 +10,7 @@ use skinkit_synth::neighbourhood::Neighbourhood;
 use skinkit_synth::synthesis::random_copies;
 use skinkit_synth::{Search, SynthConfig, synthesize};
 
-use crate::support::{pattern, quiet};
+use crate::support::pattern;
 
 /// The occurrence factor of `SynthConfig::occurrence_penalty` (Kopf et al. 2007): candidates
 /// copied more often than `expected` have their squared distance scaled up.
@@ -147,7 +147,7 @@ fn exact_search_equals_a_brute_force_scan() {
             occurrence_penalty: lambda,
             ..SynthConfig::scanline(9, 10)
         };
-        let s = synthesize(&ex, &c, &quiet).unwrap();
+        let s = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
         assert_eq!(s.coords, brute_force_single_level(&ex, 9, 10, 7, lambda).1, "lambda {lambda}");
     }
     let plain = brute_force_single_level(&ex, 9, 10, 7, 0.0).1;
@@ -172,7 +172,7 @@ fn exact_search_with_corrections_equals_a_brute_force_scan() {
             occurrence_penalty: lambda,
             ..SynthConfig::scanline(10, 8)
         };
-        let s = synthesize(&ex, &c, &quiet).unwrap();
+        let s = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
         assert_eq!(s.coords, coords, "lambda {lambda}");
         assert_eq!(s.texels, out, "lambda {lambda}");
     }

@@ -13,8 +13,12 @@ use skinkit_synth::{SynthConfig, synthesize_normals};
 #[test]
 fn a_collapsed_output_is_grown_again_and_reported() {
     let ex = skinkit_heightfield::SkinParams::nose(128, 128, 1).generate().unwrap().normals;
-    let quiet = |_: usize, _: f32| {};
-    let default = synthesize_normals(&ex, &SynthConfig { seed: 1, ..SynthConfig::new(256, 256) }, &quiet).unwrap();
+    let default = synthesize_normals(
+        &ex,
+        &SynthConfig { seed: 1, ..SynthConfig::new(256, 256) },
+        &skinkit_maps::progress::NoProgress,
+    )
+    .unwrap();
     assert!(default.guards.variation >= 0.8, "{}", default.guards.variation);
     assert!(default.warnings.is_empty(), "{:?}", default.warnings);
     let config = SynthConfig {
@@ -24,12 +28,12 @@ fn a_collapsed_output_is_grown_again_and_reported() {
         layout_penalty: 0.0,
         ..SynthConfig::new(256, 256)
     };
-    let guarded = synthesize_normals(&ex, &config, &quiet).unwrap();
+    let guarded = synthesize_normals(&ex, &config, &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(guarded.guards.variation, metrics::slope_variation_ratio(&guarded.normals, &ex));
     assert!(guarded.guards.variation >= 0.5, "{}", guarded.guards.variation);
     assert!(guarded.warnings.iter().any(|w| w.contains("collapse guard")), "{:?}", guarded.warnings);
     let retry = config.collapse_retry().expect("the default has no coarse penalty");
-    let again = synthesize_normals(&ex, &retry, &quiet).unwrap();
+    let again = synthesize_normals(&ex, &retry, &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(again.coords, guarded.coords, "the guard returns the regrown output");
     assert!(again.warnings.iter().all(|w| !w.contains("collapse guard")), "{:?}", again.warnings);
     assert!(retry.collapse_retry().is_none(), "a retry is not retried");
@@ -44,9 +48,8 @@ fn a_collapsed_output_is_grown_again_and_reported() {
 #[test]
 fn a_drifted_histogram_is_grown_again_with_the_occurrence_penalty() {
     let ex = skinkit_heightfield::SkinParams::nose(128, 128, 1).generate().unwrap().normals;
-    let quiet = |_: usize, _: f32| {};
     let config = SynthConfig { seed: 1, robust_scale: 0.0, layout_penalty: 0.0, ..SynthConfig::new(256, 256) };
-    let s = synthesize_normals(&ex, &config, &quiet).unwrap();
+    let s = synthesize_normals(&ex, &config, &skinkit_maps::progress::NoProgress).unwrap();
     assert!(s.guards.histogram_retry, "{}", s.guards.histogram);
     assert_eq!(s.guards.histogram, metrics::slope_histogram_mismatch(&s.normals, &ex));
     assert!(s.guards.histogram <= HISTOGRAM_RATIO, "{}", s.guards.histogram);
@@ -54,7 +57,7 @@ fn a_drifted_histogram_is_grown_again_with_the_occurrence_penalty() {
     let retry = config.histogram_retry().expect("the config has no occurrence penalty");
     assert_eq!((retry.occurrence_penalty, retry.finest_penalty), (0.5, Some(0.5)));
     assert!(retry.histogram_retry().is_none(), "a retry is not retried");
-    let direct = synthesize_normals(&ex, &retry, &quiet).unwrap();
+    let direct = synthesize_normals(&ex, &retry, &skinkit_maps::progress::NoProgress).unwrap();
     assert!(!direct.guards.histogram_retry);
     assert_eq!(direct.coords, s.coords, "the guard returns the regrown output");
 }
@@ -63,7 +66,12 @@ fn a_drifted_histogram_is_grown_again_with_the_occurrence_penalty() {
 #[test]
 fn a_histogram_within_the_limit_is_grown_once() {
     let ex = skinkit_heightfield::SkinParams::forehead(64, 64, 1).generate().unwrap().normals;
-    let s = synthesize_normals(&ex, &SynthConfig { seed: 2, ..SynthConfig::new(128, 128) }, &|_, _| {}).unwrap();
+    let s = synthesize_normals(
+        &ex,
+        &SynthConfig { seed: 2, ..SynthConfig::new(128, 128) },
+        &skinkit_maps::progress::NoProgress,
+    )
+    .unwrap();
     assert!(!s.guards.histogram_retry && s.guards.histogram <= HISTOGRAM_RATIO, "{}", s.guards.histogram);
     assert!(s.guards.histogram.is_finite() && s.guards.histogram > 0.0, "{}", s.guards.histogram);
 }

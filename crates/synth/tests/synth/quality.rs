@@ -29,8 +29,6 @@ const OUT: usize = 256;
 /// Detrend block of the captured maps (as `skinkit demo`, the paper's 50 x 50).
 const DETREND_BLOCK: usize = 50;
 
-fn quiet(_: usize, _: f32) {}
-
 fn config(seed: u64) -> SynthConfig {
     SynthConfig { seed, ..SynthConfig::new(OUT, OUT) }
 }
@@ -55,7 +53,7 @@ fn halves(n: &NormalMap) -> (NormalMap, NormalMap) {
 
 fn grow(name: &'static str, field: &NormalMap) -> NormalCase {
     let (a, b) = halves(field);
-    let out = synthesize_normals(&a, &config(1), &quiet).unwrap();
+    let out = synthesize_normals(&a, &config(1), &skinkit_maps::progress::NoProgress).unwrap();
     NormalCase { name, a, b, out }
 }
 
@@ -102,7 +100,7 @@ fn captured(region: &str) -> NormalMap {
     let rig = Rig::load(&mold_dir(region).join("rig.toml")).unwrap();
     let (photos, names) = mold_photos(region);
     let stack = PhotoStack::new(photos, names).unwrap();
-    let mut solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::no_progress).unwrap();
+    let mut solution = solve::solve(&stack, &rig, &SolveConfig::default(), &solve::NoProgress).unwrap();
     detrend::detrend(&mut solution.normals, DETREND_BLOCK);
     solution.normals
 }
@@ -390,7 +388,7 @@ fn photo_colour(region: &str) -> ColorMap {
 fn check_colour(name: &str, map: &ColorMap, channel: f64, spectrum: f64) {
     let a = map.crop(0, 0, HALF, HALF).unwrap();
     let b = map.crop(HALF, 0, HALF, HALF).unwrap();
-    let s: Synthesis = synthesize(&a, &config(1), &quiet).unwrap();
+    let s: Synthesis = synthesize(&a, &config(1), &skinkit_maps::progress::NoProgress).unwrap();
     let o = &s.texels;
     let ch = [metrics::channel_distance(&a, &b), metrics::channel_distance(o, &a), metrics::channel_distance(o, &b)];
     let sp = [

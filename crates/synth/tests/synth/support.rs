@@ -11,6 +11,3 @@ pub fn pattern(w: usize, h: usize) -> Grid<Vec3> {
         Vec3::new((x as f32 * 0.9).sin() + 0.3 * r, (y as f32 * 0.7).cos(), r)
     })
 }
-
-/// A progress callback that ignores its reports.
-pub fn quiet(_: usize, _: f32) {}

@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use skinkit_maps::Grid;
+use skinkit_maps::progress::Step;
 use skinkit_synth::config::SCANLINE_OCCURRENCE_PENALTY;
 use skinkit_synth::energy::{self_energy, window_energy};
 use skinkit_synth::exemplar::ExemplarLevel;
@@ -11,7 +12,7 @@ use skinkit_synth::search::KCoherenceSets;
 use skinkit_synth::synthesis::histogram_noise;
 use skinkit_synth::{Error, Search, SynthConfig, replay, synthesize, synthesize_normals};
 
-use crate::support::{pattern, quiet};
+use crate::support::pattern;
 
 fn config(w: usize, h: usize, search: Search) -> SynthConfig {
     SynthConfig { levels: 2, search, ..SynthConfig::scanline(w, h) }
@@ -30,8 +31,8 @@ fn same_bits_on_one_and_two_threads() {
     let ex = pattern(16, 16);
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let c = config(24, 24, search);
-        let one = on_threads(1, || synthesize(&ex, &c, &quiet).unwrap());
-        let two = on_threads(2, || synthesize(&ex, &c, &quiet).unwrap());
+        let one = on_threads(1, || synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap());
+        let two = on_threads(2, || synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap());
         assert_eq!(one.coords, two.coords, "{search:?}");
         let bits = |s: &skinkit_synth::Synthesis| {
             s.texels.as_slice().iter().map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<_>>()
@@ -44,7 +45,7 @@ fn same_bits_on_one_and_two_threads() {
 fn output_texels_are_copies_of_their_coords() {
     let ex = pattern(16, 16);
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
-        let s = synthesize(&ex, &config(24, 24, search), &quiet).unwrap();
+        let s = synthesize(&ex, &config(24, 24, search), &skinkit_maps::progress::NoProgress).unwrap();
         assert_eq!(s.texels.size(), (24, 24));
         for y in 0..24 {
             for x in 0..24 {
@@ -68,8 +69,8 @@ fn corrections_give_the_same_bits_on_one_and_two_threads() {
     let ex = pattern(16, 16);
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         let c = SynthConfig { corrections: 2, ..config(23, 19, search) };
-        let one = on_threads(1, || synthesize(&ex, &c, &quiet).unwrap());
-        let two = on_threads(2, || synthesize(&ex, &c, &quiet).unwrap());
+        let one = on_threads(1, || synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap());
+        let two = on_threads(2, || synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap());
         assert_eq!(one.coords, two.coords, "{search:?}");
         let bits = |s: &skinkit_synth::Synthesis| {
             s.texels.as_slice().iter().map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<_>>()
@@ -86,7 +87,7 @@ fn corrections_lower_the_window_energy() {
     // Without the occurrence penalty, which trades window energy for texel variety on purpose.
     let energy = |search: Search, corrections: usize| {
         let c = SynthConfig { corrections, occurrence_penalty: 0.0, ..config(40, 40, search) };
-        window_energy(&synthesize(&ex, &c, &quiet).unwrap().texels, &ex, 5, 1)
+        window_energy(&synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap().texels, &ex, 5, 1)
     };
     // Measured ratios of one pass to none: 0.878 (k-coherence), 0.944 (approximate).
     for (search, ratio) in [(KCOH, 0.92), (APPROX, 0.97)] {
@@ -101,14 +102,15 @@ fn constant_exemplar_gives_constant_output() {
     let v = Vec3::new(0.2, -0.4, 0.9);
     let ex = Grid::filled(12, 12, v);
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
-        let s = synthesize(&ex, &config(10, 7, search), &quiet).unwrap();
+        let s = synthesize(&ex, &config(10, 7, search), &skinkit_maps::progress::NoProgress).unwrap();
         assert!(s.texels.as_slice().iter().all(|t| *t == v), "{search:?}");
     }
 }
 
 #[test]
 fn exemplar_smaller_than_the_neighbourhood_is_refused() {
-    let err = synthesize(&pattern(3, 4), &config(8, 8, Search::Exact), &quiet).unwrap_err();
+    let err =
+        synthesize(&pattern(3, 4), &config(8, 8, Search::Exact), &skinkit_maps::progress::NoProgress).unwrap_err();
     assert!(matches!(err, Error::ExemplarTooSmall { width: 3, height: 4, n: 5 }));
     assert_eq!(err.to_string(), "exemplar 3x4 is smaller than the 5x5 neighbourhood");
 }
@@ -117,10 +119,10 @@ fn exemplar_smaller_than_the_neighbourhood_is_refused() {
 fn one_by_one_output_and_non_square_exemplar() {
     let ex = pattern(21, 9);
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
-        let s = synthesize(&ex, &config(1, 1, search), &quiet).unwrap();
+        let s = synthesize(&ex, &config(1, 1, search), &skinkit_maps::progress::NoProgress).unwrap();
         assert_eq!(s.texels.size(), (1, 1));
         assert!(s.texels.get(0, 0).is_finite());
-        let s = synthesize(&ex, &config(17, 6, search), &quiet).unwrap();
+        let s = synthesize(&ex, &config(17, 6, search), &skinkit_maps::progress::NoProgress).unwrap();
         assert_eq!(s.coords.size(), (17, 6));
         assert!(s.coords.as_slice().iter().all(|&[x, y]| (2..19).contains(&x) && (2..7).contains(&y)));
     }
@@ -130,7 +132,7 @@ fn one_by_one_output_and_non_square_exemplar() {
 fn too_many_levels_are_clamped_with_a_warning() {
     let ex = pattern(16, 16);
     let c = SynthConfig { levels: 6, search: APPROX, ..SynthConfig::scanline(8, 8) };
-    let s = synthesize(&ex, &c, &quiet).unwrap();
+    let s = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
     // 16 -> 8 -> 4: only two levels keep a 5x5 window.
     assert_eq!(s.level_seconds.len(), 2);
     assert_eq!(s.warnings.len(), 1);
@@ -141,7 +143,7 @@ fn too_many_levels_are_clamped_with_a_warning() {
 fn wrapped_exemplar_uses_every_texel_position() {
     let ex = pattern(8, 8);
     let c = SynthConfig { exemplar_wrap: true, ..config(16, 16, Search::Exact) };
-    let s = synthesize(&ex, &c, &quiet).unwrap();
+    let s = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
     for (t, &[x, y]) in s.texels.as_slice().iter().zip(s.coords.as_slice()) {
         assert_eq!(t, ex.get(x as usize, y as usize));
     }
@@ -150,16 +152,27 @@ fn wrapped_exemplar_uses_every_texel_position() {
 #[test]
 fn progress_reaches_one_on_every_level() {
     for corrections in [0, 2] {
-        let seen = std::sync::Mutex::new(Vec::new());
-        let report = |level: usize, f: f32| seen.lock().unwrap().push((level, f));
+        // Each stage: its name, its length and the steps of each advance.
+        let seen = std::sync::Mutex::new(Vec::<(String, u64, Vec<u64>)>::new());
+        let report = |step: Step<'_>| {
+            let mut seen = seen.lock().unwrap();
+            match step {
+                Step::Start { name, len } => seen.push((name.to_owned(), len, Vec::new())),
+                Step::Advance(n) => seen.last_mut().expect("a stage was started").2.push(n),
+                Step::Finish => {}
+            }
+        };
         let c = SynthConfig { corrections, ..config(6, 6, APPROX) };
         synthesize(&pattern(16, 16), &c, &report).unwrap();
         let seen = seen.into_inner().unwrap();
+        let names: Vec<&str> = seen.iter().map(|(name, _, _)| name.as_str()).collect();
+        assert_eq!(names, ["level 1", "level 0"], "coarsest first");
         // The coarser level has 3 rows, counted once by the causal pass and once per correction.
-        assert_eq!(seen.first(), Some(&(1, 1.0 / (3 * (1 + corrections)) as f32)));
-        assert!(seen.contains(&(1, 1.0)));
-        assert_eq!(seen.last(), Some(&(0, 1.0)));
-        assert!(seen.windows(2).all(|p| p[0].0 > p[1].0 || (p[0].0 == p[1].0 && p[0].1 <= p[1].1)), "{seen:?}");
+        assert_eq!(seen[0].1, 3 * (1 + corrections as u64));
+        assert_eq!(seen[0].2.first(), Some(&1), "the first row is told at once");
+        for (name, len, steps) in &seen {
+            assert_eq!(steps.iter().sum::<u64>(), *len, "{name} reaches its length");
+        }
     }
 }
 
@@ -174,7 +187,7 @@ fn replay_rejects_coordinates_outside_the_map() {
 fn normal_maps_come_out_unit_length() {
     let field = skinkit_heightfield::SkinParams::forehead(16, 16, 3).generate().unwrap();
     let c = config(20, 12, APPROX);
-    let s = synthesize_normals(&field.normals, &c, &quiet).unwrap();
+    let s = synthesize_normals(&field.normals, &c, &skinkit_maps::progress::NoProgress).unwrap();
     assert_eq!(s.normals.size(), (20, 12));
     for n in s.normals.as_slice() {
         assert!((n.length() - 1.0).abs() < 1e-5, "{n}");
@@ -186,10 +199,10 @@ fn normal_maps_come_out_unit_length() {
 fn approximate_search_reranking_every_candidate_equals_exact() {
     // 16x16 without wrap: 12 x 12 = 144 candidates per finest level, fewer at the coarser one.
     let ex = pattern(16, 16);
-    let exact = synthesize(&ex, &config(12, 12, Search::Exact), &quiet).unwrap();
+    let exact = synthesize(&ex, &config(12, 12, Search::Exact), &skinkit_maps::progress::NoProgress).unwrap();
     for coherence in [false, true] {
         let c = SynthConfig { coherence, ..config(12, 12, Search::Approximate { dims: 3, rerank: 144 }) };
-        let approx = synthesize(&ex, &c, &quiet).unwrap();
+        let approx = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
         assert_eq!(approx.coords, exact.coords, "coherence {coherence}");
     }
 }
@@ -200,7 +213,7 @@ fn outputs_over_the_memory_limit_are_refused_with_the_estimate() {
     let estimate = c.memory_estimate(16, 16);
     // 1024x1024 texels at 21 bytes each on the finest level alone.
     assert!(estimate > 21 << 20, "{estimate}");
-    let err = synthesize(&pattern(16, 16), &c, &quiet).unwrap_err();
+    let err = synthesize(&pattern(16, 16), &c, &skinkit_maps::progress::NoProgress).unwrap_err();
     assert!(matches!(err, Error::TooLarge { width: 1024, height: 1024, limit_mib: 1, .. }), "{err}");
     assert!(err.to_string().contains(&format!("{} MiB", estimate.div_ceil(1 << 20))), "{err}");
 }
@@ -210,7 +223,7 @@ fn non_finite_exemplar_texels_are_zeroed_with_a_warning() {
     let mut ex = pattern(12, 12);
     *ex.get_mut(5, 5) = Vec3::new(f32::NAN, 0.0, f32::INFINITY);
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
-        let s = synthesize(&ex, &config(9, 9, search), &quiet).unwrap();
+        let s = synthesize(&ex, &config(9, 9, search), &skinkit_maps::progress::NoProgress).unwrap();
         assert!(s.texels.as_slice().iter().all(|t| t.is_finite()), "{search:?}");
         assert!(s.warnings.iter().any(|w| w.contains("1 exemplar texels were not finite")), "{:?}", s.warnings);
     }
@@ -221,9 +234,9 @@ fn k_coherence_with_a_zero_fallback_and_full_rerank_equals_exact() {
     // A zero ratio sends every texel whose best coherent candidate is not a perfect match to the
     // tree, which then returns every candidate within the bound: the exact answer.
     let ex = pattern(16, 16);
-    let exact = synthesize(&ex, &config(12, 12, Search::Exact), &quiet).unwrap();
+    let exact = synthesize(&ex, &config(12, 12, Search::Exact), &skinkit_maps::progress::NoProgress).unwrap();
     let c = config(12, 12, Search::KCoherence { k: 3, fallback: Some(0.0), dims: 3, rerank: 144 });
-    assert_eq!(synthesize(&ex, &c, &quiet).unwrap().coords, exact.coords);
+    assert_eq!(synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap().coords, exact.coords);
 }
 
 #[test]
@@ -300,7 +313,7 @@ fn window_energy_matches_a_brute_force_scan() {
 fn k_coherence_beats_noise_on_window_energy() {
     let ex = pattern(24, 24);
     let c = SynthConfig { levels: 2, search: KCOH, ..SynthConfig::scanline(32, 32) };
-    let s = synthesize(&ex, &c, &quiet).unwrap();
+    let s = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
     let synthesized = window_energy(&s.texels, &ex, 5, 1);
     let noise = window_energy(&histogram_noise(&ex, 32, 32, 0, 0), &ex, 5, 1);
     assert!(synthesized < 0.5 * noise, "{synthesized} vs noise {noise}");
@@ -326,7 +339,7 @@ fn the_occurrence_penalty_spreads_the_copies() {
     for search in [Search::Exact, KCOH] {
         let run = |lambda| {
             let c = SynthConfig { occurrence_penalty: lambda, ..config(40, 40, search) };
-            synthesize(&ex, &c, &quiet).unwrap().coords
+            synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap().coords
         };
         let (plain, penalised) = (most_copies(&run(0.0)), most_copies(&run(SCANLINE_OCCURRENCE_PENALTY)));
         println!("{search:?}: most copies of one texel {plain} without the penalty, {penalised} with");
@@ -338,7 +351,7 @@ fn the_occurrence_penalty_spreads_the_copies() {
 fn a_negative_or_non_finite_penalty_is_refused() {
     for lambda in [-1.0, f32::NAN, f32::INFINITY] {
         let c = SynthConfig { occurrence_penalty: lambda, ..config(8, 8, KCOH) };
-        let err = synthesize(&pattern(16, 16), &c, &quiet).unwrap_err().to_string();
+        let err = synthesize(&pattern(16, 16), &c, &skinkit_maps::progress::NoProgress).unwrap_err().to_string();
         assert!(err.contains("occurrence_penalty"), "{err}");
     }
 }
@@ -353,8 +366,8 @@ fn upsampled_start_gives_the_same_bits_on_one_and_two_threads() {
     for search in [Search::Exact, APPROX, KCOH, KCOH_FALLBACK] {
         for jitter in [0, 1] {
             let c = SynthConfig { jitter, ..upsampled(40, 33, search) };
-            let one = on_threads(1, || synthesize(&ex, &c, &quiet).unwrap());
-            let two = on_threads(2, || synthesize(&ex, &c, &quiet).unwrap());
+            let one = on_threads(1, || synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap());
+            let two = on_threads(2, || synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap());
             assert_eq!(one.coords, two.coords, "{search:?} jitter {jitter}");
             assert!(one.texels.as_slice().iter().zip(two.texels.as_slice()).all(|(a, b)| a.to_array() == b.to_array()));
             // Every texel is its coordinate's exemplar texel.
@@ -370,7 +383,7 @@ fn upsampled_coordinates_copy_two_by_two_blocks_before_correction() {
     // No correction pass: the finest level is its coarser level's coordinates upsampled, so each
     // 2x2 output block copies a 2x2 exemplar block (clamped into the candidates at the border).
     let c = SynthConfig { corrections: 0, levels: 2, ..SynthConfig::new(30, 22) };
-    let s = synthesize(&ex, &c, &quiet).unwrap();
+    let s = synthesize(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
     let (mut aligned, mut blocks) = (0, 0);
     for by in 0..11 {
         for bx in 0..15 {
@@ -389,13 +402,13 @@ fn upsampled_coordinates_copy_two_by_two_blocks_before_correction() {
 #[test]
 fn upsampled_start_hard_cases() {
     let v = Vec3::new(0.2, -0.4, 0.9);
-    let s = synthesize(&Grid::filled(12, 12, v), &upsampled(10, 7, KCOH), &quiet).unwrap();
+    let s = synthesize(&Grid::filled(12, 12, v), &upsampled(10, 7, KCOH), &skinkit_maps::progress::NoProgress).unwrap();
     assert!(s.texels.as_slice().iter().all(|t| *t == v));
     let ex = pattern(21, 9);
-    let s = synthesize(&ex, &upsampled(1, 1, KCOH), &quiet).unwrap();
+    let s = synthesize(&ex, &upsampled(1, 1, KCOH), &skinkit_maps::progress::NoProgress).unwrap();
     assert!(s.texels.get(0, 0).is_finite());
     // Five levels asked of a 21x9 exemplar: clamped, with a warning.
-    let s = synthesize(&ex, &SynthConfig::new(17, 6), &quiet).unwrap();
+    let s = synthesize(&ex, &SynthConfig::new(17, 6), &skinkit_maps::progress::NoProgress).unwrap();
     assert!(!s.warnings.is_empty());
     assert!(s.coords.as_slice().iter().all(|&[x, y]| (2..19).contains(&x) && (2..7).contains(&y)));
 }
@@ -406,7 +419,9 @@ fn the_default_beats_the_scanline_start_on_a_skin_exemplar() {
     // are both lower than the scanline start's.
     let ex = skinkit_heightfield::SkinParams::forehead(64, 64, 1).generate().unwrap().normals;
     let score = |c: SynthConfig| {
-        let out = synthesize_normals(&ex, &SynthConfig { seed: 1, ..c }, &quiet).unwrap().normals;
+        let out = synthesize_normals(&ex, &SynthConfig { seed: 1, ..c }, &skinkit_maps::progress::NoProgress)
+            .unwrap()
+            .normals;
         (window_energy(out.grid(), ex.grid(), 5, 1), skinkit_synth::metrics::slope_distance(&out, &ex))
     };
     let (e_scan, s_scan) = score(SynthConfig::scanline(128, 128));
@@ -421,7 +436,7 @@ fn the_default_beats_the_scanline_start_on_a_skin_exemplar() {
 fn d13_an_exemplar_without_valid_normals_is_refused_early() {
     use skinkit_maps::NormalMap;
     let called = std::sync::atomic::AtomicBool::new(false);
-    let progress = |_: usize, _: f32| called.store(true, std::sync::atomic::Ordering::Relaxed);
+    let progress = |_: Step<'_>| called.store(true, std::sync::atomic::Ordering::Relaxed);
     let empty = NormalMap::from_grid(Grid::filled(24, 20, Vec3::ZERO));
     let e = synthesize_normals(&empty, &config(16, 16, Search::Exact), &progress).unwrap_err();
     assert!(matches!(e, Error::NoValidNormals { width: 24, height: 20 }), "{e}");
@@ -432,7 +447,7 @@ fn d13_an_exemplar_without_valid_normals_is_refused_early() {
     for x in 0..6 {
         some.set(x, 3, Vec3::ZERO);
     }
-    let s = synthesize_normals(&some, &config(16, 16, Search::Exact), &quiet).unwrap();
+    let s = synthesize_normals(&some, &config(16, 16, Search::Exact), &skinkit_maps::progress::NoProgress).unwrap();
     assert!(s.warnings[0].contains("6 of 480 texels"), "{:?}", s.warnings);
 }
 
@@ -476,7 +491,7 @@ fn the_copy_cap_bounds_the_largest_verbatim_block() {
     let ex = skinkit_heightfield::SkinParams::forehead(64, 64, 1).generate().unwrap().normals;
     let largest = |copy_cap: Option<f32>| {
         let c = SynthConfig { seed: 3, copy_cap, ..SynthConfig::new(128, 128) };
-        let s = synthesize_normals(&ex, &c, &quiet).unwrap();
+        let s = synthesize_normals(&ex, &c, &skinkit_maps::progress::NoProgress).unwrap();
         skinkit_synth::metrics::copy_statistics(&s.coords, (64, 64), false).largest_block
     };
     let area = 64 * 64;

@@ -46,7 +46,7 @@ pub fn finish(mut report: BatchReport, path: &Path, page: bool, out: &Output) ->
     }
     let mut set = OutputSet::files();
     pipeline::write_json_file(&mut set, path, &report)?;
-    set.commit().with_context(|| format!("cannot write {}", path.display()))?;
+    set.commit().context("cannot write")?;
     Ok(show(&report, out))
 }
 
@@ -68,6 +68,6 @@ pub fn write_parts(report: BatchReport, units: &[Unit], out_dir: &Path, out: &Ou
         let path = out_dir.join(shard::PARTS).join(format!("{}.json", unit.name()));
         pipeline::write_json_file(&mut set, &path, &report.part(unit))?;
     }
-    set.commit().with_context(|| format!("cannot write {}", out_dir.join(shard::PARTS).display()))?;
+    set.commit().context("cannot write")?;
     Ok(show(&report, out))
 }

@@ -60,7 +60,7 @@ fn stitch(subject: &Subject, dir: &Path, out: &Output) -> Result<f64> {
     for job in &subject.jobs {
         let path = job.out.join("normal.exr");
         let map = io::read_normal_map(&path, NormalEncoding::default(), &Limits::default())
-            .with_context(|| format!("cannot read the captured map {}", path.display()))?;
+            .context("cannot read the captured map")?;
         cache.insert(job.dir.canonicalize().unwrap_or_else(|_| job.dir.clone()), map);
     }
     let options = StitchOptions::for_layout(subject.layout.clone());

@@ -32,6 +32,7 @@ use crate::output::Output;
 use crate::pipeline;
 use crate::solve_flags::{SolveArgs, SolverArg};
 use figures::{FiguresReport, figures};
+use skinkit_maps::progress::Progress;
 use skinkit_stitch::FaceReport;
 use skinkit_stitch::face::ExemplarCache;
 
@@ -277,10 +278,10 @@ fn capture_and_grow(args: &Args, samples: &Path, out: &Output, seconds: &mut Dem
             if solver == SolverArg::Robust {
                 captured_maps.push((dir, region.clone(), captured));
             }
-            bar.inc(1);
+            bar.advance(1);
         }
     }
-    bar.finish_and_clear();
+    bar.clear();
     seconds.capture = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let bar = out.progress(captured_maps.len() as u64, "synthesis");
@@ -289,9 +290,9 @@ fn capture_and_grow(args: &Args, samples: &Path, out: &Output, seconds: &mut Dem
         let target = args.out.join("synth").join(&region);
         growths.push(grow(&region, &captured, args.synth_size, args.seed, &target)?);
         cache.insert(dir.canonicalize().unwrap_or_else(|_| dir.clone()), captured.solution.normals);
-        bar.inc(1);
+        bar.advance(1);
     }
-    bar.finish_and_clear();
+    bar.clear();
     seconds.synthesis = t.elapsed().as_secs_f64();
     Ok((molds, growths, cache))
 }
@@ -305,7 +306,7 @@ fn capture_mold(
     out: &Output,
 ) -> Result<(MoldResult, Captured)> {
     let options = options(solver, out)?;
-    let mut captured = session::capture(files, &options, &|_| {})?;
+    let mut captured = session::capture(files, &options, &skinkit_maps::progress::NoProgress)?;
     let target = args.out.join("capture").join(region).join(solver.name());
     skinkit_capture::outputs::write(skinkit_capture::outputs::output_set(&target)?, &target, &mut captured, &options)?;
     let r = &captured.report;
@@ -369,26 +370,24 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
     let start = Instant::now();
     let config = SynthConfig { seed, ..SynthConfig::new(size.0, size.1) };
     let exemplar = &captured.solution.normals;
-    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &|_, _| {})
+    let grown = skinkit_synth::synthesize_normals(exemplar, &config, &skinkit_maps::progress::NoProgress)
         .with_context(|| format!("cannot grow the {region} mold's normal map"))?;
     let seconds = start.elapsed().as_secs_f64();
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let normal = dir.join("normal.png");
-    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16)
-        .with_context(|| format!("cannot write {}", normal.display()))?;
+    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16).context("cannot write")?;
     let albedo = dir.join("albedo.png");
     match &captured.solution.albedo {
         AlbedoMap::Gray(map) => io::write_scalar_png(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
         AlbedoMap::Rgb(map) => io::write_color_map(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
     }
-    .with_context(|| format!("cannot write {}", albedo.display()))?;
+    .context("cannot write")?;
     let coords_path = dir.join("coords.png");
-    coords::write(&coords_path, &grown.coords)
-        .with_context(|| format!("cannot write coordinate map {}", coords_path.display()))?;
+    coords::write(&coords_path, &grown.coords).context("cannot write the coordinate map")?;
     // The grown map's height, periodic so it tiles, in mm at the capture's pixel size.
     let mut set = skinkit_maps::OutputSet::files();
     crate::pipeline::grown_height(&mut set, &dir.join("height.exr"), &grown.normals, captured.report.mm_per_pixel)?;
-    set.commit().with_context(|| format!("cannot write {}", dir.join("height.exr").display()))?;
+    set.commit().context("cannot write")?;
     let quality = QualityReport::new(
         &Map::Normal(exemplar.clone()),
         &Map::Normal(grown.normals),

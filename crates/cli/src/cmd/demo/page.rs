@@ -346,16 +346,14 @@ fn accuracy(html: &mut String, report: &DemoReport, stages: &[Stage]) {
 
 /// A photo as a small grey picture in `page/name`; returns its link.
 fn photo_thumbnail(out: &Path, photo: &Path, name: &str) -> Result<String> {
-    let read =
-        io::read_photo(photo, &Default::default()).with_context(|| format!("cannot read {}", photo.display()))?;
+    let read = io::read_photo(photo, &Default::default()).context("cannot read")?;
     let luminance = Grid::from_vec(read.width(), read.height(), read.luminance())?;
     save(out, &preview::shrink(&preview::gray(&luminance), THUMB_SIDE), name)
 }
 
 /// A normal map drawn as relief in `page/name`; returns its link.
 fn shaded_normals(out: &Path, map: &Path, name: &str) -> Result<String> {
-    let normals = io::read_normal_map(map, NormalEncoding::default(), &Default::default())
-        .with_context(|| format!("cannot read {}", map.display()))?;
+    let normals = io::read_normal_map(map, NormalEncoding::default(), &Default::default()).context("cannot read")?;
     save(out, &preview::shrink(&preview::shade_normals(&normals, preview::raking_light()), PREVIEW_SIDE), name)
 }
 
@@ -364,8 +362,7 @@ fn shaded_normals(out: &Path, map: &Path, name: &str) -> Result<String> {
 /// averages the fine relief away). Boundaries are drawn after shrinking, so the lines stay one
 /// pixel wide and pure. Returns both links.
 fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, String)> {
-    let normals = io::read_normal_map(normal, NormalEncoding::default(), &Default::default())
-        .with_context(|| format!("cannot read {}", normal.display()))?;
+    let normals = io::read_normal_map(normal, NormalEncoding::default(), &Default::default()).context("cannot read")?;
     let (w, h) = normals.size();
     let shaded = preview::shade_normals(&normals, preview::raking_light());
     let (cw, ch) = (w.min(DETAIL.0), h.min(DETAIL.1));
@@ -373,8 +370,7 @@ fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, Str
     let mut detail = shaded.crop(x0, y0, cw, ch)?;
     let factor = w.max(h).div_ceil(PREVIEW_SIDE).max(1);
     let mut picture = preview::shrink(&shaded, PREVIEW_SIDE);
-    let read =
-        io::read_photo(labels, &Default::default()).with_context(|| format!("cannot read {}", labels.display()))?;
+    let read = io::read_photo(labels, &Default::default()).context("cannot read")?;
     if (read.width(), read.height()) == (w, h) {
         let channels = read.channels().count();
         let label = |x: usize, y: usize| -> [u32; 3] {
@@ -392,6 +388,6 @@ fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, Str
 
 pub(super) fn save(out: &Path, picture: &preview::Picture, name: &str) -> Result<String> {
     let path = out.join("page").join(name);
-    preview::write_png(&path, picture).with_context(|| format!("cannot write {}", path.display()))?;
+    preview::write_png(&path, picture).context("cannot write")?;
     Ok(rel(out, &path))
 }

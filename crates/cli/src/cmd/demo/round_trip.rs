@@ -45,10 +45,8 @@ pub fn round_trip(
     renders: &mut Vec<RenderReport>,
 ) -> Result<RoundTripFigure> {
     let limits = Limits::default();
-    let normals = io::read_normal_map(map, NormalEncoding::default(), &limits)
-        .with_context(|| format!("cannot read {}", map.display()))?;
-    let heights = io::read_exr_channel(height_exr, "Y", &limits)
-        .with_context(|| format!("cannot read {}", height_exr.display()))?;
+    let normals = io::read_normal_map(map, NormalEncoding::default(), &limits).context("cannot read")?;
+    let heights = io::read_exr_channel(height_exr, "Y", &limits).context("cannot read")?;
     let mut from_height = normals_of(&heights, mm_per_texel as f32, false).into_grid();
     // Texels without a normal stay without one (the height there is the integrator's fill).
     for (n, &m) in from_height.as_mut_slice().iter_mut().zip(normals.as_slice()) {
@@ -58,8 +56,7 @@ pub fn round_trip(
     }
     let mut draw = |name: &str, normals: &NormalMap| -> Result<PathBuf> {
         let file = dir.join(format!("{name}.png"));
-        io::write_normal_map(&file, normals, NormalEncoding::default(), 16)
-            .with_context(|| format!("cannot write {}", file.display()))?;
+        io::write_normal_map(&file, normals, NormalEncoding::default(), 16).context("cannot write")?;
         let scene = dir.join(format!("head-{name}.toml"));
         write_text(&scene, &face_scene(Some(&file.to_string_lossy().replace('\\', "/")), true))?;
         let image = dir.join(format!("head-{name}.png"));
