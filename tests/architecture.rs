@@ -546,5 +546,38 @@ fn no_module_circles_in_render_synth_and_capture() {
     assert!(report.is_empty(), "module circles (issue 38: dependencies between siblings point one way):\n{report}");
 }
 
+/// The renderer's layers behind its front door, as other crates would name them.
+const BEHIND_THE_FRONT_DOOR: [&str; 4] =
+    ["skinkit_render::gpu", "skinkit_render::pass", "skinkit_render::load", "Gpu::new("];
+
+#[test]
+fn only_the_renderer_builds_the_device_and_wires_the_passes() {
+    // Issue 38: the CLI, the viewer, the demo's figures, the accuracy run and the benchmarks of
+    // other crates go through `skinkit_render::renderer`; the render crate's own tests and
+    // benches may drive its layers directly.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut folders: Vec<PathBuf> = std::fs::read_dir(root.join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| !p.ends_with("render"))
+        .collect();
+    folders.push(root.join("tests"));
+    let mut found = Vec::new();
+    for folder in folders {
+        let files = read_src(&folder);
+        assert!(!files.is_empty() || !folder.join("src").exists(), "{}: no sources read", folder.display());
+        // This file names them in its list.
+        for (file, text) in files.into_iter().filter(|(f, _)| !f.ends_with("architecture.rs")) {
+            for (n, line) in text.lines().enumerate() {
+                let code = line.split("//").next().unwrap_or("");
+                if let Some(name) = BEHIND_THE_FRONT_DOOR.iter().find(|name| code.contains(**name)) {
+                    found.push(format!("{}/{}:{}: {name}", folder.display(), file.display(), n + 1));
+                }
+            }
+        }
+    }
+    assert!(found.is_empty(), "outside the renderer's front door:\n{}", found.join("\n"));
+}
+
 /// The circle finder's own tests.
 mod tests;

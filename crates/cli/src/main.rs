@@ -71,7 +71,7 @@ enum Command {
 
 fn main() {
     // SAFETY: the first statement of `main`, before any thread is started.
-    unsafe { skinkit_render::gpu::quiet_vulkan_loader() };
+    unsafe { skinkit_render::renderer::quiet_vulkan_loader() };
     let cli = Cli::parse();
     interrupt::install();
     let out = output::Output::new(&cli.global);

@@ -11,9 +11,8 @@ use skinkit_maps::OutputSet;
 use skinkit_maps::io::{self, PngLayout};
 use skinkit_maps::limits;
 use skinkit_render::compare::Method;
-use skinkit_render::load;
-use skinkit_render::pass::explain::Plan;
 use skinkit_render::renderer::{Encoding, Frame, FrameOptions, Renderer, Shading};
+use skinkit_render::renderer::{Plan, orbit};
 use skinkit_render::scene::{self, Scene};
 
 use crate::output::Output;
@@ -164,7 +163,7 @@ pub fn render_into(
     let bar = out.progress((scene.cameras.len() * frames) as u64, "render");
     let mut images = Vec::new();
     for (c, f) in (0..scene.cameras.len()).flat_map(|c| (0..frames).map(move |f| (c, f))) {
-        let camera = if job.frames.is_some() { load::orbit(&scene.cameras[c], f, frames) } else { scene.cameras[c] };
+        let camera = if job.frames.is_some() { orbit(&scene.cameras[c], f, frames) } else { scene.cameras[c] };
         let file = numbered(&path, (scene.cameras.len() > 1).then_some(c), job.frames.map(|_| f));
         let t = Instant::now();
         let frame = renderer.draw(&mut prepared, &camera)?;

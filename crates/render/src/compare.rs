@@ -134,7 +134,7 @@ impl Method {
     /// scattered with the full profile, dilated across UV borders) drawn as the diffuse term.
     ///
     /// # Errors
-    /// As [`setup::build`].
+    /// As [`crate::pass::build::setup`].
     pub fn setup(&self, scene: &Scene, loaded: &Loaded) -> Result<SkinSetup, LoadError> {
         let scene = self.scene(scene);
         let graph = PassGraph::build(&scene);

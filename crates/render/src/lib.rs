@@ -7,12 +7,13 @@
 //!
 //! Geometry side: [`scene`] (TOML scenes), [`mesh`] (OBJ and glTF loading), [`frames`] (the
 //! paper's per-vertex texture-space frames and MikkTSpace), [`head`] (the sample head).
-//! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`gpu`]
-//! (device, resources, pipelines, readback, timing) and [`pass`] (one module per pass of the
-//! graph, each with its WGSL); [`export`] writes a scene's skin as glTF 2.0 and [`gltf_maps`]
-//! reads a glTF material's textures back as maps; [`load`] turns a scene into what the passes draw and plans the
-//! passes and resources it needs; [`highlight`] measures how much of a render's highlights the
-//! specular lobes make.
+//! Shading side: [`brdf`] (Lafortune), [`shading`] (the CPU reference of the shaders), [`skin`]
+//! (the scattering physics on the CPU), [`compare`] (the skin methods side by side); behind the
+//! front door, `load` (a scene's mesh and maps), `pass` (one folder a pass, each with its WGSL,
+//! and the pass graph; the book's "Adding an effect") and `gpu` (device, resources, caches,
+//! readback, timing, knowing no pass). [`export`] writes a scene's skin as glTF 2.0 and
+//! [`gltf_maps`] reads a glTF material's textures back as maps; [`highlight`] measures how much
+//! of a render's highlights the specular lobes make.
 
 pub mod brdf;
 pub mod compare;
@@ -20,12 +21,19 @@ pub mod effect;
 pub mod export;
 pub mod frames;
 pub mod gltf_maps;
+// The renderer's layers behind its front door ([`renderer`]): public only so that the crate's own
+// integration tests and benchmarks can drive the passes directly (the GPU-against-CPU tests set
+// up a pass's inputs by hand); applications go through `renderer` (tests/architecture.rs checks
+// that nothing outside this crate names them). Not part of the documented API.
+#[doc(hidden)]
 pub mod gpu;
 pub mod head;
 pub mod highlight;
 pub mod label;
+#[doc(hidden)]
 pub mod load;
 pub mod mesh;
+#[doc(hidden)]
 pub mod pass;
 pub mod renderer;
 pub mod scene;

@@ -25,9 +25,9 @@
 use std::time::{Duration, Instant};
 
 use crate::compare::Method;
-use crate::gpu::{Gpu, GpuError, OutputFormat, Target};
+use crate::gpu::{Gpu, OutputFormat, Target};
 use crate::load::{self, LoadError, Loaded};
-use crate::pass::explain::{self, Plan};
+use crate::pass::explain;
 use crate::pass::graph::PassGraph;
 use crate::pass::setup::SkinSetup;
 use crate::pass::{self, PreparedScene};
@@ -35,6 +35,11 @@ use crate::scene::{self, Scene};
 use crate::shading::{Light, RenderInputs, ToneCurve};
 
 pub use crate::gpu::Rendered as Frame;
+/// What the front door's callers need of the layers behind it: the device's errors, the
+/// headless loader's quieting, a plan as `--explain` prints it, a turntable's cameras.
+pub use crate::gpu::{GpuError, quiet_vulkan_loader};
+pub use crate::load::orbit;
+pub use crate::pass::explain::Plan;
 
 /// Largest texture side assumed by [`explain`] when no device is given (WebGPU's default).
 pub const OFFLINE_TEXTURE_SIDE: u32 = 8192;

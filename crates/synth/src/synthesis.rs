@@ -6,7 +6,7 @@
 //! in L2 (the causal pass, `causal`). The output is toroidal, so results tile. How a candidate is
 //! scored, with the occurrence penalty of Kopf et al. 2007, is in `scoring`.
 //!
-//! With [`Search::KCoherence`] (Tong et al. 2002) a texel's candidates are, for each synthesised
+//! With [`Search::KCoherence`](crate::Search::KCoherence) (Tong et al. 2002) a texel's candidates are, for each synthesised
 //! causal neighbour, its source shifted back and that source's k-coherence set
 //! ([`crate::search::KCoherenceSets`]), each scored once with an early-exit distance (exact at or
 //! below the best so far, so the choice equals a full scoring of the same candidates).
@@ -15,9 +15,9 @@
 //! Ashikhmin 2001, Lefebvre and Hoppe 2005): after the causal pass, every texel of the level is
 //! chosen again by its full `N x N` neighbourhood (centre included, toroidal) joined with the
 //! coarser `M x M` window, against exemplar candidates with full-window features: exhaustively
-//! ([`Search::Exact`]), through a PCA kd-tree built on the full features plus coherence candidates
-//! ([`Search::Approximate`]), or from the k-coherence sets of every neighbour's source shifted
-//! back, the texel's own current source among them ([`Search::KCoherence`]; its fallback tree is
+//! ([`Search::Exact`](crate::Search::Exact)), through a PCA kd-tree built on the full features plus coherence candidates
+//! ([`Search::Approximate`](crate::Search::Approximate)), or from the k-coherence sets of every neighbour's source shifted
+//! back, the texel's own current source among them ([`Search::KCoherence`](crate::Search::KCoherence); its fallback tree is
 //! also built on full features, thresholded by the full-window typical distance). A pass is split
 //! into [`crate::config::CORRECTION_STRIDE`]`^2` interleaved sub-passes by `(x mod s, y mod s)`, in row-major
 //! order of the residues; a sub-pass reads the state the previous sub-passes left (a snapshot for

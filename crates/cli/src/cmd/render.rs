@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::limits;
-use skinkit_render::pass::explain::Plan;
+use skinkit_render::renderer::Plan;
 use skinkit_render::renderer::{self, Renderer};
 #[cfg(feature = "viewer")]
 use skinkit_render::renderer::{Encoding, FrameOptions};

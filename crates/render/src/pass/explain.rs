@@ -1,5 +1,5 @@
 //! `skinkit render --explain`: a scene's passes for people, each as it describes itself
-//! ([`super::Pass::explain`]), with what it reads and writes and every GPU resource with its bytes.
+//! (`Pass::explain`), with what it reads and writes and every GPU resource with its bytes.
 //! [`super::build`] computes what the same graph asks for.
 
 use super::graph::PassGraph;

@@ -5,7 +5,7 @@
 //! shadow map (the first with `shadows = true`, and only when `shadows` is listed) and at which
 //! size, which tables are built (the diffuse LUT only for `preintegrated`, the shadow LUT only for
 //! `shadow-scattering`, the zonal table only for `sh-ambient` over a pre-integrated diffuse), and
-//! the frame's passes ([`super::PassList::of`], the one list, which the GPU encoder, its timestamps
+//! the frame's passes (`PassList::of`, the one list, which the GPU encoder, its timestamps
 //! and `--explain` walk). What was asked and cannot be built (a `shadows` effect with no
 //! shadow-casting light) is a note, never a silent omission.
 

@@ -1,5 +1,5 @@
-//! The passes of a frame, one folder each with its WGSL beside it, each a [`Pass`]: what it is
-//! called, what it explains of itself for `--explain`, and how it encodes itself. [`PassList::of`]
+//! The passes of a frame, one folder each with its WGSL beside it, each a `Pass`: what it is
+//! called, what it explains of itself for `--explain`, and how it encodes itself. `PassList::of`
 //! is the one list of them, in frame order: `shadow` (the key light's depth), `translucent` (the
 //! translucent casters' opacity), `tsd_prepass`, `light_map` and `blur` (texture-space diffusion,
 //! with what they share in `tsd`), then `base`. The graph ([`graph::PassGraph`]), the frame's
@@ -96,6 +96,40 @@ pub(crate) trait Pass: Send + Sync {
 
     /// Records the pass into the frame's encoder.
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>);
+}
+
+/// A render pass into the frame's target: its colour cleared to `background`, its depth cleared
+/// and discarded at the end (the passes that draw the target, the base pass and the debug view).
+pub(crate) fn target_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &'static str,
+    target: &Target,
+    background: [f32; 4],
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+) -> wgpu::RenderPass<'e> {
+    let target_view = target.color.create_view(&Default::default());
+    let depth_view = target.depth.create_view(&Default::default());
+    let [r, g, b, a] = background.map(f64::from);
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &target_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &depth_view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// What a pass prepared for one scene ([`Pass::prepare`]), kept beside the scene.

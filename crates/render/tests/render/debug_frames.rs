@@ -3,14 +3,13 @@
 //! a triangle without UV area is magenta, and the view runs after the base pass. Needs an
 //! adapter (lavapipe in CI); never skips.
 
+use crate::common::plain_inputs;
 use glam::{Vec3, Vec4};
 use skinkit_render::brdf::Lafortune;
 use skinkit_render::effect::Effect;
 use skinkit_render::gpu::{Gpu, OutputFormat, Rendered};
 use skinkit_render::pass::setup::SkinSetup;
-use skinkit_render::shading::{
-    Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
-};
+use skinkit_render::shading::{Camera, Light, LightKind, Vertex};
 
 const SIZE: u32 = 64;
 
@@ -33,20 +32,12 @@ fn quad(x0: f32, x1: f32, uv: [f32; 4], base: u32) -> (Vec<Vertex>, Vec<u32>) {
 }
 
 fn render(vertices: Vec<Vertex>, indices: Vec<u32>, mm_per_unit: f32) -> (Rendered, Vec<String>) {
-    let inputs = RenderInputs {
-        vertices,
-        indices,
-        camera: Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 60.0, 1.0),
-        lights: vec![Light { kind: LightKind::Directional { toward: Vec3::Z }, color: Vec3::ONE, intensity: 1.0 }],
-        brdf: Lafortune { diffuse: Vec3::splat(0.5), lobes: Vec::new() },
-        normal_map: Texture::flat_normals(),
-        green: GreenAxis::Up,
-        albedo: Texture::solid([1.0; 4]),
-        specular: SpecularMode::Pixel,
-        exposure: 1.0,
-        tone: ToneCurve::None,
-        background: [0.0; 4],
-    };
+    let inputs = plain_inputs(
+        (vertices, indices),
+        Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 60.0, 1.0),
+        vec![Light { kind: LightKind::Directional { toward: Vec3::Z }, color: Vec3::ONE, intensity: 1.0 }],
+        Lafortune { diffuse: Vec3::splat(0.5), lobes: Vec::new() },
+    );
     let skin = SkinSetup { effects: vec![Effect::DebugFrames], mm_per_unit, ..SkinSetup::default() };
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let prepared = gpu.prepare_with(&inputs, &skin).unwrap();

@@ -2,6 +2,7 @@
 //! test binary it was before (`cargo test -p skinkit-render --test render skin_lut::`).
 
 mod brdf;
+mod common;
 mod debug_frames;
 mod frames;
 mod gpu;

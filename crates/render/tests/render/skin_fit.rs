@@ -1,6 +1,7 @@
 //! The closed forms of the pre-integrated falloff (`skin::fit`) against equation 1.1 by
 //! brute-force quadrature, the blog's prose formulas, and naga for the WGSL twins.
 
+use crate::common::validate;
 use skinkit_render::skin::fit::{
     self, BLOG_INV_R_MAX, BLOG_INV_R_MIN, FitGrid, OWN_FIT, OWN_FIT_PARAMS, blog_direct, own_direct, reference_direct,
 };
@@ -124,14 +125,6 @@ fn both_forms_stay_finite_and_in_range_at_extremes() {
     }
     // Beyond the fitted range 1/r is clamped to 1 mm^-1.
     assert_eq!(own_direct(0.2, 3.0), own_direct(0.2, 1.0));
-}
-
-fn validate(source: &str) -> Result<naga::Module, String> {
-    let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
-        .validate(&module)
-        .map_err(|e| e.emit_to_string(source))?;
-    Ok(module)
 }
 
 #[test]

@@ -7,11 +7,10 @@
 //! sphere, an occluder); the fixtures are small but differ, and sharing them would hide which
 //! geometry a failure is about.
 
+use crate::common::plain_inputs;
 use glam::{Vec2, Vec3};
 use skinkit_render::brdf::Lafortune;
-use skinkit_render::shading::{
-    Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex, uv_sphere,
-};
+use skinkit_render::shading::{Camera, GreenAxis, Light, LightKind, RenderInputs, Texture, Vertex, uv_sphere};
 use skinkit_render::skin::profile::{Normalisation, Profile, VARIANCES_MM2, WEIGHTS};
 use skinkit_render::skin::reference::{
     Footprint, ReferenceBake, bake, dilate, scatter, scatter_exact, scatter_texels, support_mm, texel_weight,
@@ -22,20 +21,12 @@ fn sun(toward: Vec3, intensity: f32) -> Light {
 }
 
 fn inputs(vertices: Vec<Vertex>, indices: Vec<u32>, lights: Vec<Light>) -> RenderInputs {
-    RenderInputs {
-        vertices,
-        indices,
-        camera: Camera::look_at(Vec3::new(0.0, 0.0, 100.0), Vec3::ZERO, Vec3::Y, 45.0, 1.0),
+    plain_inputs(
+        (vertices, indices),
+        Camera::look_at(Vec3::new(0.0, 0.0, 100.0), Vec3::ZERO, Vec3::Y, 45.0, 1.0),
         lights,
-        brdf: Lafortune::lambert(Vec3::splat(0.6)),
-        normal_map: Texture::flat_normals(),
-        green: GreenAxis::Up,
-        albedo: Texture::solid([1.0; 4]),
-        specular: SpecularMode::Pixel,
-        exposure: 1.0,
-        tone: ToneCurve::None,
-        background: [0.0; 4],
-    }
+        Lafortune::lambert(Vec3::splat(0.6)),
+    )
 }
 
 /// A square of side `side` in the z = 0 plane, [0, side]^2, facing +z; u along +x, v = 0 at

@@ -4,6 +4,7 @@
 // Index loops over bands and channels mirror the formulas' subscripts.
 #![allow(clippy::needless_range_loop)]
 
+use crate::common::validate;
 use glam::Vec3;
 use rayon::prelude::*;
 use skinkit_render::skin::fit::reference_direct;
@@ -304,14 +305,6 @@ fn blog_zonal_is_lambert_at_16_mm_and_close_to_ours_over_its_range() {
             assert!((worst[l][c] / stated[l][c] - 1.0).abs() < 0.05, "{worst:?}");
         }
     }
-}
-
-fn validate(source: &str) -> Result<naga::Module, String> {
-    let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
-        .validate(&module)
-        .map_err(|e| e.emit_to_string(source))?;
-    Ok(module)
 }
 
 #[test]

@@ -2,6 +2,7 @@
 //! `shaders/*.wgsl`, and the modules assembled from the passes' files in `src/pass/`, of which
 //! every file must be part.
 
+use crate::common::validate;
 use std::path::PathBuf;
 
 /// The WGSL files under `folder` of the crate, its subfolders included (each pass has its own).
@@ -20,14 +21,6 @@ fn wgsl_files(folder: &str) -> Vec<PathBuf> {
     }
     files.sort();
     files
-}
-
-fn validate(source: &str) -> Result<naga::Module, String> {
-    let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
-        .validate(&module)
-        .map_err(|e| e.emit_to_string(source))?;
-    Ok(module)
 }
 
 #[test]

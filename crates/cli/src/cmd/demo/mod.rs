@@ -353,8 +353,8 @@ fn render_figures(args: &Args, mm_per_texel: Option<f64>, out: &Output) -> Resul
     match figures(&args.out.join("face").join("normal.png"), mm_per_texel, &args.out.join("render"), out) {
         Ok(r) => Ok(Some(r)),
         Err(e)
-            if e.downcast_ref::<skinkit_render::gpu::GpuError>()
-                .is_some_and(|g| matches!(g, skinkit_render::gpu::GpuError::NoAdapter { .. })) =>
+            if e.downcast_ref::<skinkit_render::renderer::GpuError>()
+                .is_some_and(|g| matches!(g, skinkit_render::renderer::GpuError::NoAdapter { .. })) =>
         {
             out.warn(format!("figures skipped: {e}"));
             Ok(None)

@@ -37,7 +37,7 @@ impl Pass for Base {
         let pipeline = gpu.pipeline(format!("base {format:?} {features:?}"), |gpu| {
             gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &features.constants(), format))
         });
-        let mut pass = begin_pass(frame.encoder, &target.color, &target.depth, scene.background, writes);
+        let mut pass = super::target_pass(frame.encoder, "base pass", target, scene.background, writes);
         pass.set_pipeline(&pipeline);
         gpu.draw_mesh(&mut pass, scene, &scene.bind_group);
     }
@@ -143,38 +143,6 @@ fn pipeline<'a>(
         depth: depth_state(true, wgpu::CompareFunction::Less),
         constants,
     }
-}
-
-fn begin_pass<'e>(
-    encoder: &'e mut wgpu::CommandEncoder,
-    target: &wgpu::Texture,
-    depth: &wgpu::Texture,
-    background: [f32; 4],
-    timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
-) -> wgpu::RenderPass<'e> {
-    let target_view = target.create_view(&Default::default());
-    let depth_view = depth.create_view(&Default::default());
-    let [r, g, b, a] = background.map(f64::from);
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("base pass"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: &target_view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: &depth_view,
-            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
-            stencil_ops: None,
-        }),
-        timestamp_writes,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    })
 }
 
 fn base_reads(graph: &PassGraph) -> Vec<String> {

@@ -89,29 +89,7 @@ impl Pass for DebugFrames {
         let format = target.format;
         let surface = gpu.pipeline(format!("debug frames surface {format:?}"), |gpu| pipeline(gpu, format, false));
         let axes = gpu.pipeline(format!("debug frames axes {format:?}"), |gpu| pipeline(gpu, format, true));
-        let colour = target.color.create_view(&Default::default());
-        let depth = target.depth.create_view(&Default::default());
-        let [r, g, b, a] = scene.background.map(f64::from);
-        let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("debug frames"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &colour,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = super::target_pass(frame.encoder, "debug frames", target, scene.background, writes);
         pass.set_bind_group(0, &prepared.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_pipeline(&surface);
