@@ -146,7 +146,7 @@ pub fn build(
     };
     let bar = out.progress(layout.regions.len() as u64, "regions");
     let face = Face::build(layout, &options.face_options(out.memory_limit()), cache, &mut capture, &bar)
-        .with_context(|| format!("cannot stitch {}", options.layout.display()))?;
+        .context("cannot stitch the face")?;
     bar.clear();
     Ok(face)
 }
