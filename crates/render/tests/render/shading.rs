@@ -2,6 +2,7 @@
 //! frames, the fragment step against a rotation built another way, texture sampling, mip chains,
 //! tone mapping, and the rasteriser's coverage.
 
+use crate::common::plain_inputs;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use skinkit_render::brdf::Lafortune;
 use skinkit_render::shading::{
@@ -194,20 +195,12 @@ fn head_on_plane(width: u32, height: u32) -> RenderInputs {
         tangent: [1.0, 0.0, 0.0, 1.0],
         uv: [(x + 1.0) / 2.0, (1.0 - y) / 2.0],
     };
-    RenderInputs {
-        vertices: vec![corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)],
-        indices: vec![0, 1, 2, 0, 2, 3],
-        camera: Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 45.0, width as f32 / height as f32),
-        lights: vec![sun(Vec3::Z, 2.0)],
-        brdf: Lafortune::lambert(Vec3::splat(0.6)),
-        normal_map: Texture::flat_normals(),
-        green: GreenAxis::Up,
-        albedo: Texture::solid([1.0; 4]),
-        specular: SpecularMode::Pixel,
-        exposure: 1.0,
-        tone: ToneCurve::None,
-        background: [0.0; 4],
-    }
+    plain_inputs(
+        (vec![corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)], vec![0, 1, 2, 0, 2, 3]),
+        Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 45.0, width as f32 / height as f32),
+        vec![sun(Vec3::Z, 2.0)],
+        Lafortune::lambert(Vec3::splat(0.6)),
+    )
 }
 
 #[test]

@@ -4,15 +4,14 @@
 //! the LUT path reading the table it is given, and every feature combination compiling.
 //! Needs an adapter (lavapipe in CI); never skips.
 
+use crate::common::plain_inputs;
 use glam::{Vec3, Vec4};
 use skinkit_render::brdf::Lafortune;
 use skinkit_render::gpu::Table;
 use skinkit_render::gpu::{Gpu, OutputFormat};
 use skinkit_render::pass::geometry;
 use skinkit_render::pass::setup::{self, DiffuseMode, Features, ShadowSetup, SkinSetup, TsdSetup};
-use skinkit_render::shading::{
-    Camera, GreenAxis, Light, LightKind, RenderInputs, SpecularMode, Texture, ToneCurve, Vertex,
-};
+use skinkit_render::shading::{Camera, Light, LightKind, RenderInputs, Vertex};
 use skinkit_render::skin::options::TsdKernel;
 
 const SIZE: u32 = 96;
@@ -50,22 +49,14 @@ fn floor_and_blocker(blocker: bool) -> (Vec<Vertex>, Vec<u32>) {
 }
 
 fn inputs(mesh: (Vec<Vertex>, Vec<u32>)) -> RenderInputs {
-    RenderInputs {
-        vertices: mesh.0,
-        indices: mesh.1,
+    plain_inputs(
+        mesh,
         // Looking down at the floor from below the blocker's height is impossible; look from
         // straight above through it would hide the floor, so the camera sits under z = 0.5.
-        camera: Camera::look_at(Vec3::new(0.0, 0.0, 0.45), Vec3::ZERO, Vec3::Y, 130.0, 1.0),
-        lights: vec![Light { kind: LightKind::Directional { toward: Vec3::Z }, color: Vec3::ONE, intensity: 2.0 }],
-        brdf: Lafortune { diffuse: Vec3::splat(0.5), lobes: Vec::new() },
-        normal_map: Texture::flat_normals(),
-        green: GreenAxis::Up,
-        albedo: Texture::solid([1.0; 4]),
-        specular: SpecularMode::Pixel,
-        exposure: 1.0,
-        tone: ToneCurve::None,
-        background: [0.0; 4],
-    }
+        Camera::look_at(Vec3::new(0.0, 0.0, 0.45), Vec3::ZERO, Vec3::Y, 130.0, 1.0),
+        vec![Light { kind: LightKind::Directional { toward: Vec3::Z }, color: Vec3::ONE, intensity: 2.0 }],
+        Lafortune { diffuse: Vec3::splat(0.5), lobes: Vec::new() },
+    )
 }
 
 fn shadow_setup(inputs: &RenderInputs, filter: u32) -> ShadowSetup {
