@@ -188,6 +188,8 @@ fn effect_resources(scene: &Scene, graph: &PassGraph, n_vertices: u64) -> Vec<Re
                 8 * n * n,
             ));
         }
+        let detail = format!("{n}x{n} Rg16Float: the blur kernel's widening along u and v");
+        out.push(resource(super::tsd::STRETCH, detail, 4 * n * n));
         if let Some(path) = &skin.tsd.kernel_map {
             out.push(resource("kernel map", format!("{} (per-texel blur kernel size)", path.display()), 0));
         }

@@ -1,15 +1,15 @@
-//! A frame: a scene uploaded once ([`Gpu::prepare_with`]: its buffers, textures and the
-//! resources its passes write) and drawn into a target by walking its passes in order
+//! A frame: a scene uploaded once ([`Gpu::prepare_with`]: its buffers and textures, then what
+//! each pass allocates for later passes and prepares for itself) and drawn into a target by walking its passes in order
 //! ([`Gpu::draw`]), each encoding itself ([`super::Pass`]), with GPU timestamps around each when
 //! asked ([`Gpu::draw_timed_passes`]).
 
 use super::base::tone_code;
+use super::resources::Resources;
 use super::setup::SkinSetup;
 use super::uniforms::globals;
 use super::{FrameEncoder, PreparedScene, Upload, geometry};
 use crate::gpu::{Gpu, GpuError, OutputFormat, PassTimer, Rendered, Result, Target, timestamp_writes};
 use crate::shading::{RenderInputs, ToneCurve};
-use std::sync::atomic::Ordering;
 
 impl Gpu {
     /// Render `inputs` at `width` x `height` into `format` and read the pixels back:
@@ -57,39 +57,22 @@ impl Gpu {
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let textures = self.skin_textures(inputs, skin);
-        let shadow = skin.shadow.as_ref().map(|s| self.shadow_resources(s, &textures, &uniforms));
-        let shadow_views = shadow.as_ref().map(|s| {
-            (s.depth.create_view(&Default::default()), s.opacity.as_ref().map(|o| o.create_view(&Default::default())))
-        });
-        let (shadow_view, opacity_view) = match &shadow_views {
-            Some((depth, opacity)) => (Some(depth), opacity.as_ref()),
-            None => (None, None),
-        };
-        let tsd = skin.tsd.as_ref().map(|t| {
-            let group = self.create_bind_group(&textures, &uniforms, shadow_view, opacity_view, None);
-            let mut tsd = self.tsd_resources(t, group);
-            tsd.blur_groups = self.blur_groups(t, &tsd.maps, &tsd.stretch);
-            tsd
-        });
-        let light_map = match (&tsd, &textures.light_map) {
-            (Some(tsd), _) => Some(tsd.maps[tsd.final_map].create_view(&Default::default())),
-            (None, Some(map)) => Some(map.create_view(&Default::default())),
-            (None, None) => None,
-        };
-        let bind_group = self.create_bind_group(&textures, &uniforms, shadow_view, opacity_view, light_map.as_ref());
         let vertices = self.buffer("vertices", bytemuck::cast_slice(&inputs.vertices), wgpu::BufferUsages::VERTEX);
         let skin_data: Vec<[f32; 2]> =
             if skin.vertex_skin.is_empty() { vec![[0.0; 2]; inputs.vertices.len()] } else { skin.vertex_skin.clone() };
         let vertex_skin = self.buffer("per-vertex skin", bytemuck::cast_slice(&skin_data), wgpu::BufferUsages::VERTEX);
         let indices = self.buffer("indices", bytemuck::cast_slice(&inputs.indices), wgpu::BufferUsages::INDEX);
         let passes = skin.passes();
-        let upload = Upload { inputs, skin, uniforms: &uniforms };
-        let states = passes.0.iter().map(|pass| pass.prepare(self, &upload)).collect();
+        let upload = Upload { inputs, skin, uniforms: &uniforms, textures: &textures };
+        let mut resources = Resources::default();
+        for pass in &passes.0 {
+            pass.allocate(self, &upload, &mut resources);
+        }
+        let states = passes.0.iter().map(|pass| pass.prepare(self, &upload, &resources)).collect();
         self.pop_scope(scope, "scene upload")?;
         Ok(PreparedScene {
             globals,
             uniforms,
-            bind_group,
             vertices,
             vertex_skin,
             indices,
@@ -99,8 +82,7 @@ impl Gpu {
             passes,
             states,
             bounds,
-            shadow,
-            tsd,
+            resources,
         })
     }
 
@@ -113,7 +95,7 @@ impl Gpu {
     }
 
     /// Encodes every pass of `scene` in the order of [`PreparedScene::passes`] and waits;
-    /// returns which of them ran (TSD culling may skip its passes).
+    /// returns which of them ran ([`super::Pass::runs`]: TSD culling may skip its passes).
     pub(crate) fn encode_and_submit(
         &self,
         scene: &PreparedScene,
@@ -126,20 +108,13 @@ impl Gpu {
         self.queue.write_buffer(&scene.uniforms, 0, bytemuck::bytes_of(&globals));
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame encoder") });
-        let run_tsd = scene.tsd.as_ref().is_some_and(|tsd| self.tsd_runs(scene, tsd, target));
-        let mut ran = Vec::with_capacity(scene.passes.len());
-        for (slot, pass) in scene.passes.0.iter().enumerate() {
+        // Every pass decides whether it runs before any encodes (a pass may note that it ran).
+        let ran: Vec<bool> = scene.passes.0.iter().map(|pass| pass.runs(scene, target)).collect();
+        for (slot, pass) in scene.passes.0.iter().enumerate().filter(|(slot, _)| ran[*slot]) {
             let writes = timestamp_writes(timer, slot as u32);
-            let run = !pass.culled_with_tsd() || run_tsd;
-            ran.push(run);
-            if run {
-                let state = scene.states[slot].as_deref();
-                let mut frame = FrameEncoder { encoder: &mut encoder, scene, target, state };
-                pass.encode(self, &mut frame, writes);
-            }
-        }
-        if let Some(tsd) = scene.tsd.as_ref().filter(|_| run_tsd) {
-            tsd.ready.store(true, Ordering::Relaxed);
+            let state = scene.states[slot].as_deref();
+            let mut frame = FrameEncoder { encoder: &mut encoder, scene, target, state };
+            pass.encode(self, &mut frame, writes);
         }
         if let Some(t) = timer {
             // Passes that were culled wrote no timestamps; resolving unwritten queries is

@@ -4,7 +4,10 @@
 //! translucent casters' opacity), `tsd_prepass`, `light_map` and `blur` (texture-space diffusion,
 //! with what they share in `tsd`), then `base`. The graph ([`graph::PassGraph`]), the frame's
 //! encoder (`frame`), its timestamps and `--explain` ([`explain::plan`]) all walk that list, and
-//! no other type names the passes. The book's "Adding an effect" walks through adding one.
+//! no other type names the passes. What one pass writes and a later one reads (the shadow map,
+//! TSD's light maps) is allocated by its writer into a registry by name (`resources`), so no
+//! central type holds a pass's textures either. The book's "Adding an effect" walks through
+//! adding one.
 //!
 //! Around the passes: what a scene's effects decide ([`graph`]), what they hand the GPU
 //! ([`setup`], made by [`build`]), the geometry they need ([`geometry`]), the scene's textures and
@@ -24,6 +27,7 @@ mod frame;
 pub mod geometry;
 pub mod graph;
 pub(crate) mod light_map;
+mod resources;
 pub mod setup;
 pub(crate) mod shadow;
 mod textures;
@@ -43,7 +47,9 @@ use crate::gpu::{Gpu, Target};
 use crate::scene::Scene;
 use crate::shading::RenderInputs;
 use graph::PassGraph;
+use resources::Resources;
 use setup::{Features, SkinSetup};
+use textures::SceneTextures;
 
 /// The WGSL source of the mesh passes: the closed-form LUT fits, the shared part, then each
 /// pass's file in frame order.
@@ -81,16 +87,21 @@ pub(crate) trait Pass: Send + Sync {
     /// What it does, reads and writes, for `--explain`.
     fn explain(&self, context: &Context) -> Described;
 
-    /// Whether it is one of texture-space diffusion's passes, which frustum and distance culling
-    /// skip together.
-    fn culled_with_tsd(&self) -> bool {
-        false
+    /// Whether it runs this frame (by default always; texture-space diffusion's passes skip
+    /// together when the head is off screen or small enough to reuse an earlier light map).
+    fn runs(&self, _scene: &PreparedScene, _target: &Target) -> bool {
+        true
     }
 
-    /// Uploads what this pass alone reads, once per scene (by default nothing: what several
-    /// passes share is the scene's). The frame hands it back to [`Pass::encode`]
-    /// ([`FrameEncoder::state`]).
-    fn prepare(&self, _gpu: &Gpu, _upload: &Upload<'_>) -> Option<PassState> {
+    /// Creates what this pass writes that later passes read, once per scene, under the names
+    /// `--explain` gives them ([`Resources`]; by default nothing). Every pass allocates before
+    /// any prepares.
+    fn allocate(&self, _gpu: &Gpu, _upload: &Upload<'_>, _resources: &mut Resources) {}
+
+    /// Uploads what this pass alone draws with, once per scene, reading what earlier passes
+    /// allocated from `resources` (by default nothing). The frame hands it back to
+    /// [`Pass::encode`] ([`FrameEncoder::state`]).
+    fn prepare(&self, _gpu: &Gpu, _upload: &Upload<'_>, _resources: &Resources) -> Option<PassState> {
         None
     }
 
@@ -135,11 +146,30 @@ pub(crate) fn target_pass<'e>(
 /// What a pass prepared for one scene ([`Pass::prepare`]), kept beside the scene.
 pub(crate) type PassState = Box<dyn Any + Send + Sync>;
 
-/// What a pass prepares itself from: the scene's inputs and setup, and its uniform block.
+/// What a pass prepares itself from: the scene's inputs and setup, its uniform block, and the
+/// textures and samplers every mesh pass binds.
 pub(crate) struct Upload<'a> {
     pub(crate) inputs: &'a RenderInputs,
     pub(crate) skin: &'a SkinSetup,
     pub(crate) uniforms: &'a wgpu::Buffer,
+    pub(crate) textures: &'a SceneTextures,
+}
+
+impl Upload<'_> {
+    /// The mesh passes' bind group with the scene's textures and, of what earlier passes wrote,
+    /// those named (`None`: a placeholder, as for a pass that writes that texture itself).
+    pub(crate) fn bind_group(
+        &self,
+        gpu: &Gpu,
+        resources: &Resources,
+        shadow: Option<&str>,
+        opacity: Option<&str>,
+        light_map: Option<&str>,
+    ) -> wgpu::BindGroup {
+        let view = |name: Option<&str>| name.and_then(|n| resources.view(n));
+        let (shadow, opacity, light_map) = (view(shadow), view(opacity), view(light_map));
+        gpu.create_bind_group(self.textures, self.uniforms, shadow.as_ref(), opacity.as_ref(), light_map.as_ref())
+    }
 }
 
 /// What a pass encodes into: the frame's command encoder, the scene it draws and its target,
@@ -255,7 +285,6 @@ impl serde::Serialize for PassList {
 pub struct PreparedScene {
     pub(crate) globals: uniforms::Globals,
     pub(crate) uniforms: wgpu::Buffer,
-    pub(crate) bind_group: wgpu::BindGroup,
     pub(crate) vertices: wgpu::Buffer,
     pub(crate) vertex_skin: wgpu::Buffer,
     pub(crate) indices: wgpu::Buffer,
@@ -267,8 +296,8 @@ pub struct PreparedScene {
     /// What each pass prepared, in the order of `passes`.
     pub(crate) states: Vec<Option<PassState>>,
     pub(crate) bounds: (glam::Vec3, f32),
-    pub(crate) shadow: Option<shadow::ShadowResources>,
-    pub(crate) tsd: Option<tsd::TsdResources>,
+    /// What the passes wrote for later passes to read, by name.
+    pub(crate) resources: Resources,
 }
 
 impl PreparedScene {
@@ -287,14 +316,10 @@ impl PreparedScene {
         self.passes.names()
     }
 
-    /// The key light's shadow map (a shadow pass runs only with one).
-    pub(crate) fn shadow(&self) -> &shadow::ShadowResources {
-        self.shadow.as_ref().expect("a shadow pass is listed only with its shadow map")
-    }
-
-    /// Texture-space diffusion's light maps (a TSD pass runs only with them).
-    pub(crate) fn tsd(&self) -> &tsd::TsdResources {
-        self.tsd.as_ref().expect("a TSD pass is listed only with its light maps")
+    /// The names of the textures the passes allocated for later passes to read, in the order
+    /// they did (the names `--explain` gives those resources).
+    pub fn resource_names(&self) -> Vec<&'static str> {
+        self.resources.texture_names()
     }
 
     /// Moves the camera: the next [`Gpu::draw`] uses `camera` (nothing is re-uploaded but the

@@ -45,6 +45,17 @@ fn check(gpu: &Gpu, scene: &Scene, what: &str) {
     let ran: Vec<String> = timed.iter().map(|(name, _)| name.clone()).collect();
     assert_eq!(ran, explained, "{what}");
     assert_eq!(prepared.passes(), &graph.passes, "{what}");
+    // What the passes read and write, as --explain names it, is a resource of the plan; what
+    // they allocated for each other is written by one of them.
+    let planned: Vec<&str> = plan.resources.iter().map(|r| r.name.as_str()).collect();
+    for pass in &plan.passes {
+        for name in pass.reads.iter().chain(&pass.writes) {
+            assert!(planned.contains(&name.as_str()), "{what}: {} names {name:?}, not in {planned:?}", pass.name);
+        }
+    }
+    for name in prepared.resource_names() {
+        assert!(plan.passes.iter().any(|p| p.writes.iter().any(|w| w == name)), "{what}: no pass writes {name:?}");
+    }
     assert!(timed.iter().map(|(_, d)| *d).sum::<std::time::Duration>() > std::time::Duration::ZERO, "{what}");
 }
 

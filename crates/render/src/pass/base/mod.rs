@@ -4,8 +4,11 @@
 use std::sync::Arc;
 
 use super::graph::PassGraph;
+use super::resources::Resources;
 use super::setup::{DiffuseMode, Features, SkinSetup};
-use super::{Context, Described, FrameEncoder, Pass, Shape};
+use super::shadow::SHADOW_MAP;
+use super::translucent::SHADOW_OPACITY;
+use super::{Context, Described, FrameEncoder, Pass, PassState, Shape, Upload};
 use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, OutputFormat, Table, depth_state};
 use crate::shading::{MAX_LOBES, RenderInputs, SpecularMode, ToneCurve};
 use crate::skin::tsd;
@@ -30,16 +33,24 @@ impl Pass for Base {
         described
     }
 
+    /// Its bind group: the shadow map, the casters' opacity and the light map (texture-space
+    /// diffusion's last, or the caller's) as earlier passes wrote them, placeholders for those
+    /// the scene has not.
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &Resources) -> Option<PassState> {
+        let light_map = upload.skin.tsd.as_ref().map(super::tsd::final_light_map);
+        Some(Box::new(upload.bind_group(gpu, resources, Some(SHADOW_MAP), Some(SHADOW_OPACITY), light_map)))
+    }
+
     /// The base pass into the frame's target.
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
-        let (scene, target) = (frame.scene, frame.target);
+        let (scene, target, bind_group) = (frame.scene, frame.target, frame.state::<wgpu::BindGroup>());
         let (format, features) = (target.format, scene.features);
         let pipeline = gpu.pipeline(format!("base {format:?} {features:?}"), |gpu| {
             gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &features.constants(), format))
         });
         let mut pass = super::target_pass(frame.encoder, "base pass", target, scene.background, writes);
         pass.set_pipeline(&pipeline);
-        gpu.draw_mesh(&mut pass, scene, &scene.bind_group);
+        gpu.draw_mesh(&mut pass, scene, bind_group);
     }
 }
 
@@ -152,8 +163,8 @@ fn base_reads(graph: &PassGraph) -> Vec<String> {
         (graph.vertex_curvature, "per-vertex curvature"),
         (graph.diffuse_lut, "diffuse LUT"),
         (graph.zonal_table, "zonal table"),
-        (graph.shadow.is_some(), "shadow map"),
-        (graph.features.translucent_shadows, "shadow opacity"),
+        (graph.shadow.is_some(), SHADOW_MAP),
+        (graph.features.translucent_shadows, SHADOW_OPACITY),
         (graph.shadow_lut, "shadow LUT"),
     ];
     reads.extend(optional.into_iter().filter(|(on, _)| *on).map(|(_, name)| name.to_string()));

@@ -5,14 +5,22 @@
 use std::sync::Arc;
 
 use super::light_map::UNWRITTEN_TEXEL;
+use super::resources::Resources;
 use super::setup::{self, TsdSetup};
-use super::{Context, Described, FrameEncoder, Pass, Shape};
-use crate::gpu::{Gpu, colour_attachment};
+use super::tsd::{self as shared, STRETCH};
+use super::{Context, Described, FrameEncoder, Pass, PassState, PreparedScene, Shape, Upload};
+use crate::gpu::{Gpu, Target, colour_attachment};
 use crate::skin::options::TsdKernel;
-use crate::skin::tsd;
+use crate::skin::tsd::{self, LIGHT_MAP_NAMES};
 
 /// TSD blur pass `.0` (0-based) of the ping-pong pair.
 struct TsdBlur(u32);
+
+/// What a blur pass draws with: its bind group and the light map it writes.
+struct Prepared {
+    bind_group: wgpu::BindGroup,
+    to: &'static str,
+}
 
 /// The blur passes `shape` runs, in order.
 pub(crate) fn passes(shape: &Shape) -> Vec<Arc<dyn Pass>> {
@@ -34,23 +42,28 @@ impl Pass for TsdBlur {
                 "12-tap Poisson blur by one Gaussian's increment, the weighted light map B added"
             }
         };
-        let mut described = Described::new(what, &[tsd::LIGHT_MAP_NAMES[from]], &[tsd::LIGHT_MAP_NAMES[to]]);
+        let mut described = Described::new(what, &[LIGHT_MAP_NAMES[from], STRETCH], &[LIGHT_MAP_NAMES[to]]);
         if self.0 > 0 && kernel == TsdKernel::Gaussians {
-            described.reads.push(tsd::LIGHT_MAP_NAMES[1].into());
+            described.reads.push(LIGHT_MAP_NAMES[1].into());
         }
         described
     }
 
-    fn culled_with_tsd(&self) -> bool {
-        true
+    fn runs(&self, scene: &PreparedScene, target: &Target) -> bool {
+        shared::runs(scene, target)
+    }
+
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &Resources) -> Option<PassState> {
+        let setup = shared::setup(upload);
+        let (_, to) = tsd::blur_maps(setup.kernel, self.0);
+        Some(Box::new(Prepared { bind_group: bind_group(gpu, setup, self.0, resources), to: LIGHT_MAP_NAMES[to] }))
     }
 
     /// TSD blur `i`: over the whole map, into the map its bind group was made for (the first
     /// also dilates into the texels the light map left unwritten).
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
-        let tsd = frame.scene.tsd();
-        let (group, to) = &tsd.blur_groups[self.0 as usize];
-        let view = tsd.maps[*to].create_view(&Default::default());
+        let prepared: &Prepared = frame.state();
+        let view = frame.scene.resources.get::<wgpu::Texture>(prepared.to).create_view(&Default::default());
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd blur"),
             color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
@@ -60,7 +73,7 @@ impl Pass for TsdBlur {
             multiview_mask: None,
         });
         pass.set_pipeline(&gpu.pipeline("tsd blur".into(), pipeline));
-        pass.set_bind_group(0, group, &[]);
+        pass.set_bind_group(0, &prepared.bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
 }
@@ -89,75 +102,54 @@ pub(crate) struct BlurUniforms {
     pub(crate) radius_table: [[f32; 4]; tsd::RADIUS_TABLE_LEN / 2],
 }
 
-impl Gpu {
-    /// One bind group per blur pass and the map it writes: pass `i` reads the map of
-    /// [`tsd::blur_maps`] (and light map B, which the Gaussians add back), the first with a
-    /// nearest sampler (it dilates), the others bilinear.
-    pub(crate) fn blur_groups(
-        &self,
-        setup: &TsdSetup,
-        maps: &[wgpu::Texture],
-        stretch: &wgpu::Texture,
-    ) -> Vec<(wgpu::BindGroup, usize)> {
-        let stretch = stretch.create_view(&Default::default());
-        let sampler = |label, filter| {
-            self.device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some(label),
-                address_mode_u: wgpu::AddressMode::ClampToEdge,
-                address_mode_v: wgpu::AddressMode::ClampToEdge,
-                mag_filter: filter,
-                min_filter: filter,
-                ..Default::default()
-            })
-        };
-        let nearest = sampler("tsd dilation sampler", wgpu::FilterMode::Nearest);
-        let linear = sampler("tsd blur sampler", wgpu::FilterMode::Linear);
-        let (a, b) = (setup.kernel_scale[0], setup.kernel_scale[1]);
-        let rgb0 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
-        let radius_table = tsd::radius_table();
-        tsd::stages(setup.kernel, setup.passes)
-            .into_iter()
-            .enumerate()
-            .map(|(i, stage)| {
-                let inv_size = [1.0 / setup.size as f32; 2];
-                let raw = BlurUniforms {
-                    inv_size,
-                    a: a * stage.scale,
-                    b: b * stage.scale,
-                    dilate: stage.dilate as u32,
-                    tap_variance: setup::poisson_second_moment() / 2.0,
-                    tap_mean: setup::poisson_mean(),
-                    source_scale: rgb0(stage.source_scale),
-                    irradiance_weight: rgb0(stage.irradiance_weight),
-                    axis_variance: setup::poisson_axis_variance(),
-                    pad0: 0.0,
-                    pad1: 0.0,
-                    radius_table,
-                };
-                let buffer = self.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
-                let (from, to) = tsd::blur_maps(setup.kernel, i as u32);
-                let view = maps[from].create_view(&Default::default());
-                // Map B is the target of the first pass: that one binds its own source instead
-                // (its weight is 0).
-                let added = maps[if i == 0 || maps.len() < 3 { from } else { 1 }].create_view(&Default::default());
-                let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("tsd blur bind group"),
-                    layout: &layout(self),
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::Sampler(if i == 0 { &nearest } else { &linear }),
-                        },
-                        wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&added) },
-                        wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&stretch) },
-                    ],
-                });
-                (group, to)
-            })
-            .collect()
-    }
+/// Blur `i`'s bind group: it reads the map of [`tsd::blur_maps`] (and light map B, which the
+/// Gaussians add back), the first with a nearest sampler (it dilates), the others bilinear.
+fn bind_group(gpu: &Gpu, setup: &TsdSetup, i: u32, resources: &Resources) -> wgpu::BindGroup {
+    let view = |name: &str| resources.get::<wgpu::Texture>(name).create_view(&Default::default());
+    let filter = if i == 0 { wgpu::FilterMode::Nearest } else { wgpu::FilterMode::Linear };
+    let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(if i == 0 { "tsd dilation sampler" } else { "tsd blur sampler" }),
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        mag_filter: filter,
+        min_filter: filter,
+        ..Default::default()
+    });
+    let stage = tsd::stages(setup.kernel, setup.passes)[i as usize];
+    let (a, b) = (setup.kernel_scale[0], setup.kernel_scale[1]);
+    let rgb0 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+    let raw = BlurUniforms {
+        inv_size: [1.0 / setup.size as f32; 2],
+        a: a * stage.scale,
+        b: b * stage.scale,
+        dilate: stage.dilate as u32,
+        tap_variance: setup::poisson_second_moment() / 2.0,
+        tap_mean: setup::poisson_mean(),
+        source_scale: rgb0(stage.source_scale),
+        irradiance_weight: rgb0(stage.irradiance_weight),
+        axis_variance: setup::poisson_axis_variance(),
+        pad0: 0.0,
+        pad1: 0.0,
+        radius_table: tsd::radius_table(),
+    };
+    let buffer = gpu.buffer("tsd blur uniforms", bytemuck::bytes_of(&raw), wgpu::BufferUsages::UNIFORM);
+    let (from, _) = tsd::blur_maps(setup.kernel, i);
+    // Map B is the target of the first pass: that one binds its own source instead (its weight
+    // is 0), as does the single kernel, which keeps no map B.
+    let added = if i == 0 || tsd::map_count(setup.kernel) < 3 { from } else { 1 };
+    let (source, added, stretch) = (view(LIGHT_MAP_NAMES[from]), view(LIGHT_MAP_NAMES[added]), view(STRETCH));
+    let texture = |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("tsd blur bind group"),
+        layout: &layout(gpu),
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
+            texture(1, &source),
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
+            texture(3, &added),
+            texture(4, &stretch),
+        ],
+    })
 }
 
 /// A filterable 2-D float texture read by the blur's fragment stage.

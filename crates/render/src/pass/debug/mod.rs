@@ -8,6 +8,7 @@
 
 use std::sync::Arc;
 
+use super::resources::Resources;
 use super::{Context, Described, FrameEncoder, Pass, PassState, Shape, Upload, geometry};
 use crate::effect::Effect;
 use crate::gpu::{Gpu, OutputFormat, depth_state};
@@ -63,7 +64,7 @@ impl Pass for DebugFrames {
         Described::new(what, &["vertices", "indices", "uniforms"], &["colour target", "depth"])
     }
 
-    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>) -> Option<PassState> {
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, _: &Resources) -> Option<PassState> {
         let inputs = upload.inputs;
         let raw = DebugUniforms {
             median_mm_per_uv: median_mm_per_uv(&inputs.vertices, &inputs.indices, upload.skin.mm_per_unit),

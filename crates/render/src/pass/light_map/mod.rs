@@ -3,10 +3,15 @@
 
 use std::sync::Arc;
 
+use super::resources::Resources;
 use super::setup::{self, TsdSetup};
-use super::{Context, Described, FrameEncoder, Pass, Shape};
-use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, STRETCH_FORMAT, colour_attachment, depth_attachment, depth_state};
-use crate::skin::tsd;
+use super::shadow::SHADOW_MAP;
+use super::tsd::{self, DEPTH, STRETCH};
+use super::{Context, Described, FrameEncoder, Pass, PassState, PreparedScene, Shape, Upload};
+use crate::gpu::{
+    Gpu, MESH_BUFFERS, MeshPipeline, STRETCH_FORMAT, Target, colour_attachment, depth_attachment, depth_state,
+};
+use crate::skin::tsd::LIGHT_MAP_NAMES;
 
 /// TSD's light-map pass, after the pre-pass.
 struct TsdLightMap;
@@ -85,11 +90,11 @@ impl Pass for TsdLightMap {
                     size in alpha";
         let mut described = Described::new(
             what,
-            &["vertices", "indices", "uniforms", "normal map", "per-vertex curvature", "tsd depth"],
-            &[tsd::LIGHT_MAP_NAMES[0]],
+            &["vertices", "indices", "uniforms", "normal map", "per-vertex curvature", DEPTH],
+            &[LIGHT_MAP_NAMES[0], STRETCH],
         );
         if context.graph.shadow.is_some() {
-            described.reads.push("shadow map".into());
+            described.reads.push(SHADOW_MAP.into());
         }
         if context.scene.skin.tsd.kernel_map.is_some() {
             described.reads.push("kernel map".into());
@@ -97,16 +102,24 @@ impl Pass for TsdLightMap {
         described
     }
 
-    fn culled_with_tsd(&self) -> bool {
-        true
+    fn runs(&self, scene: &PreparedScene, target: &Target) -> bool {
+        tsd::runs(scene, target)
+    }
+
+    fn allocate(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &mut Resources) {
+        tsd::allocate_maps(gpu, tsd::setup(upload), resources);
+    }
+
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &Resources) -> Option<PassState> {
+        Some(Box::new(tsd::texture_space_group(gpu, upload, resources)))
     }
 
     /// TSD's light map (depth "equal": only texels the pre-pass kept).
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
-        let tsd = frame.scene.tsd();
-        let depth_view = tsd.depth.create_view(&Default::default());
-        let view = tsd.maps[0].create_view(&Default::default());
-        let stretch = tsd.stretch.create_view(&Default::default());
+        let bind_group: &wgpu::BindGroup = frame.state();
+        let resources = &frame.scene.resources;
+        let view_of = |name| resources.get::<wgpu::Texture>(name).create_view(&Default::default());
+        let (depth_view, view, stretch) = (view_of(DEPTH), view_of(LIGHT_MAP_NAMES[0]), view_of(STRETCH));
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd light map"),
             color_attachments: &[
@@ -124,6 +137,6 @@ impl Pass for TsdLightMap {
             gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &features.constants(), format))
         });
         pass.set_pipeline(&pipeline);
-        gpu.draw_mesh(&mut pass, frame.scene, &tsd.bind_group);
+        gpu.draw_mesh(&mut pass, frame.scene, bind_group);
     }
 }

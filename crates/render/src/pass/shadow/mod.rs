@@ -3,10 +3,13 @@
 
 use std::sync::Arc;
 
+use super::resources::Resources;
 use super::setup::{Features, ShadowSetup};
-use super::textures::SceneTextures;
-use super::{Context, Described, FrameEncoder, Pass, Shape};
-use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, POSITION_BUFFER, depth_state, extent};
+use super::{Context, Described, FrameEncoder, Pass, PassState, Shape, Upload};
+use crate::gpu::{Gpu, MeshPipeline, POSITION_BUFFER, depth_state};
+
+/// The key light's depth, as the passes after this one read it.
+pub(crate) const SHADOW_MAP: &str = "shadow map";
 
 /// The shadow map pass, drawn when the key light casts shadows.
 struct ShadowMap;
@@ -29,13 +32,23 @@ impl Pass for ShadowMap {
         Described::new(
             format!("depth of the mesh seen from light[{key}], bounding its sphere tightly"),
             &["vertices", "indices", "uniforms"],
-            &["shadow map"],
+            &[SHADOW_MAP],
         )
     }
 
+    fn allocate(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &mut Resources) {
+        let side = setup(upload).map_size;
+        resources.put(SHADOW_MAP, gpu.depth_texture("shadow map", side, side, true));
+    }
+
+    /// Its bind group: one that does not sample the map it writes.
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &Resources) -> Option<PassState> {
+        Some(Box::new(upload.bind_group(gpu, resources, None, None, None)))
+    }
+
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
-        let shadow = frame.scene.shadow();
-        let view = shadow.depth.create_view(&Default::default());
+        let bind_group: &wgpu::BindGroup = frame.state();
+        let view = frame.scene.resources.get::<wgpu::Texture>(SHADOW_MAP).create_view(&Default::default());
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow map pass"),
             color_attachments: &[],
@@ -53,26 +66,13 @@ impl Pass for ShadowMap {
             gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &constants))
         });
         pass.set_pipeline(&pipeline);
-        gpu.draw_mesh(&mut pass, frame.scene, &shadow.bind_group);
+        gpu.draw_mesh(&mut pass, frame.scene, bind_group);
     }
 }
 
-/// One translucent caster's positions, per-vertex opacity and indices.
-pub(crate) struct CasterBuffers {
-    pub(crate) positions: wgpu::Buffer,
-    pub(crate) opacity: wgpu::Buffer,
-    pub(crate) indices: wgpu::Buffer,
-    pub(crate) count: u32,
-}
-
-/// The key light's shadow map and the bind group its pass draws with (one that does not sample
-/// the map being written).
-pub(crate) struct ShadowResources {
-    pub(crate) depth: wgpu::Texture,
-    pub(crate) bind_group: wgpu::BindGroup,
-    /// Summed opacity of the translucent casters (with their buffers), when there are any.
-    pub(crate) opacity: Option<wgpu::Texture>,
-    pub(crate) casters: Vec<CasterBuffers>,
+/// The scene's shadow-map settings (a shadow pass is listed only with them).
+pub(crate) fn setup<'a>(upload: &Upload<'a>) -> &'a ShadowSetup {
+    upload.skin.shadow.as_ref().expect("a shadow pass is listed only with its settings")
 }
 
 /// The shadow map's uniforms (`ShadowUniforms` in shadow.wgsl).
@@ -131,53 +131,5 @@ fn pipeline<'a>(module: &'a wgpu::ShaderModule, constants: &'a [(&'static str, f
         second_target: None,
         depth: depth_state(true, wgpu::CompareFunction::Less),
         constants,
-    }
-}
-
-impl Gpu {
-    pub(crate) fn shadow_resources(
-        &self,
-        s: &ShadowSetup,
-        textures: &SceneTextures,
-        uniforms: &wgpu::Buffer,
-    ) -> ShadowResources {
-        let depth = self.depth_texture("shadow map", s.map_size, s.map_size, true);
-        let bind_group = self.create_bind_group(textures, uniforms, None, None, None);
-        let opacity = (!s.translucent.is_empty()).then(|| {
-            self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("shadow opacity"),
-                size: extent(s.map_size, s.map_size),
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: OPACITY_FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        });
-        let casters = s
-            .translucent
-            .iter()
-            .filter(|c| !c.indices.is_empty() && c.indices.iter().all(|&i| (i as usize) < c.positions.len()))
-            .map(|c| CasterBuffers {
-                positions: self.buffer(
-                    "translucent positions",
-                    bytemuck::cast_slice(&c.positions),
-                    wgpu::BufferUsages::VERTEX,
-                ),
-                opacity: self.buffer(
-                    "translucent opacity",
-                    bytemuck::cast_slice(&vec![c.opacity; c.positions.len()]),
-                    wgpu::BufferUsages::VERTEX,
-                ),
-                indices: self.buffer(
-                    "translucent indices",
-                    bytemuck::cast_slice(&c.indices),
-                    wgpu::BufferUsages::INDEX,
-                ),
-                count: c.indices.len() as u32,
-            })
-            .collect();
-        ShadowResources { depth, bind_group, opacity, casters }
     }
 }

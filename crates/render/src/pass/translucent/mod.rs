@@ -3,9 +3,14 @@
 
 use std::sync::Arc;
 
+use super::resources::Resources;
 use super::setup::Features;
-use super::{Context, Described, FrameEncoder, Pass, Shape};
-use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, colour_attachment, depth_state};
+use super::shadow::{self, SHADOW_MAP};
+use super::{Context, Described, FrameEncoder, Pass, PassState, Shape, Upload};
+use crate::gpu::{Gpu, MeshPipeline, OPACITY_FORMAT, colour_attachment, depth_state, extent};
+
+/// The translucent casters' summed opacity, as the passes after this one read it.
+pub(crate) const SHADOW_OPACITY: &str = "shadow opacity";
 
 /// The translucent casters' pass, drawn after the shadow map when the scene has casters.
 struct TranslucentShadows;
@@ -26,6 +31,22 @@ const CASTER_BUFFERS: [Option<wgpu::VertexBufferLayout<'static>>; 2] = [
     Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &POSITION }),
     Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &OPACITY }),
 ];
+
+const VERTEX: wgpu::BufferUsages = wgpu::BufferUsages::VERTEX;
+
+/// One translucent caster's positions, per-vertex opacity and indices.
+struct CasterBuffers {
+    positions: wgpu::Buffer,
+    opacity: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    count: u32,
+}
+
+/// What the translucent pass draws with: its bind group and the casters.
+struct Prepared {
+    bind_group: wgpu::BindGroup,
+    casters: Vec<CasterBuffers>,
+}
 
 /// The casters' pipeline: tested against the opaque depth, not writing it.
 fn pipeline<'a>(module: &'a wgpu::ShaderModule, constants: &'a [(&'static str, f64)]) -> MeshPipeline<'a> {
@@ -50,18 +71,54 @@ impl Pass for TranslucentShadows {
     fn explain(&self, _: &Context) -> Described {
         Described::new(
             "translucent casters seen from the key light, their opacity added where no opaque surface is in front",
-            &["uniforms", "shadow map"],
-            &["shadow opacity"],
+            &["uniforms", SHADOW_MAP],
+            &[SHADOW_OPACITY],
         )
+    }
+
+    fn allocate(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &mut Resources) {
+        let side = shadow::setup(upload).map_size;
+        let opacity = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow opacity"),
+            size: extent(side, side),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: OPACITY_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        resources.put(SHADOW_OPACITY, opacity);
+    }
+
+    /// The casters' buffers (those with a valid triangle list) and a bind group that samples
+    /// neither the shadow map nor the opacity being written.
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &Resources) -> Option<PassState> {
+        let casters = shadow::setup(upload)
+            .translucent
+            .iter()
+            .filter(|c| !c.indices.is_empty() && c.indices.iter().all(|&i| (i as usize) < c.positions.len()))
+            .map(|c| CasterBuffers {
+                positions: gpu.buffer("translucent positions", bytemuck::cast_slice(&c.positions), VERTEX),
+                opacity: gpu.buffer(
+                    "translucent opacity",
+                    bytemuck::cast_slice(&vec![c.opacity; c.positions.len()]),
+                    VERTEX,
+                ),
+                indices: gpu.buffer("translucent indices", bytemuck::cast_slice(&c.indices), wgpu::BufferUsages::INDEX),
+                count: c.indices.len() as u32,
+            })
+            .collect();
+        Some(Box::new(Prepared { bind_group: upload.bind_group(gpu, resources, None, None, None), casters }))
     }
 
     /// Translucent casters into the opacity channels: cleared to 0, added up where the opaque
     /// depth does not hide them.
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
-        let shadow = frame.scene.shadow();
-        let opacity = shadow.opacity.as_ref().expect("translucent shadows are listed with their map");
-        let depth = shadow.depth.create_view(&Default::default());
-        let view = opacity.create_view(&Default::default());
+        let prepared: &Prepared = frame.state();
+        let resources = &frame.scene.resources;
+        let depth = resources.get::<wgpu::Texture>(SHADOW_MAP).create_view(&Default::default());
+        let view = resources.get::<wgpu::Texture>(SHADOW_OPACITY).create_view(&Default::default());
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("translucent shadows pass"),
             color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)))],
@@ -79,8 +136,8 @@ impl Pass for TranslucentShadows {
             gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &constants))
         });
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &shadow.bind_group, &[]);
-        for caster in &shadow.casters {
+        pass.set_bind_group(0, &prepared.bind_group, &[]);
+        for caster in &prepared.casters {
             pass.set_vertex_buffer(0, caster.positions.slice(..));
             pass.set_vertex_buffer(1, caster.opacity.slice(..));
             pass.set_index_buffer(caster.indices.slice(..), wgpu::IndexFormat::Uint32);

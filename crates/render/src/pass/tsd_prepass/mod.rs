@@ -3,9 +3,11 @@
 
 use std::sync::Arc;
 
+use super::resources::Resources;
 use super::setup::TsdSetup;
-use super::{Context, Described, FrameEncoder, Pass, Shape};
-use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, depth_attachment, depth_state};
+use super::tsd::{self, DEPTH};
+use super::{Context, Described, FrameEncoder, Pass, PassState, PreparedScene, Shape, Upload};
+use crate::gpu::{Gpu, MESH_BUFFERS, MeshPipeline, Target, depth_attachment, depth_state};
 
 /// TSD's back-face pre-pass, first of its passes.
 struct TsdPrepass;
@@ -60,17 +62,25 @@ impl Pass for TsdPrepass {
              screen)",
             context.scene.skin.tsd.backface_bias
         );
-        Described::new(what, &["vertices", "indices", "uniforms"], &["tsd depth"])
+        Described::new(what, &["vertices", "indices", "uniforms"], &[DEPTH])
     }
 
-    fn culled_with_tsd(&self) -> bool {
-        true
+    fn runs(&self, scene: &PreparedScene, target: &Target) -> bool {
+        tsd::runs(scene, target)
+    }
+
+    fn allocate(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &mut Resources) {
+        tsd::allocate_depth(gpu, tsd::setup(upload), resources);
+    }
+
+    fn prepare(&self, gpu: &Gpu, upload: &Upload<'_>, resources: &Resources) -> Option<PassState> {
+        Some(Box::new(tsd::texture_space_group(gpu, upload, resources)))
     }
 
     /// TSD's back-face pre-pass into the UV-space depth.
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
-        let tsd = frame.scene.tsd();
-        let depth_view = tsd.depth.create_view(&Default::default());
+        let bind_group: &wgpu::BindGroup = frame.state();
+        let depth_view = frame.scene.resources.get::<wgpu::Texture>(DEPTH).create_view(&Default::default());
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd back-face pre-pass"),
             color_attachments: &[],
@@ -84,6 +94,7 @@ impl Pass for TsdPrepass {
             gpu.mesh_pipeline(&pipeline(&super::mesh_module(gpu), &features.constants()))
         });
         pass.set_pipeline(&pipeline);
-        gpu.draw_mesh(&mut pass, frame.scene, &tsd.bind_group);
+        gpu.draw_mesh(&mut pass, frame.scene, bind_group);
+        tsd::mark_drawn(frame.scene);
     }
 }
