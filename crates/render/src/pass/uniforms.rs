@@ -3,6 +3,11 @@
 //! pass ([`super::base::BaseUniforms`], [`super::shadow::ShadowUniforms`], ...). One buffer and
 //! one binding, written once per frame; [`uniform_layouts`] lists every struct's Rust layout for
 //! the naga-reflection test (`tests/render/wgsl.rs`) to check against the WGSL.
+//!
+//! Why one block lists the mesh passes' parts: they are one shader module (`BASE_WGSL`), whose
+//! `Globals` declares each part once, and one binding keeps that module's bind group shared by
+//! every mesh pass. A pass with a module of its own (the blur, the debug view) owns its uniform
+//! buffer instead and appears nowhere here; that is the way for a new pass.
 
 use super::base::{self, BaseUniforms, LobeRaw};
 use super::blur::BlurUniforms;
