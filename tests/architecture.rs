@@ -1,5 +1,6 @@
 //! The house rules of issue 38 that read the libraries' sources rather than run them: no module
-//! circles inside a crate.
+//! circles inside a crate, nothing outside the renderer behind its front door, no function over
+//! 80 lines and no file over 600 without its reason.
 //!
 //! At every level of a crate's module tree the sibling modules are the nodes of a graph (a node
 //! stands for the module and all its descendants) with an edge `a -> b` when code anywhere in
@@ -578,6 +579,9 @@ fn only_the_renderer_builds_the_device_and_wires_the_passes() {
     }
     assert!(found.is_empty(), "outside the renderer's front door:\n{}", found.join("\n"));
 }
+
+/// No function over 80 lines, no file over 600 without its reason.
+mod sizes;
 
 /// The circle finder's own tests.
 mod tests;

@@ -129,6 +129,65 @@ fn small_layout(dir: &Path) -> PathBuf {
     path
 }
 
+/// The inputs of [`exit_codes_are_0_1_2_for_every_command`], made in `dir`.
+struct ExitCodeInputs {
+    missing: String,
+    cheek: String,
+    rig: String,
+    truth: String,
+    sessions: String,
+    uw: String,
+    scene: String,
+    layout: String,
+    coords: String,
+    unwritable: String,
+    a_file: String,
+}
+
+impl ExitCodeInputs {
+    fn make(dir: &Path) -> ExitCodeInputs {
+        let t = |name: &str| dir.join(name).display().to_string();
+        std::fs::create_dir_all(dir.join("sessions/cheek")).unwrap();
+        for entry in std::fs::read_dir(mold("cheek")).unwrap() {
+            let path = entry.unwrap().path();
+            std::fs::copy(&path, dir.join("sessions/cheek").join(path.file_name().unwrap())).unwrap();
+        }
+        let uw = t("lights.txt");
+        std::fs::write(&uw, "3\n0 0 1\n0.6 0 0.8\n0 0.6 0.8\n").unwrap();
+        let a_file = t("a-file");
+        std::fs::write(&a_file, "not a folder\n").unwrap();
+        ExitCodeInputs {
+            missing: t("missing.toml"),
+            cheek: s(&mold("cheek")).to_owned(),
+            rig: s(&mold("cheek").join("rig.toml")).to_owned(),
+            truth: s(&mold("cheek").join("truth.png")).to_owned(),
+            sessions: t("sessions"),
+            uw,
+            scene: s(&head_scene(dir)).to_owned(),
+            layout: s(&small_layout(dir)).to_owned(),
+            coords: t("coords.png"),
+            unwritable: t("no-such-folder/out.exr"),
+            a_file,
+        }
+    }
+}
+
+/// The cases whose exit code is not the one wanted; a failure must also be one error line.
+fn wrong_exit_codes(cases: &[(&str, i32, Vec<String>)]) -> Vec<String> {
+    let mut wrong = Vec::new();
+    for (command, want, args) in cases {
+        let o = skinkit(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        if o.status.code() != Some(*want) {
+            wrong.push(format!("{command}: want {want}, got {:?}: {}", o.status.code(), stderr(&o).trim_end()));
+        } else if *want == 1 {
+            let e = stderr(&o);
+            let lines = e.lines().filter(|l| l.starts_with("error: ")).count();
+            assert_eq!(lines, 1, "{command}: {e}");
+        }
+    }
+    wrong
+}
+
 /// The README's exit codes, for every command: 0 when it worked, 1 when an input or the job
 /// failed (a missing or unreadable file, an unwritable output), 2 for a usage error (an unknown
 /// flag, a missing argument, a value clap cannot parse). `demo`'s and `rig from-sphere`'s
@@ -138,24 +197,8 @@ fn small_layout(dir: &Path) -> PathBuf {
 fn exit_codes_are_0_1_2_for_every_command() {
     let tmp = tempfile::tempdir().unwrap();
     let t = |name: &str| tmp.path().join(name).display().to_string();
-    let missing = t("missing.toml");
-    let cheek = s(&mold("cheek")).to_owned();
-    let rig = s(&mold("cheek").join("rig.toml")).to_owned();
-    let truth = s(&mold("cheek").join("truth.png")).to_owned();
-    let sessions = t("sessions");
-    std::fs::create_dir_all(tmp.path().join("sessions/cheek")).unwrap();
-    for entry in std::fs::read_dir(mold("cheek")).unwrap() {
-        let path = entry.unwrap().path();
-        std::fs::copy(&path, tmp.path().join("sessions/cheek").join(path.file_name().unwrap())).unwrap();
-    }
-    let uw = t("lights.txt");
-    std::fs::write(&uw, "3\n0 0 1\n0.6 0 0.8\n0 0.6 0.8\n").unwrap();
-    let scene = s(&head_scene(tmp.path())).to_owned();
-    let layout = s(&small_layout(tmp.path())).to_owned();
-    let coords = t("coords.png");
-    let unwritable = t("no-such-folder/out.exr");
-    let a_file = t("a-file");
-    std::fs::write(&a_file, "not a folder\n").unwrap();
+    let ExitCodeInputs { missing, cheek, rig, truth, sessions, uw, scene, layout, coords, unwritable, a_file } =
+        ExitCodeInputs::make(tmp.path());
     // Every argument as an owned string (the output paths are made in place).
     macro_rules! args {
         ($($arg:expr),* $(,)?) => { vec![$($arg.to_string()),*] };
@@ -209,18 +252,7 @@ fn exit_codes_are_0_1_2_for_every_command() {
         ("lut shadow", 1, args!["lut", "shadow", "--size", "16x8", "--out", &unwritable]),
         ("lut shadow", 2, args!["lut", "shadow", "--bogus"]),
     ];
-    let mut wrong = Vec::new();
-    for (command, want, args) in &cases {
-        let o = skinkit(&args.iter().map(String::as_str).collect::<Vec<_>>());
-        if o.status.code() != Some(*want) {
-            wrong.push(format!("{command}: want {want}, got {:?}: {}", o.status.code(), stderr(&o).trim_end()));
-        } else if *want == 1 {
-            // Failures are one line on stderr.
-            let e = stderr(&o);
-            let lines = e.lines().filter(|l| l.starts_with("error: ")).count();
-            assert_eq!(lines, 1, "{command}: {e}");
-        }
-    }
+    let wrong = wrong_exit_codes(&cases);
     assert!(wrong.is_empty(), "{} of {} cases:\n{}", wrong.len(), cases.len(), wrong.join("\n"));
 }
 
