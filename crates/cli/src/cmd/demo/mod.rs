@@ -308,7 +308,7 @@ fn capture_mold(
     let options = options(solver, out)?;
     let mut captured = session::capture(files, &options, &skinkit_maps::progress::NoProgress)?;
     let target = args.out.join("capture").join(region).join(solver.name());
-    skinkit_capture::outputs::write(skinkit_capture::outputs::output_set(&target)?, &target, &mut captured, &options)?;
+    skinkit_capture::outputs::write(skinkit_capture::outputs::output_set(&target)?, &mut captured, &options)?;
     let r = &captured.report;
     let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
     let mold = MoldResult {
