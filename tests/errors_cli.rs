@@ -71,6 +71,64 @@ fn d10_error_chains_name_each_cause_once_and_no_temp_file() {
     one_clean_error(&o, s(&target));
 }
 
+/// Issue 38: a failed write says which output it was, by its role (`cannot write the label
+/// map`), and the path once, from the library error under it: every command's outputs into a
+/// folder that cannot be made (its parent is a file).
+#[test]
+fn failed_writes_name_the_outputs_role_and_its_path_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = |name: &str| tmp.path().join(name).display().to_string();
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let bad = |name: &str| file.join(name).display().to_string();
+    let (cheek, truth) = (s(&mold("cheek")).to_owned(), s(&mold("cheek").join("truth.png")).to_owned());
+    let rig = s(&mold("cheek").join("rig.toml")).to_owned();
+    let (scene, layout) = (s(&head_scene(tmp.path())).to_owned(), s(&small_layout(tmp.path())).to_owned());
+    let synth =
+        |out: &str, more: &[&str]| [owned(&["synth", &truth, "--size", "32x32", "--out", out]), owned(more)].concat();
+    let g = t("g.png");
+    let cases: Vec<(&str, String, Vec<String>)> = vec![
+        ("the normal map", bad("g.png"), synth(&bad("g.png"), &[])),
+        ("the coordinate map", bad("c.png"), synth(&g, &["--coords", &bad("c.png")])),
+        ("the synthesis report", bad("r.json"), synth(&g, &["--report", &bad("r.json")])),
+        ("the height map", bad("h.exr"), synth(&g, &["--height", &bad("h.exr")])),
+        (
+            "the cavity map",
+            bad("cav.png"),
+            owned(&["height", &truth, "--out", &t("h.exr"), "--cavity", &bad("cav.png")]),
+        ),
+        ("the LUT", bad("d.exr"), owned(&["lut", "diffuse", "--size", "16x8", "--out", &bad("d.exr")])),
+        (
+            "the capture folder",
+            bad("cap"),
+            owned(&["capture", "--rig", &rig, "--photos-from", &cheek, "--out", &bad("cap")]),
+        ),
+        (
+            "the label map",
+            bad("l.png"),
+            owned(&["stitch", "--layout", &layout, "--out", &t("f.png"), "--labels", &bad("l.png")]),
+        ),
+        ("the face folder", bad("face"), owned(&["face", "--layout", &layout, "--out", &bad("face")])),
+        ("the rendered image", bad("head.png"), owned(&["render", &scene, "--out", &bad("head.png")])),
+        (
+            "the exported model",
+            bad("head.glb"),
+            owned(&["export", "gltf", "--scene", &scene, "--out", &bad("head.glb")]),
+        ),
+    ];
+    for (role, path, args) in &cases {
+        let o = skinkit(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        let line = one_clean_error(&o, path);
+        let said = format!("error: cannot write {role}: {path}: ");
+        assert!(line.starts_with(&said), "{}: not `{said}...`: {line}", args.join(" "));
+    }
+}
+
+/// The arguments `words`, owned.
+fn owned(words: &[&str]) -> Vec<String> {
+    words.iter().map(|w| (*w).to_owned()).collect()
+}
+
 /// Issue 15, D13: JPEG data named `.png` is refused, saying why, and nothing is written.
 #[test]
 fn d13_a_jpeg_photo_named_png_is_refused_with_the_reason() {

@@ -210,8 +210,9 @@ fn d3_a_write_error_fails_the_session_whole_and_the_batch_goes_on() {
     // Every 48-pixel output fits under the limit; a 96-pixel normal.exr (96 * 96 * 12 bytes)
     // does not, so the big sessions fail after some of their files were written.
     let limit = 48 * 48 * 12 + 4096;
+    let out = tmp.path().join("out");
     let o = bin()
-        .args(["batch", s(&dir), "--out", s(&tmp.path().join("out"))])
+        .args(["batch", s(&dir), "--out", s(&out)])
         .env("SKINKIT_FAULT_WRITE_AFTER_BYTES", limit.to_string())
         .output()
         .unwrap();
@@ -219,10 +220,11 @@ fn d3_a_write_error_fails_the_session_whole_and_the_batch_goes_on() {
     let e = stderr(&o);
     let errors: Vec<&str> = e.lines().filter(|l| l.contains("No space left on device")).collect();
     assert_eq!(errors.len(), 2, "{e}");
+    // Each names the file that failed by its role, then its path once (the maps error's).
     for line in errors {
-        assert!(line.contains("-big") && line.contains("cannot write") && !line.contains(".staging."), "{line}");
+        assert!(line.contains("-big: cannot write the ") && !line.contains(".staging."), "{line}");
+        assert_eq!(line.matches(s(&out)).count(), 1, "{line}");
     }
-    let out = tmp.path().join("out");
     assert_eq!(complete_sessions(&out, "after the full disk"), ["a-small", "c-small"]);
     let report = json(&out.join("batch-report.json"));
     assert_eq!((report["succeeded"].as_u64(), report["failed"].as_u64()), (Some(2), Some(2)));

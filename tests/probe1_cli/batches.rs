@@ -157,20 +157,23 @@ fn fill(dir: &Path, free_kib: u64) {
 }
 
 /// 6.5, D3: a batch of 4 sessions onto a 2 MiB tmpfs fails (exit 1) saying `No space left`
-/// once; every session folder on the disk holds a whole set or is absent.
+/// once, naming the file's role and its path once; every session folder on the disk holds a
+/// whole set or is absent.
 #[test]
 fn probe1_6_5_a_batch_onto_a_full_disk_leaves_whole_sets_or_none() {
     let scratch = Scratch::new();
     let sessions = linked_sessions(&scratch, "batch4", &all_molds(&scratch), 1);
     let Some(disk) = small_disk(&scratch) else { return };
     let maps = disk.0.join("maps");
-    let case = scratch.expect(&[1]).names("No space left").says(&["No space left"]).first_warning();
+    let case = scratch.expect(&[1]).names("No space left").names(s(&maps)).first_warning();
+    let case = case.says(&["cannot write the ", s(&maps), "No space left"]);
     case.run(&["batch", s(&sessions), "--out", s(&maps)]);
     assert_eq!(half_sets(&maps), Vec::<String>::new(), "half sets on the full disk");
 }
 
 /// 6.6, D3: a capture onto a nearly full disk (300 KiB free) fails saying `No space left`
-/// once and leaves nothing at its `--out`.
+/// once, naming the file that did not fit once, after its role (`cannot write the height map:
+/// .../cap/height.exr`), and leaves nothing at its `--out`.
 #[test]
 fn probe1_6_6_a_capture_onto_a_full_disk_leaves_nothing() {
     let scratch = Scratch::new();
@@ -178,7 +181,8 @@ fn probe1_6_6_a_capture_onto_a_full_disk_leaves_nothing() {
     let Some(disk) = small_disk(&scratch) else { return };
     fill(&disk.0, 300);
     let cap = disk.0.join("cap");
-    let case = scratch.expect(&[1]).names("No space left").says(&["No space left"]).leaves_nothing_at(&cap);
+    let case = scratch.expect(&[1]).names("No space left").names(s(&cap)).leaves_nothing_at(&cap);
+    let case = case.says(&["cannot write the ", s(&cap), "No space left"]);
     case.run(&["capture", "--rig", s(&rig), "--photos-from", s(&folder), "--out", s(&cap)]);
 }
 
@@ -192,8 +196,8 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
 }
 
 /// 6.7, D3: the cheek captured whole onto a small disk, then the nose into the same folder with
-/// the disk full: the re-capture fails saying `No space left` once, and the cheek's set is
-/// unchanged, byte for byte.
+/// the disk full: the re-capture fails saying `No space left` once, naming the file's role and
+/// its path once, and the cheek's set is unchanged, byte for byte.
 #[test]
 fn probe1_6_7_a_failed_recapture_keeps_the_previous_set() {
     let scratch = Scratch::new();
@@ -207,7 +211,8 @@ fn probe1_6_7_a_failed_recapture_keeps_the_previous_set() {
     fill(&disk.0, 300);
     let nose = scratch.input("molds/nose");
     let nose_rig = nose.join("rig.toml");
-    let case = scratch.expect(&[1]).names("No space left").says(&["No space left"]);
+    let case = scratch.expect(&[1]).names("No space left").names(s(&cap));
+    let case = case.says(&["cannot write the ", s(&cap), "No space left"]);
     case.run(&["capture", "--rig", s(&nose_rig), "--photos-from", s(&nose), "--out", s(&cap)]);
     assert!(before == snapshot(&cap), "the cheek's set changed");
 }

@@ -131,7 +131,7 @@ impl Scratch {
         Case {
             scratch: self,
             want: want.to_vec(),
-            names: None,
+            names: Vec::new(),
             says: Vec::new(),
             absent: None,
             max_mib: None,
@@ -172,7 +172,7 @@ fn hash_file(path: &Path) -> u64 {
 pub struct Case<'s> {
     scratch: &'s Scratch,
     want: Vec<i32>,
-    names: Option<String>,
+    names: Vec<String>,
     says: Vec<String>,
     absent: Option<PathBuf>,
     max_mib: Option<u64>,
@@ -184,9 +184,10 @@ pub struct Case<'s> {
 }
 
 impl Case<'_> {
-    /// The error line names `what` (a path, a flag, an OS error's words) exactly once.
+    /// The error line names `what` (a path, a flag, an OS error's words) exactly once; each
+    /// call adds one more (a full disk's line names its file and `No space left` once each).
     pub fn names(mut self, what: impl AsRef<str>) -> Self {
-        self.names = Some(what.as_ref().to_owned());
+        self.names.push(what.as_ref().to_owned());
         self
     }
 
@@ -267,7 +268,7 @@ impl Case<'_> {
     fn check_line(&self, what: &str, r: &Run) {
         let line = error_line(&r.stderr, r.code == 2, self.first_warning)
             .unwrap_or_else(|| panic!("{what}: not one error line: {}", r.stderr));
-        if let Some(name) = &self.names {
+        for name in &self.names {
             assert_eq!(line.matches(name.as_str()).count(), 1, "{what}: does not name {name} once: {line}");
         }
         assert!(!line.contains(".tmp"), "{what}: a temporary file named: {line}");

@@ -39,8 +39,8 @@ fn probe1_7_2_out_an_existing_folder_is_refused_at_start_up() {
     }
 }
 
-/// 7.3, D10: `synth --out` on a read-only mount fails naming the output once and saying
-/// `Read-only`. Needs a tmpfs mount (root).
+/// 7.3, D10: `synth --out` on a read-only mount fails naming the output once, after its role,
+/// and saying `Read-only`. Needs a tmpfs mount (root).
 #[test]
 fn probe1_7_3_out_on_a_read_only_mount_is_refused() {
     let scratch = Scratch::new();
@@ -50,7 +50,7 @@ fn probe1_7_3_out_on_a_read_only_mount_is_refused() {
     };
     let truth = scratch.input("molds/cheek/truth.png");
     let out = ro.0.join("s.png");
-    let case = scratch.expect(&[1]).names(s(&out)).says(&["Read-only"]);
+    let case = scratch.expect(&[1]).names(s(&out)).says(&["cannot write the normal map: ", s(&out), "Read-only"]);
     case.run(&["synth", s(&truth), "--size", "32x32", "--out", s(&out)]);
 }
 
@@ -60,8 +60,8 @@ fn nobody(scratch: &Scratch) -> Option<u32> {
     (r.code == 0).then_some(65534)
 }
 
-/// 7.4, D10: `synth --out` in a folder its user may not write fails naming the output once and
-/// saying `Permission denied`. Needs root, to run the binary as uid 65534.
+/// 7.4, D10: `synth --out` in a folder its user may not write fails naming the output once,
+/// after its role, and saying `Permission denied`. Needs root, to run the binary as uid 65534.
 #[test]
 fn probe1_7_4_out_in_a_folder_without_write_permission_is_refused() {
     let scratch = Scratch::new();
@@ -73,7 +73,8 @@ fn probe1_7_4_out_in_a_folder_without_write_permission_is_refused() {
     std::fs::create_dir_all(&locked).unwrap();
     let truth = scratch.input("molds/cheek/truth.png");
     let out = locked.join("s.png");
-    let case = scratch.expect(&[1]).names(s(&out)).says(&["Permission denied"]).run_as(uid);
+    let case = scratch.expect(&[1]).names(s(&out)).run_as(uid);
+    let case = case.says(&["cannot write the normal map: ", s(&out), "Permission denied"]);
     case.run(&["synth", s(&truth), "--size", "32x32", "--out", s(&out)]);
 }
 

@@ -91,13 +91,12 @@ fn run_session(job: &Job, settings: &Settings) -> Result<SessionRun> {
     let _admitted = settings.gate.acquire(estimate);
     // Staged from the start, so an interrupt during the solve removes this session's folder too.
     let set = skinkit_capture::outputs::output_set(out_dir)?;
-    let made_path = out_dir.join(resume::MADE_FROM);
     set.write(resume::MADE_FROM, |p| skinkit_maps::documents::write_json(p, &made))
-        .with_context(|| format!("cannot write {}", made_path.display()))?;
+        .context("cannot write the record of the inputs")?;
     let mut captured = session::capture(&files, options, &skinkit_maps::progress::NoProgress)?;
     let signs = review::signs(&captured);
     review::write_previews(&previews, &captured, &signs)?;
-    let swept = skinkit_capture::outputs::write(set, out_dir, &mut captured, options)?;
+    let swept = skinkit_capture::outputs::write(set, &mut captured, options)?;
     let report = &captured.report;
     Ok(SessionRun {
         invalid_pixels: report.invalid_pixels,

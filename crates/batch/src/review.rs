@@ -139,11 +139,13 @@ pub fn write_previews(dir: &Path, captured: &Captured, signs: &Signs) -> Result<
     write_set(dir, &maps, signs)
 }
 
+/// Writes the previews of `maps` and `signs` as the review folder `dir`, all or none; an error
+/// names the file's role, its cause the path.
 fn write_set(dir: &Path, maps: &Maps, signs: &Signs) -> Result<()> {
     if let Some(parent) = dir.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
     }
-    let set = OutputSet::folder(dir, SIGNS).with_context(|| format!("cannot write {}", dir.display()))?;
+    let set = OutputSet::folder(dir, SIGNS).context("cannot write the review folder")?;
     let pictures = [
         preview::shade_normals(maps.normals, preview::raking_light()),
         preview::gray(maps.albedo),
@@ -152,11 +154,10 @@ fn write_set(dir: &Path, maps: &Maps, signs: &Signs) -> Result<()> {
     ];
     for (name, picture) in PREVIEWS.iter().zip(&pictures) {
         set.write(name, |p| preview::write_png(p, &preview::shrink(picture, PREVIEW_SIDE)))
-            .with_context(|| format!("cannot write {}", dir.join(name).display()))?;
+            .with_context(|| format!("cannot write the {} preview", name.trim_end_matches(".png")))?;
     }
-    set.write(SIGNS, |p| skinkit_maps::documents::write_json(p, signs))
-        .with_context(|| format!("cannot write {}", dir.join(SIGNS).display()))?;
-    set.commit().with_context(|| format!("cannot write {}", dir.display()))?;
+    set.write(SIGNS, |p| skinkit_maps::documents::write_json(p, signs)).context("cannot write the review signs")?;
+    set.commit().context("cannot finish writing the review previews")?;
     Ok(())
 }
 

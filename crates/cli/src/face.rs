@@ -111,16 +111,16 @@ pub fn face_to_dir(
 ) -> Result<FaceReport> {
     skinkit_maps::gate::out_folder("--out", dir)?;
     // Staged before the work, so an interrupt during it removes the staging folder.
-    let set = OutputSet::folder(dir, "report.json").context("cannot write")?;
+    let set = OutputSet::folder(dir, "report.json").context("cannot write the face folder")?;
     let face = build(options, cache, out, &|layout: &Layout| check_face_out(dir, layout))?;
     let t = Instant::now();
-    let (height, height_seconds) = face.write_folder(&set, dir)?;
+    let (height, height_seconds) = face.write_folder(&set)?;
     let mut report = face.report(&dir.join("normal.png"), t.elapsed().as_secs_f64(), start.elapsed().as_secs_f64());
     report.height_map = Some(height);
     report.seconds.height = height_seconds;
     report.peak_memory_mib = skinkit_maps::limits::peak_resident_mib();
-    pipeline::write_json_in(&set, "report.json", &report)?;
-    out.swept(&set.commit().context("cannot write")?);
+    pipeline::write_json_in(&set, "report.json", "the face report", &report)?;
+    out.swept(&set.commit().context("cannot finish writing the face folder")?);
     Ok(report)
 }
 

@@ -73,7 +73,7 @@ pub fn render(job: &Job, renderer: &Renderer, out: &Output) -> Result<RenderRepo
     check_outputs(job, &resolved.scene, &resolved.path, None)?;
     let mut set = OutputSet::files();
     let report = render_into(job, resolved, renderer, out, &mut set)?;
-    set.commit().with_context(|| format!("cannot write the images of {}", job.scene.display()))?;
+    set.commit().with_context(|| format!("cannot finish writing the images of {}", job.scene.display()))?;
     Ok(report)
 }
 
@@ -194,7 +194,7 @@ pub fn render_into(
 /// Stages `frame` in `set` as `file`: the seconds of the write.
 fn stage(frame: &Frame, file: &Path, format: scene::OutputFormat, set: &mut OutputSet) -> Result<f64> {
     let t = Instant::now();
-    set.write_file(file, |p| write_image(p, frame, format)).context("cannot write")?;
+    set.write_file(file, |p| write_image(p, frame, format)).context("cannot write the rendered image")?;
     Ok(t.elapsed().as_secs_f64())
 }
 

@@ -60,10 +60,11 @@ pub enum Error {
     /// Integrating a face's height failed.
     #[error("cannot integrate the face's normals")]
     Height(#[source] skinkit_height::Error),
-    /// Writing one of a face's files failed.
-    #[error("cannot write {}", path.display())]
+    /// Writing one of a face's files failed: `role` says which (`the label map`), in the
+    /// user's words; `source` names the path.
+    #[error("cannot write {role}")]
     Write {
-        path: PathBuf,
+        role: String,
         #[source]
         source: skinkit_maps::Error,
     },

@@ -73,7 +73,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
 /// When a stage cannot read its samples or a file cannot be written.
 pub fn to_dir(config: &Config, stages: &[Stage], dir: &Path, out: &Output) -> Result<Report> {
     let start = Instant::now();
-    let set = OutputSet::folder(dir, MARKER).context("cannot write the output folder")?;
+    let set = OutputSet::folder(dir, MARKER).context("cannot write the accuracy folder")?;
     let mut reports = Vec::new();
     for &stage in stages {
         reports.push(measure_stage(stage, config, out)?);
@@ -105,22 +105,22 @@ fn measure_stage(stage: Stage, config: &Config, out: &Output) -> Result<StageRep
 
 /// Writes the markdown, the plots and the JSON (last) into the set's folder, all or nothing.
 fn write_all(set: OutputSet, report: &Report) -> Result<()> {
-    let bytes = |name: &str, data: &[u8]| -> Result<()> {
+    let bytes = |name: &str, role: &str, data: &[u8]| -> Result<()> {
         set.write(name, |p| {
             write_atomic(p, |w| {
                 use std::io::Write;
                 w.write_all(data).map_err(|e| skinkit_maps::Error::Io { path: p.to_owned(), error: e })
             })
         })
-        .context("cannot write")
+        .with_context(|| format!("cannot write {role}"))
     };
-    bytes("accuracy.md", markdown::render(report).as_bytes())?;
+    bytes("accuracy.md", "the accuracy summary", markdown::render(report).as_bytes())?;
     for stage in &report.stages {
         let png = plot::png(stage)?;
-        bytes(&markdown::plot_name(stage), &png)?;
+        bytes(&markdown::plot_name(stage), &format!("the {} plot", stage.stage.name()), &png)?;
     }
-    write_json_in(&set, MARKER, report)?;
-    set.commit().context("cannot write the output folder")?;
+    write_json_in(&set, MARKER, "the accuracy report", report)?;
+    set.commit().context("cannot finish writing the accuracy results")?;
     Ok(())
 }
 

@@ -82,7 +82,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let bar = out.progress(0, "capture");
     let mut captured = session::capture(&files, &options, &bar)?;
     bar.start("write", 0);
-    let swept = skinkit_capture::outputs::write(set, &args.out, &mut captured, &options)?;
+    let swept = skinkit_capture::outputs::write(set, &mut captured, &options)?;
     bar.clear();
     out.swept(&swept);
     for w in &captured.report.warnings {

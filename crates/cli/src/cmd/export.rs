@@ -98,10 +98,11 @@ fn gltf(args: GltfArgs, out: &Output) -> Result<i32> {
     for (i, file) in exported.files.iter().enumerate() {
         // The main file is `--out` as spelt (`HEAD.GLB` stays so); side files are named by the library.
         let path = if i == 0 { args.out.clone() } else { dir.join(&file.name) };
-        set.write_file(&path, |p| write_bytes(p, &file.bytes)).context("cannot write")?;
+        set.write_file(&path, |p| write_bytes(p, &file.bytes))
+            .with_context(|| format!("cannot write {}", role(&path)))?;
         files.push(WrittenFile { path: path.display().to_string(), bytes: file.bytes.len() });
     }
-    out.swept(&set.commit().context("cannot write")?);
+    out.swept(&set.commit().context("cannot finish writing the export")?);
     let report = Report {
         scene: args.scene.display().to_string(),
         container,
@@ -134,6 +135,16 @@ fn check_outputs(args: &GltfArgs, scene: &Scene, dir: &Path, stem: &str, contain
     }
     let outputs: Vec<(&str, &Path)> = paths.iter().map(|p| ("--out", p.as_path())).collect();
     Ok(skinkit_maps::gate::output_files(&outputs, &inputs)?)
+}
+
+/// What an exported file is, in errors: the model (`.glb`, `.gltf`), its buffer (`.bin`) or one
+/// of its textures.
+fn role(path: &Path) -> &'static str {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("glb" | "gltf") => "the exported model",
+        Some("bin") => "the exported model's buffer",
+        _ => "an exported texture",
+    }
 }
 
 /// Writes `bytes` to `path` atomically.

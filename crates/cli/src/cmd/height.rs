@@ -116,28 +116,28 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     set.write_file(&args.out, |p| {
         deliver::write_height(p, &height, storage).map(|s| png = s).map_err(skinkit_maps::Error::from)
     })
-    .context("cannot write")?;
+    .context("cannot write the height map")?;
     if let Some(path) = &args.png {
         set.write_file(path, |p| {
             deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(skinkit_maps::Error::from)
         })
-        .context("cannot write")?;
+        .context("cannot write the height PNG")?;
     }
     if args.cavity.is_some() || args.bands.is_some() {
         let bands = deliver::bands(&height);
         if let Some(path) = &args.cavity {
             let cavity = deliver::cavity(&bands);
             set.write_file(path, |p| deliver::write_cavity_png(p, &cavity).map_err(skinkit_maps::Error::from))
-                .context("cannot write")?;
+                .context("cannot write the cavity map")?;
         }
         if let Some(path) = &args.bands {
             set.write_file(path, |p| {
                 deliver::write_bands_exr(p, &height, &bands, storage).map_err(skinkit_maps::Error::from)
             })
-            .context("cannot write")?;
+            .context("cannot write the height bands")?;
         }
     }
-    out.swept(&set.commit().context("cannot write")?);
+    out.swept(&set.commit().context("cannot finish writing the height outputs")?);
     let (width, rows) = normals.size();
     let seconds = height.report.seconds;
     let report = Report {

@@ -138,7 +138,7 @@ fn run_diffuse(args: DiffuseArgs, out: &Output) -> Result<i32> {
     let lut = DiffuseLut::build(&spec).map_err(build_error)?;
     let build_seconds = started.elapsed().as_secs_f64();
     let started = Instant::now();
-    lut_file::write_diffuse(&args.out, &lut).context("cannot write")?;
+    lut_file::write_diffuse(&args.out, &lut).context("cannot write the LUT")?;
     let attributes = lut_file::diffuse_attributes(&lut);
     report(out, &args.out, (width, height), &attributes, build_seconds, started.elapsed().as_secs_f64());
     Ok(0)
@@ -159,7 +159,7 @@ fn run_shadow(args: ShadowArgs, out: &Output) -> Result<i32> {
     let lut = ShadowLut::build(&spec).map_err(build_error)?;
     let build_seconds = started.elapsed().as_secs_f64();
     let started = Instant::now();
-    lut_file::write_shadow(&args.out, &lut).context("cannot write")?;
+    lut_file::write_shadow(&args.out, &lut).context("cannot write the LUT")?;
     let attributes = lut_file::shadow_attributes(&lut);
     report(out, &args.out, (width, height), &attributes, build_seconds, started.elapsed().as_secs_f64());
     Ok(0)

@@ -96,9 +96,9 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     let mut set = OutputSet::files();
     let report = render_into(&job, resolved, &Renderer::new()?, out, &mut set)?;
     if let Some(path) = &args.report {
-        crate::pipeline::write_json_file(&mut set, path, &report)?;
+        crate::pipeline::write_json_file(&mut set, path, "the render report", &report)?;
     }
-    out.swept(&set.commit().context("cannot write")?);
+    out.swept(&set.commit().context("cannot finish writing the render outputs")?);
     out.result(&report, || human(&report));
     Ok(0)
 }

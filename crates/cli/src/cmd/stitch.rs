@@ -60,16 +60,18 @@ pub fn run_stitch(args: StitchArgs, out: &Output) -> Result<i32> {
     let t = Instant::now();
     // One set: the map, the labels and the report appear together or not at all.
     let mut set = OutputSet::files();
-    set.write_file(&args.out, |p| files::write_normal_map(p, &face.composed.normals)).context("cannot write")?;
+    set.write_file(&args.out, |p| files::write_normal_map(p, &face.composed.normals))
+        .context("cannot write the normal map")?;
     if let Some(path) = &args.labels {
-        set.write_file(path, |p| files::write_labels(p, &face.composed.labels)).context("cannot write")?;
+        set.write_file(path, |p| files::write_labels(p, &face.composed.labels))
+            .context("cannot write the label map")?;
     }
     let mut report = face.report(&args.out, t.elapsed().as_secs_f64(), start.elapsed().as_secs_f64());
     report.peak_memory_mib = skinkit_maps::limits::peak_resident_mib();
     if let Some(path) = &args.report {
-        pipeline::write_json_file(&mut set, path, &report)?;
+        pipeline::write_json_file(&mut set, path, "the stitch report", &report)?;
     }
-    out.swept(&set.commit().context("cannot write")?);
+    out.swept(&set.commit().context("cannot finish writing the stitch outputs")?);
     out.result(&report, || human(&report));
     Ok(0)
 }

@@ -179,20 +179,26 @@ impl MapArgs {
         self.kind == MapKind::Color
     }
 
+    /// What a map of this kind is, in errors: `the normal map` or `the colour image`.
+    fn role(&self) -> &'static str {
+        if self.is_color() { "the colour image" } else { "the normal map" }
+    }
+
     /// Reads a normal map, or a colour image as linear RGB (grey replicated).
     fn read(&self, path: &Path) -> Result<Map> {
         let limits = Limits::default();
-        if self.is_color() {
-            Map::read_color(path, Transfer::from(self.transfer), &limits).context("cannot read the colour image")
+        let map = if self.is_color() {
+            Map::read_color(path, Transfer::from(self.transfer), &limits)
         } else {
-            Map::read_normals(path, self.encoding()?, &limits).context("cannot read the normal map")
-        }
+            Map::read_normals(path, self.encoding()?, &limits)
+        };
+        map.with_context(|| format!("cannot read {}", self.role()))
     }
 
-    /// Adds `path` to the output set and writes `map` there.
+    /// Adds `path` to the output set and writes `map` there; an error names the map's role.
     fn write(&self, set: &mut OutputSet, path: &Path, map: &Map) -> Result<()> {
         let encoding = self.encoding()?;
-        set.write_file(path, |p| map.write(p, encoding)).context("cannot write")
+        set.write_file(path, |p| map.write(p, encoding)).with_context(|| format!("cannot write {}", self.role()))
     }
 }
 
@@ -372,9 +378,9 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         invalid_texels,
     };
     if let Some(path) = &args.report {
-        pipeline::write_json_file(&mut set, path, &report)?;
+        pipeline::write_json_file(&mut set, path, "the synthesis report", &report)?;
     }
-    out.swept(&set.commit().context("cannot write")?);
+    out.swept(&set.commit().context("cannot finish writing the synthesis outputs")?);
     out.result(&report, || human(&report));
     Ok(invalid_exit(out, out_path, exemplar_path, invalid_texels, size))
 }
@@ -470,7 +476,7 @@ fn run_replay(args: ReplayArgs, out: &Output) -> Result<i32> {
     let replayed = source.replay(&coords).with_context(context)?;
     let mut set = OutputSet::files();
     args.map.write(&mut set, &args.out, &replayed)?;
-    out.swept(&set.commit().context("cannot write")?);
+    out.swept(&set.commit().context("cannot finish writing the replayed map")?);
     let (width, height) = coords.size();
     let report = ReplayReport {
         coords: args.coords.display().to_string(),

@@ -31,20 +31,21 @@ pub struct FaceHeight {
 }
 
 impl Face {
-    /// Writes the face's maps into `set`, destined for the folder `dir` (named in errors): the
-    /// normals and the height files at once (two threads), then the labels and the exemplars.
-    /// Returns the height files' report and the seconds they took.
-    pub fn write_folder(&self, set: &OutputSet, dir: &Path) -> Result<(FaceHeight, f64)> {
+    /// Writes the face's maps into the folder set `set` (its errors name each file's role and
+    /// final path): the normals and the height files at once (two threads), then the labels and
+    /// the exemplars. Returns the height files' report and the seconds they took.
+    pub fn write_folder(&self, set: &OutputSet) -> Result<(FaceHeight, f64)> {
         let map = &self.composed.normals;
         let (normals, height) = rayon::join(
-            || write_normals(set, dir, &self.layout, map),
-            || write_height(set, dir, map, self.layout.mm_per_texel, &self.composed.labels),
+            || write_normals(set, &self.layout, map),
+            || write_height(set, map, self.layout.mm_per_texel, &self.composed.labels),
         );
         normals?;
         let height = height?;
-        write_in(set, dir, "labels.png", |p| write_labels(p, &self.composed.labels))?;
+        write_in(set, "labels.png", "the label map", |p| write_labels(p, &self.composed.labels))?;
         for (region, ex) in self.layout.regions.iter().zip(&self.exemplars) {
-            write_in(set, dir, &format!("exemplars/{}.png", region.name), |p| write_normal_map(p, ex))?;
+            let role = format!("the {} exemplar", region.name);
+            write_in(set, &format!("exemplars/{}.png", region.name), &role, |p| write_normal_map(p, ex))?;
         }
         Ok(height)
     }
@@ -52,15 +53,17 @@ impl Face {
 
 /// The face's normal map as normal.png and normal.exr, or on a mesh over several UDIM tiles one
 /// pair per tile, `normal.<tile>.png` and `.exr` ([`crate::udim`]).
-fn write_normals(set: &OutputSet, dir: &Path, layout: &Layout, map: &NormalMap) -> Result<()> {
+fn write_normals(set: &OutputSet, layout: &Layout, map: &NormalMap) -> Result<()> {
     let Some(atlas) = layout.atlas.as_ref().filter(|a| !a.is_single_1001()) else {
-        write_in(set, dir, "normal.png", |p| write_normal_map(p, map))?;
-        return write_in(set, dir, "normal.exr", |p| write_normal_map(p, map));
+        write_in(set, "normal.png", "the normal map", |p| write_normal_map(p, map))?;
+        return write_in(set, "normal.exr", "the normal map", |p| write_normal_map(p, map));
     };
     for (tile, grid) in atlas.split(map.grid())? {
         let tile_map = NormalMap::from_unit_grid(grid)?;
+        let role = format!("the normal map of tile {tile}");
         for format in [ImageFormat::Png, ImageFormat::Exr] {
-            write_in(set, dir, &format!("normal.{tile}.{}", format.extension()), |p| write_normal_map(p, &tile_map))?;
+            let name = format!("normal.{tile}.{}", format.extension());
+            write_in(set, &name, &role, |p| write_normal_map(p, &tile_map))?;
         }
     }
     Ok(())
@@ -68,13 +71,7 @@ fn write_normals(set: &OutputSet, dir: &Path, layout: &Layout, map: &NormalMap) 
 
 /// Integrates the face's normals (Neumann: a face map does not wrap) into millimetres and writes
 /// its [`HEIGHT_FILES`] (the EXRs ZIP-compressed, since face maps are large).
-fn write_height(
-    set: &OutputSet,
-    dir: &Path,
-    map: &NormalMap,
-    mm_per_texel: f64,
-    labels: &Grid<u16>,
-) -> Result<(FaceHeight, f64)> {
+fn write_height(set: &OutputSet, map: &NormalMap, mm_per_texel: f64, labels: &Grid<u16>) -> Result<(FaceHeight, f64)> {
     use skinkit_height::deliver::{self, ExrStorage};
     let t = Instant::now();
     let scale = skinkit_height::Scale::from_mm(Some(mm_per_texel)).map_err(Error::Height)?;
@@ -82,26 +79,30 @@ fn write_height(
     let height = skinkit_height::integrate(map, &options).map_err(Error::Height)?;
     let storage = ExrStorage { zip: true, half: false };
     let h = skinkit_maps::Error::from;
-    write_in(set, dir, "height.exr", |p| deliver::write_exr(p, &height, storage).map_err(h))?;
+    write_in(set, "height.exr", "the height map", |p| deliver::write_exr(p, &height, storage).map_err(h))?;
     let mut png = None;
-    write_in(set, dir, "height.png", |p| deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(h))?;
+    let png16 = |p: &Path| deliver::write_png16(p, &height).map(|s| png = Some(s)).map_err(h);
+    write_in(set, "height.png", "the height map", png16)?;
     let bands = deliver::bands(&height);
-    write_in(set, dir, "bands.exr", |p| deliver::write_bands_exr(p, &height, &bands, storage).map_err(h))?;
+    write_in(set, "bands.exr", "the height bands", |p| {
+        deliver::write_bands_exr(p, &height, &bands, storage).map_err(h)
+    })?;
     let cavity = deliver::cavity(&bands);
-    write_in(set, dir, "cavity.png", |p| deliver::write_cavity_png(p, &cavity).map_err(h))?;
+    write_in(set, "cavity.png", "the cavity map", |p| deliver::write_cavity_png(p, &cavity).map_err(h))?;
     let png = png.expect("write_png16 returned its scale");
     let round_trip = skinkit_height::round_trip::height_agreement(map, &height, false, Some(labels));
     Ok((FaceHeight { height: height.report, png, round_trip }, t.elapsed().as_secs_f64()))
 }
 
-/// Writes `name` of the folder set `set` (destined for `dir`), naming the final path in errors.
+/// Writes `name` of the folder set `set`; an error says `cannot write {role}` over the set's,
+/// which names the final path.
 fn write_in(
     set: &OutputSet,
-    dir: &Path,
     name: &str,
+    role: &str,
     write: impl FnOnce(&Path) -> skinkit_maps::Result<()>,
 ) -> Result<()> {
-    set.write(name, write).map_err(|source| Error::Write { path: dir.join(name), source })
+    set.write(name, write).map_err(|source| Error::Write { role: role.to_owned(), source })
 }
 
 /// A normal map as 16-bit PNG or, for `.exr`, float EXR.

@@ -29,7 +29,7 @@ pub fn on_interrupt(
         let mut report = BatchReport::new(sessions, lock(&finished).clone(), true, &gate, shard, Vec::new());
         report.partition = partition.clone();
         // Written by the signal thread itself, whole (atomically), before the exit.
-        if let Err(e) = pipeline::write_json(&path, &report) {
+        if let Err(e) = pipeline::write_json(&path, "the batch report", &report) {
             eprintln!("error: {e:#}");
         }
     })
@@ -41,12 +41,12 @@ pub fn finish(mut report: BatchReport, path: &Path, page: bool, out: &Output) ->
     if page {
         let start = Instant::now();
         let page_path = path.with_file_name(page::PAGE);
-        pipeline::write_text(&page_path, &page::html(&report))?;
+        pipeline::write_text(&page_path, "the review page", &page::html(&report))?;
         report.page_seconds = start.elapsed().as_secs_f64();
     }
     let mut set = OutputSet::files();
-    pipeline::write_json_file(&mut set, path, &report)?;
-    set.commit().context("cannot write")?;
+    pipeline::write_json_file(&mut set, path, "the batch report", &report)?;
+    set.commit().context("cannot finish writing the batch report")?;
     Ok(show(&report, out))
 }
 
@@ -66,8 +66,8 @@ pub fn write_parts(report: BatchReport, units: &[Unit], out_dir: &Path, out: &Ou
     let mut set = OutputSet::files();
     for unit in units {
         let path = out_dir.join(shard::PARTS).join(format!("{}.json", unit.name()));
-        pipeline::write_json_file(&mut set, &path, &report.part(unit))?;
+        pipeline::write_json_file(&mut set, &path, "a part of the batch report", &report.part(unit))?;
     }
-    set.commit().context("cannot write")?;
+    set.commit().context("cannot finish writing the parts of the batch report")?;
     Ok(show(&report, out))
 }

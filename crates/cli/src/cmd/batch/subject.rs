@@ -31,7 +31,7 @@ pub fn face(subject: &Subject, force: bool, out: &Output) -> FaceOutcome {
         stitch(subject, &dir, out).and_then(|seconds| {
             // Recorded after the face is in place: a face without its record is made again.
             let record = now?;
-            pipeline::write_json(&dir.join(resume::MADE_FROM), &record)?;
+            pipeline::write_json(&dir.join(resume::MADE_FROM), "the record of the inputs", &record)?;
             Ok((seconds, false))
         })
     };

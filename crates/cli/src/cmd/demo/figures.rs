@@ -178,7 +178,7 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
         use std::io::Write;
         w.write_all(text.as_bytes()).map_err(|error| skinkit_maps::Error::Io { path: path.to_owned(), error })
     })
-    .context("cannot write")
+    .context("cannot write the figure's scene")
 }
 
 /// Renders the figures of `normal_map` (the stitched face) into `dir`; with the face's texel size
@@ -308,5 +308,5 @@ pub fn grid(images: &[(PathBuf, String)], columns: usize, path: &Path) -> Result
             }
         }
     }
-    io::write_png(path, gw, gh, PngLayout::Rgb8, &samples).context("cannot write")
+    io::write_png(path, gw, gh, PngLayout::Rgb8, &samples).context("cannot write the figure")
 }

@@ -144,7 +144,7 @@ pub fn run(args: Args, out: &Output) -> Result<i32> {
     report.page = Some(page.display().to_string());
     report.seconds.page = t.elapsed().as_secs_f64();
     report.seconds.total = start.elapsed().as_secs_f64();
-    pipeline::write_json(&args.out.join("demo-report.json"), &report)?;
+    pipeline::write_json(&args.out.join("demo-report.json"), "the demo report", &report)?;
     out.result(&report, || human(&report, &args.out));
     Ok(0)
 }
@@ -308,7 +308,7 @@ fn capture_mold(
     let options = options(solver, out)?;
     let mut captured = session::capture(files, &options, &skinkit_maps::progress::NoProgress)?;
     let target = args.out.join("capture").join(region).join(solver.name());
-    skinkit_capture::outputs::write(skinkit_capture::outputs::output_set(&target)?, &target, &mut captured, &options)?;
+    skinkit_capture::outputs::write(skinkit_capture::outputs::output_set(&target)?, &mut captured, &options)?;
     let r = &captured.report;
     let e = r.error_vs_truth_degrees.context("sample mold without truth.png")?;
     let mold = MoldResult {
@@ -375,19 +375,20 @@ fn grow(region: &str, captured: &Captured, size: (usize, usize), seed: u64, dir:
     let seconds = start.elapsed().as_secs_f64();
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let normal = dir.join("normal.png");
-    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16).context("cannot write")?;
+    io::write_normal_map(&normal, &grown.normals, NormalEncoding::default(), 16)
+        .context("cannot write the grown normal map")?;
     let albedo = dir.join("albedo.png");
     match &captured.solution.albedo {
         AlbedoMap::Gray(map) => io::write_scalar_png(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
         AlbedoMap::Rgb(map) => io::write_color_map(&albedo, &skinkit_synth::replay(&grown.coords, map)?, 16),
     }
-    .context("cannot write")?;
+    .context("cannot write the grown albedo map")?;
     let coords_path = dir.join("coords.png");
     coords::write(&coords_path, &grown.coords).context("cannot write the coordinate map")?;
     // The grown map's height, periodic so it tiles, in mm at the capture's pixel size.
     let mut set = skinkit_maps::OutputSet::files();
     crate::pipeline::grown_height(&mut set, &dir.join("height.exr"), &grown.normals, captured.report.mm_per_pixel)?;
-    set.commit().context("cannot write")?;
+    set.commit().context("cannot finish writing the grown height map")?;
     let quality = QualityReport::new(
         &Map::Normal(exemplar.clone()),
         &Map::Normal(grown.normals),

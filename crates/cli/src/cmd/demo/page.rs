@@ -37,7 +37,7 @@ pub fn write(out: &Path, samples: &Path, report: &DemoReport) -> Result<PathBuf>
     renders(&mut html, out, report);
     html += "</main></body></html>\n";
     let page = out.join("index.html");
-    crate::pipeline::write_text(&page, &html)?;
+    crate::pipeline::write_text(&page, "the demo page", &html)?;
     Ok(page)
 }
 
@@ -388,6 +388,6 @@ fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, Str
 
 pub(super) fn save(out: &Path, picture: &preview::Picture, name: &str) -> Result<String> {
     let path = out.join("page").join(name);
-    preview::write_png(&path, picture).context("cannot write")?;
+    preview::write_png(&path, picture).context("cannot write a picture of the demo page")?;
     Ok(rel(out, &path))
 }

@@ -56,7 +56,8 @@ pub fn round_trip(
     }
     let mut draw = |name: &str, normals: &NormalMap| -> Result<PathBuf> {
         let file = dir.join(format!("{name}.png"));
-        io::write_normal_map(&file, normals, NormalEncoding::default(), 16).context("cannot write")?;
+        io::write_normal_map(&file, normals, NormalEncoding::default(), 16)
+            .context("cannot write the round trip's normal map")?;
         let scene = dir.join(format!("head-{name}.toml"));
         write_text(&scene, &face_scene(Some(&file.to_string_lossy().replace('\\', "/")), true))?;
         let image = dir.join(format!("head-{name}.png"));
