@@ -212,18 +212,15 @@ fn redraw(out_dir: &Path, dir: &Path, signs: &Signs) -> Result<()> {
     let limits = Limits::default();
     let normal = out_dir.join("normal.exr");
     let normals = io::read_normal_map(&normal, NormalEncoding::default(), &limits)
-        .with_context(|| format!("cannot read {}", normal.display()))?;
+        .context("cannot read the session's normal map")?;
     let gray = |name: &str| -> Result<ScalarMap> {
         let path = out_dir.join(name);
-        let photo = io::read_photo(&path, &limits).with_context(|| format!("cannot read {}", path.display()))?;
+        let photo = io::read_photo(&path, &limits).with_context(|| format!("cannot read the session's {name}"))?;
         Ok(Grid::from_vec(photo.width(), photo.height(), photo.luminance())?)
     };
     let height_path = out_dir.join("height.exr");
     let height = match height_path.is_file() {
-        true => Some(
-            io::read_exr_channel(&height_path, "Y", &limits)
-                .with_context(|| format!("cannot read {}", height_path.display()))?,
-        ),
+        true => Some(io::read_exr_channel(&height_path, "Y", &limits).context("cannot read the session's height map")?),
         false => None,
     };
     let (albedo, confidence) = (gray("albedo.png")?, gray("confidence.png")?);

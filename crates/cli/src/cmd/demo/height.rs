@@ -21,7 +21,7 @@ const BAR_STOPS: usize = 9;
 /// # Errors
 /// When the height cannot be read or a preview cannot be written.
 pub fn figures(html: &mut String, out: &Path, exr: &Path, name: &str, mm: bool, wraps: bool) -> Result<()> {
-    let heights = io::read_exr_channel(exr, "Y", &Default::default()).context("cannot read")?;
+    let heights = io::read_exr_channel(exr, "Y", &Default::default()).context("cannot read the height map")?;
     // The relief's slopes only scale its contrast, which the shading stretches anyway.
     let relief = preview::shade_normals(&normals_of(&heights, 1.0, wraps), preview::raking_light());
     let src = save(out, &preview::shrink(&relief, SIDE), &format!("{name}-height-relief.png"))?;

@@ -346,14 +346,15 @@ fn accuracy(html: &mut String, report: &DemoReport, stages: &[Stage]) {
 
 /// A photo as a small grey picture in `page/name`; returns its link.
 fn photo_thumbnail(out: &Path, photo: &Path, name: &str) -> Result<String> {
-    let read = io::read_photo(photo, &Default::default()).context("cannot read")?;
+    let read = io::read_photo(photo, &Default::default()).context("cannot read a photo")?;
     let luminance = Grid::from_vec(read.width(), read.height(), read.luminance())?;
     save(out, &preview::shrink(&preview::gray(&luminance), THUMB_SIDE), name)
 }
 
 /// A normal map drawn as relief in `page/name`; returns its link.
 fn shaded_normals(out: &Path, map: &Path, name: &str) -> Result<String> {
-    let normals = io::read_normal_map(map, NormalEncoding::default(), &Default::default()).context("cannot read")?;
+    let normals =
+        io::read_normal_map(map, NormalEncoding::default(), &Default::default()).context("cannot read a normal map")?;
     save(out, &preview::shrink(&preview::shade_normals(&normals, preview::raking_light()), PREVIEW_SIDE), name)
 }
 
@@ -362,7 +363,8 @@ fn shaded_normals(out: &Path, map: &Path, name: &str) -> Result<String> {
 /// averages the fine relief away). Boundaries are drawn after shrinking, so the lines stay one
 /// pixel wide and pure. Returns both links.
 fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, String)> {
-    let normals = io::read_normal_map(normal, NormalEncoding::default(), &Default::default()).context("cannot read")?;
+    let normals = io::read_normal_map(normal, NormalEncoding::default(), &Default::default())
+        .context("cannot read the face's normal map")?;
     let (w, h) = normals.size();
     let shaded = preview::shade_normals(&normals, preview::raking_light());
     let (cw, ch) = (w.min(DETAIL.0), h.min(DETAIL.1));
@@ -370,7 +372,7 @@ fn face_preview(out: &Path, normal: &Path, labels: &Path) -> Result<(String, Str
     let mut detail = shaded.crop(x0, y0, cw, ch)?;
     let factor = w.max(h).div_ceil(PREVIEW_SIDE).max(1);
     let mut picture = preview::shrink(&shaded, PREVIEW_SIDE);
-    let read = io::read_photo(labels, &Default::default()).context("cannot read")?;
+    let read = io::read_photo(labels, &Default::default()).context("cannot read the face's label map")?;
     if (read.width(), read.height()) == (w, h) {
         let channels = read.channels().count();
         let label = |x: usize, y: usize| -> [u32; 3] {

@@ -45,8 +45,8 @@ pub fn round_trip(
     renders: &mut Vec<RenderReport>,
 ) -> Result<RoundTripFigure> {
     let limits = Limits::default();
-    let normals = io::read_normal_map(map, NormalEncoding::default(), &limits).context("cannot read")?;
-    let heights = io::read_exr_channel(height_exr, "Y", &limits).context("cannot read")?;
+    let normals = io::read_normal_map(map, NormalEncoding::default(), &limits).context("cannot read the normal map")?;
+    let heights = io::read_exr_channel(height_exr, "Y", &limits).context("cannot read the height map")?;
     let mut from_height = normals_of(&heights, mm_per_texel as f32, false).into_grid();
     // Texels without a normal stay without one (the height there is the integrator's fill).
     for (n, &m) in from_height.as_mut_slice().iter_mut().zip(normals.as_slice()) {
