@@ -67,6 +67,28 @@ fn the_committed_sample_head_is_what_samples_writes() {
     assert_eq!(std::fs::read_dir(tmp.path().join("h")).unwrap().count(), 1);
 }
 
+/// Issue 41: every sample scene renders on a fresh clone, without the demo's outputs (head.toml
+/// wears the committed quarter-size face map, samples/face/normal.png).
+#[test]
+fn every_sample_scene_renders_as_committed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(repo().join("samples/scenes"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 6, "{scenes:?}");
+    for scene in scenes {
+        let out = tmp.path().join(scene.file_stem().unwrap()).with_extension("png");
+        let o = skinkit(&["render", s(&scene), "--size", "48x40", "--out", s(&out), "--quiet"]);
+        assert!(o.status.success(), "{}: {}", scene.display(), stderr(&o));
+        let (w, h, pixels) = pixels(&out);
+        assert_eq!((w, h), (48, 40), "{}", scene.display());
+        assert!(pixels.iter().any(|&v| v > 0), "{}: a black frame", scene.display());
+    }
+}
+
 #[test]
 fn the_head_renders_and_the_normal_map_changes_it() {
     let tmp = tempfile::tempdir().unwrap();
