@@ -35,6 +35,14 @@ impl Resources {
         self.find(name).unwrap_or_else(|| panic!("no pass wrote the resource {name:?} this pass reads"))
     }
 
+    /// A view of the texture `name`, which the pass graph guarantees an earlier pass wrote.
+    ///
+    /// # Panics
+    /// As [`Resources::get`].
+    pub(crate) fn texture_view(&self, name: &str) -> wgpu::TextureView {
+        self.get::<wgpu::Texture>(name).create_view(&Default::default())
+    }
+
     /// A view of the texture `name`, when a pass registered it.
     pub(crate) fn view(&self, name: &str) -> Option<wgpu::TextureView> {
         self.find::<wgpu::Texture>(name).map(|t| t.create_view(&Default::default()))

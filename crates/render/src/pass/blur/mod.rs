@@ -63,7 +63,7 @@ impl Pass for TsdBlur {
     /// also dilates into the texels the light map left unwritten).
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
         let prepared: &Prepared = frame.state();
-        let view = frame.scene.resources.get::<wgpu::Texture>(prepared.to).create_view(&Default::default());
+        let view = frame.scene.resources.texture_view(prepared.to);
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd blur"),
             color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(UNWRITTEN_TEXEL)))],
@@ -105,7 +105,7 @@ pub(crate) struct BlurUniforms {
 /// Blur `i`'s bind group: it reads the map of [`tsd::blur_maps`] (and light map B, which the
 /// Gaussians add back), the first with a nearest sampler (it dilates), the others bilinear.
 fn bind_group(gpu: &Gpu, setup: &TsdSetup, i: u32, resources: &Resources) -> wgpu::BindGroup {
-    let view = |name: &str| resources.get::<wgpu::Texture>(name).create_view(&Default::default());
+    let view = |name: &str| resources.texture_view(name);
     let filter = if i == 0 { wgpu::FilterMode::Nearest } else { wgpu::FilterMode::Linear };
     let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some(if i == 0 { "tsd dilation sampler" } else { "tsd blur sampler" }),

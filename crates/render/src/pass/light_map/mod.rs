@@ -118,8 +118,11 @@ impl Pass for TsdLightMap {
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
         let bind_group: &wgpu::BindGroup = frame.state();
         let resources = &frame.scene.resources;
-        let view_of = |name| resources.get::<wgpu::Texture>(name).create_view(&Default::default());
-        let (depth_view, view, stretch) = (view_of(DEPTH), view_of(LIGHT_MAP_NAMES[0]), view_of(STRETCH));
+        let (depth_view, view, stretch) = (
+            resources.texture_view(DEPTH),
+            resources.texture_view(LIGHT_MAP_NAMES[0]),
+            resources.texture_view(STRETCH),
+        );
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd light map"),
             color_attachments: &[

@@ -48,7 +48,7 @@ impl Pass for ShadowMap {
 
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
         let bind_group: &wgpu::BindGroup = frame.state();
-        let view = frame.scene.resources.get::<wgpu::Texture>(SHADOW_MAP).create_view(&Default::default());
+        let view = frame.scene.resources.texture_view(SHADOW_MAP);
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow map pass"),
             color_attachments: &[],

@@ -117,8 +117,8 @@ impl Pass for TranslucentShadows {
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
         let prepared: &Prepared = frame.state();
         let resources = &frame.scene.resources;
-        let depth = resources.get::<wgpu::Texture>(SHADOW_MAP).create_view(&Default::default());
-        let view = resources.get::<wgpu::Texture>(SHADOW_OPACITY).create_view(&Default::default());
+        let depth = resources.texture_view(SHADOW_MAP);
+        let view = resources.texture_view(SHADOW_OPACITY);
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("translucent shadows pass"),
             color_attachments: &[Some(colour_attachment(&view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)))],

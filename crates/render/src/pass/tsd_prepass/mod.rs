@@ -80,7 +80,7 @@ impl Pass for TsdPrepass {
     /// TSD's back-face pre-pass into the UV-space depth.
     fn encode(&self, gpu: &Gpu, frame: &mut FrameEncoder<'_>, writes: Option<wgpu::RenderPassTimestampWrites<'_>>) {
         let bind_group: &wgpu::BindGroup = frame.state();
-        let depth_view = frame.scene.resources.get::<wgpu::Texture>(DEPTH).create_view(&Default::default());
+        let depth_view = frame.scene.resources.texture_view(DEPTH);
         let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tsd back-face pre-pass"),
             color_attachments: &[],
