@@ -78,27 +78,33 @@ fn demo_reports_every_mold_with_both_solvers() {
         .count();
     assert!(differ > 1024 * 1024 / 20, "figure 7's panels differ in only {differ} pixels");
     // Issue 13: the lobes make much of figure 7's highlights, and the grown map raises the
-    // sheen's local contrast. On the MakeHuman head (issue 41, whose target is "at least a
-    // quarter"), framed on brow, eye and nose under a rim, a key and a fill: 42 % measured,
-    // contrast 0.183 against 0.110.
+    // sheen's local contrast. Issue 41 asks, over the brightest 5 % of the skin's pixels, for
+    // the lobes to make at least a quarter and the grown map to at least double the contrast.
+    // Measured on the MakeHuman head, framed on brow, eye and nose under a rim, a key and a
+    // fill: 37 %, contrast 0.131 against 0.047 (2.8x).
     let (skin, smooth) = (&renders["figure7"]["skin"], &renders["figure7"]["smooth"]);
     let share = skin["mean"].as_f64().unwrap();
-    assert!(share > 0.25, "the lobes make only {share} of figure 7's highlights");
+    assert!(share >= 0.25, "the lobes make only {share} of figure 7's highlights");
     let (c_skin, c_smooth) = (skin["local_contrast"].as_f64().unwrap(), smooth["local_contrast"].as_f64().unwrap());
-    assert!(c_skin > 1.2 * c_smooth, "sheen contrast {c_skin} with the map, {c_smooth} without");
+    assert!(c_skin >= 2.0 * c_smooth, "sheen contrast {c_skin} with the map, {c_smooth} without");
     assert!(tmp.join("render").join("head-skin.toml").is_file());
     // The skin figure: six methods in a 3 x 2 grid, each with its FLIP mean against the
-    // reference (the last panel, 0 against itself; the others differ from it but stay close).
+    // reference (the last panel, 0 against itself). Framed on the nose's shadow across the
+    // cheek, where scattering shows (issue 41): the best skin method is within half of
+    // Lambert's error. Measured: Lambert 0.050, blog fit 0.055, own fit and LUT 0.035, TSD 0.024.
     let (ws, hs, _) = read("figure-skin.png");
     assert_eq!((ws, hs), (3 * 768, 2 * 768));
     let methods = renders["skin"]["methods"].as_array().unwrap();
     let names: Vec<&str> = methods.iter().map(|m| m["method"].as_str().unwrap()).collect();
-    assert_eq!(names, ["lambert", "blog-fit", "own-fit", "lut-256", "tsd-1x1024", "reference-512"]);
+    assert_eq!(names, ["lambert", "blog-fit", "own-fit", "lut-256", "tsd-1x1024", "reference-1024"]);
+    let flip = |m: &serde_json::Value| m["flip_mean"].as_f64().unwrap();
     for m in methods {
-        let flip = m["flip_mean"].as_f64().unwrap();
-        let last = m["method"] == "reference-512";
-        assert!(if last { flip == 0.0 } else { flip > 0.0 && flip < 0.2 }, "{m}");
+        let last = m["method"] == "reference-1024";
+        assert!(if last { flip(m) == 0.0 } else { flip(m) > 0.0 && flip(m) < 0.2 }, "{m}");
     }
+    let lambert = flip(&methods[0]);
+    let best = methods[1..5].iter().map(flip).fold(f64::INFINITY, f64::min);
+    assert!(best <= 0.5 * lambert, "best skin method FLIP {best}, Lambert {lambert}");
     height_round_trip(face, renders);
 }
 

@@ -8,16 +8,18 @@
 //! renders and never count). For them [`SpecularShare`] gives the mean and median of
 //! `(with - without) / with`, the share of each highlight pixel's luminance the lobes make, and
 //! the lobes' local contrast there: the mean absolute difference between the lobes' luminance
-//! and its `CONTRAST_BOX` x `CONTRAST_BOX` box average, over the lobes' mean luminance. Smooth
-//! shading varies little over 9 pixels; fine-scale bumps that break a sheen up raise it.
+//! and its `CONTRAST_BOX` x `CONTRAST_BOX` box average over the covered pixels of the box, over
+//! the lobes' mean luminance. Smooth shading varies little over 9 pixels; fine-scale bumps that
+//! break a sheen up raise it. The background is left out of the box: at a silhouette it would
+//! pull the average toward 0 and count the outline as contrast, which smooth shading has too.
 
 use serde::Serialize;
 
-/// The brightest part of the covered pixels taken as the highlight: 2 %.
-pub(crate) const HIGHLIGHT_FRACTION: f64 = 0.02;
+/// The brightest part of the covered pixels taken as the highlight: 5 % (issue 41's measure).
+pub const HIGHLIGHT_FRACTION: f64 = 0.05;
 
 /// Side of the box the local contrast compares each pixel with (odd).
-pub(crate) const CONTRAST_BOX: usize = 9;
+pub const CONTRAST_BOX: usize = 9;
 
 /// The lobes' part of a render's highlights.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -82,33 +84,43 @@ pub fn specular_share(with: &[f32], without: &[f32], width: usize) -> Result<Spe
     let mut shares: Vec<f64> = top.iter().map(|&i| lobes[i] / lum[i]).collect();
     shares.sort_by(f64::total_cmp);
     let mean = shares.iter().sum::<f64>() / highlight as f64;
-    let boxed = box_mean(&lobes, width, CONTRAST_BOX / 2);
+    let covered_mask: Vec<bool> = lum.iter().map(|l| *l > 0.0 && l.is_finite()).collect();
+    let boxed = box_mean(&lobes, &covered_mask, width, CONTRAST_BOX / 2);
     let lobes_mean = top.iter().map(|&i| lobes[i]).sum::<f64>() / highlight as f64;
     let deviation = top.iter().map(|&i| (lobes[i] - boxed[i]).abs()).sum::<f64>() / highlight as f64;
     let local_contrast = if lobes_mean > 0.0 { deviation / lobes_mean } else { 0.0 };
     Ok(SpecularShare { covered, highlight, mean, median: median(&shares), overall, local_contrast })
 }
 
-/// The mean of each pixel's `(2 r + 1)^2` box, clamped at the image's edges (a summed-area
-/// table, in f64).
-fn box_mean(values: &[f64], width: usize, r: usize) -> Vec<f64> {
+/// The mean over each pixel's `(2 r + 1)^2` box of the values whose `mask` is set, clamped at
+/// the image's edges (summed-area tables of the values and of the count, in f64); 0 where the
+/// box holds no masked pixel.
+fn box_mean(values: &[f64], mask: &[bool], width: usize, r: usize) -> Vec<f64> {
     let height = values.len() / width;
-    let mut sat = vec![0.0; (width + 1) * (height + 1)];
+    let stride = width + 1;
+    let (mut sum, mut count) = (vec![0.0; stride * (height + 1)], vec![0.0; stride * (height + 1)]);
     for y in 0..height {
-        let mut row = 0.0;
+        let (mut row, mut row_count) = (0.0, 0.0);
         for x in 0..width {
-            row += values[y * width + x];
-            sat[(y + 1) * (width + 1) + x + 1] = sat[y * (width + 1) + x + 1] + row;
+            let i = y * width + x;
+            if mask[i] {
+                row += values[i];
+                row_count += 1.0;
+            }
+            sum[(y + 1) * stride + x + 1] = sum[y * stride + x + 1] + row;
+            count[(y + 1) * stride + x + 1] = count[y * stride + x + 1] + row_count;
         }
     }
-    let at = |x: usize, y: usize| sat[y * (width + 1) + x];
+    let rect = |t: &[f64], x0: usize, y0: usize, x1: usize, y1: usize| {
+        t[y1 * stride + x1] - t[y1 * stride + x0] - t[y0 * stride + x1] + t[y0 * stride + x0]
+    };
     (0..values.len())
         .map(|i| {
             let (x, y) = (i % width, i / width);
             let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(width));
             let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(height));
-            let sum = at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0);
-            sum / ((x1 - x0) * (y1 - y0)) as f64
+            let n = rect(&count, x0, y0, x1, y1);
+            if n > 0.0 { rect(&sum, x0, y0, x1, y1) / n } else { 0.0 }
         })
         .collect()
 }
@@ -129,23 +141,23 @@ mod tests {
 
     #[test]
     fn hand_computed_share() {
-        // 100 covered pixels, 2 highlight pixels: 10 (half specular) and 8 (a quarter), the
-        // rest 1 with no specular; 5 background pixels.
+        // 40 covered pixels, 2 highlight pixels (5 %): 10 (half specular) and 8 (a quarter),
+        // the rest 1 with no specular; 5 background pixels.
         let mut with = vec![0.0; 5];
         let mut without = vec![0.0; 5];
         with.extend([10.0, 8.0]);
         without.extend([5.0, 6.0]);
-        with.extend([1.0; 98]);
-        without.extend([1.0; 98]);
-        let s = specular_share(&grey(&with), &grey(&without), 105).unwrap();
-        assert_eq!((s.covered, s.highlight), (100, 2));
+        with.extend([1.0; 38]);
+        without.extend([1.0; 38]);
+        let s = specular_share(&grey(&with), &grey(&without), 45).unwrap();
+        assert_eq!((s.covered, s.highlight), (40, 2));
         assert!((s.mean - 0.375).abs() < 1e-12, "{s:?}");
         assert!((s.median - 0.375).abs() < 1e-12, "{s:?}");
-        assert!((s.overall - 7.0 / 116.0).abs() < 1e-12, "{s:?}");
-        // One row: the 9-box around pixel 5 (lobes 5) holds pixels 1-9, lobes 5 + 2 = 7, mean
-        // 7/9; around pixel 6 (lobes 2) pixels 2-10, the same. Deviations 38/9 and 11/9 over the
-        // lobes' mean 3.5.
-        let expected = (38.0 / 9.0 + 11.0 / 9.0) / 2.0 / 3.5;
+        assert!((s.overall - 7.0 / 56.0).abs() < 1e-12, "{s:?}");
+        // One row: the 9-box around pixel 5 (lobes 5) holds pixels 1-9, of which 5-9 are
+        // covered, lobes 5 + 2 = 7, mean 7/5; around pixel 6 (lobes 2) pixels 2-10, covered 5-10,
+        // mean 7/6. Deviations 18/5 and 5/6 over the lobes' mean 3.5.
+        let expected = (18.0 / 5.0 + 5.0 / 6.0) / 2.0 / 3.5;
         assert!((s.local_contrast - expected).abs() < 1e-12, "{s:?}");
     }
 
@@ -163,17 +175,22 @@ mod tests {
     fn box_mean_against_a_direct_sum() {
         let (w, h, r) = (7, 5, 2);
         let values: Vec<f64> = (0..w * h).map(|i| ((i * 37) % 11) as f64).collect();
-        let fast = box_mean(&values, w, r);
+        // A hole and a masked-out corner: only masked pixels count.
+        let mask: Vec<bool> = (0..w * h).map(|i| i % 5 != 0 && i != 8).collect();
+        let fast = box_mean(&values, &mask, w, r);
         for y in 0..h {
             for x in 0..w {
                 let (mut sum, mut n) = (0.0, 0);
                 for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
                     for xx in x.saturating_sub(r)..(x + r + 1).min(w) {
-                        sum += values[yy * w + xx];
-                        n += 1;
+                        if mask[yy * w + xx] {
+                            sum += values[yy * w + xx];
+                            n += 1;
+                        }
                     }
                 }
-                assert!((fast[y * w + x] - sum / n as f64).abs() < 1e-12);
+                let direct = if n > 0 { sum / n as f64 } else { 0.0 };
+                assert!((fast[y * w + x] - direct).abs() < 1e-12);
             }
         }
     }

@@ -191,6 +191,45 @@ fn texture_space_diffusion_keeps_uniform_light_and_softens_a_shadow_edge() {
     assert!(soft > hard, "four blur passes must widen the edge: {hard} vs {soft} pixels");
 }
 
+/// Surfaces whose UVs leave the light map's square (the sample head's eyes, at u + 1) are not
+/// drawn into it: with texture-space diffusion they are shaded directly, Lambert and the key
+/// light's shadow map, not from whatever the light map holds at its edge.
+#[test]
+fn tsd_shades_surfaces_outside_the_light_map_directly() {
+    let gpu = gpu();
+    let shifted = |blocker: bool| {
+        let (mut v, i) = floor_and_blocker(blocker);
+        for vertex in &mut v[..4] {
+            vertex.uv[0] += 1.0;
+        }
+        inputs((v, i))
+    };
+    let open = shifted(false);
+    let lambert = middle_row(&render(&gpu, &open, &SkinSetup::default()));
+    let tsd = middle_row(&render(&gpu, &open, &tsd_skin(&open, 2, false)));
+    for x in 8..SIZE as usize - 8 {
+        assert!((tsd[x] - lambert[x]).abs() < 1e-3 * lambert[x], "x {x}: tsd {} vs lambert {}", tsd[x], lambert[x]);
+    }
+    let blocked = shifted(true);
+    let direct = SkinSetup {
+        features: Features { shadows: true, ..Default::default() },
+        shadow: Some(shadow_setup(&blocked, 1)),
+        ..Default::default()
+    };
+    let want = middle_row(&render(&gpu, &blocked, &direct));
+    let got = middle_row(&render(&gpu, &blocked, &tsd_skin(&blocked, 2, true)));
+    let half = SIZE as usize / 2;
+    assert!(want[half - 8] < 1e-4 && want[half + 8] > 0.5 * lit_value(), "the blocker's shadow: {want:?}");
+    for x in 8..SIZE as usize - 8 {
+        assert!(
+            (got[x] - want[x]).abs() <= 1e-3 * lit_value(),
+            "x {x}: tsd {} vs shadowed lambert {}",
+            got[x],
+            want[x]
+        );
+    }
+}
+
 #[test]
 fn tsd_gaussians_keep_uniform_light_and_scatter_red_farther_than_blue() {
     // The profile's Gaussians on a 20 mm floor (128 texels of 0.16 mm): the weights of each

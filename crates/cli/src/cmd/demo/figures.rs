@@ -5,10 +5,14 @@
 //!   specular lobes add to its highlights;
 //! - figure 8: one patch of the map on a flat square under four light directions (azimuths 0, 90,
 //!   180 and 270 degrees at 15 degrees elevation, where the fine structure shows), in a 2 x 2 grid.
-//! - the skin figure (issue 6): the head wearing the map under a shadow-casting key light, drawn
-//!   with every diffuse method in a 3 x 2 grid: Lambert, the blog's closed form, our fit (top
-//!   row); the pre-integrated LUT, texture-space diffusion, the exact texture-space reference
-//!   (bottom row). Each method's FLIP mean against the reference is in the report.
+//! - the skin figure (issue 6): the head wearing the map, close on the subject's right of the nose
+//!   (about 60 mm across), where a key light from the left front casts the nose's hard shadow
+//!   across the cheek and the upper lip: where scattering shows (the red fringe of the shadow's
+//!   edge, pores softened in the light). Drawn with every diffuse method in a 3 x 2 grid:
+//!   Lambert, the blog's closed form, our fit (top row); the pre-integrated LUT, texture-space
+//!   diffusion, the exact texture-space reference at 1024 texels (bottom row; at 512 its texels
+//!   were 0.5 mm on the face, 2.5 pixels here, and its own blocky shadow edge was most of every
+//!   method's error). Each method's FLIP mean against the reference is in the report.
 //!
 //! Every render goes through scene files written next to the images and the same code as
 //! `skinkit render`, so `skinkit render demo-out/render/head-skin.toml` redraws a figure.
@@ -84,14 +88,14 @@ const SKIN_METHODS: [(&str, &str, &str, bool); 6] = [
     ),
     ("lut-256", r#"["preintegrated", "shadows", "shadow-scattering"]"#, "", false),
     ("tsd-1x1024", r#"["tsd", "shadows"]"#, "[tsd]\npasses = 1\nsize = 1024\n", false),
-    ("reference-512", r#"["shadows"]"#, "", true),
+    ("reference-1024", r#"["shadows"]"#, "", true),
 ];
 
 /// Side of the reference's light map in the skin figure.
-pub const REFERENCE_TEXELS: u32 = 512;
+pub const REFERENCE_TEXELS: u32 = 1024;
 
-/// The skin figure's scene: the head wearing `normal_map`, a warm key light from the side
-/// casting the nose's shadow, a dim fill, `effects` and `tables`.
+/// The skin figure's scene: the head wearing `normal_map`, a warm key light from the left front
+/// casting the nose's shadow onto the cheek, a dim fill, `effects` and `tables`.
 fn skin_scene(normal_map: &str, effects: &str, tables: &str) -> String {
     format!(
         r#"# Written by `skinkit demo`: the sample head for the skin scattering figure (issue 6).
@@ -108,7 +112,7 @@ path = "{normal_map}"
 
 [[light]]
 kind = "directional"
-direction = [0.95, 0.25, 0.2]
+direction = [0.75, 0.35, 0.55]
 colour = [1.0, 0.95, 0.9]
 intensity = 5.0
 shadows = true
@@ -119,9 +123,9 @@ direction = [-0.5, 0.2, 0.85]
 intensity = 0.4
 
 [[camera]]
-position = [150.0, 30.0, 330.0]
-target = [10.0, 5.0, 40.0]
-fov_deg = 30.0
+position = [-80.0, -15.0, 230.0]
+target = [-18.0, -32.0, 30.0]
+fov_deg = 15.0
 
 {tables}
 [output]

@@ -232,7 +232,8 @@ fn renders_text(r: &FiguresReport) -> String {
     );
     let (skin, smooth) = (&r.figure7.skin, &r.figure7.smooth);
     s += &format!(
-        "figure 7 highlights (brightest 2 %): the specular lobes make {:.0} % of a pixel (median {:.0} %; smooth head {:.0} %), local contrast of the sheen {:.3} with the grown map, {:.3} without\n",
+        "figure 7 highlights (brightest {:.0} %): the specular lobes make {:.0} % of a pixel (median {:.0} %; smooth head {:.0} %), local contrast of the sheen {:.3} with the grown map, {:.3} without\n",
+        skinkit_render::highlight::HIGHLIGHT_FRACTION * 100.0,
         skin.mean * 100.0,
         skin.median * 100.0,
         smooth.mean * 100.0,

@@ -259,6 +259,10 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
     if DIFFUSE_MODE == 4u {
         light_map_e = textureSample(light_map, lut_sampler, input.uv).rgb;
     }
+    // Surfaces whose UVs leave the map's square (the sample head's eyes and pockets, moved to
+    // u + 1) are not drawn into the light map: they are shaded directly, as Lambert.
+    let uv_in_map = all(input.uv >= vec2<f32>(0.0)) && all(input.uv <= vec2<f32>(1.0));
+    let from_map = DIFFUSE_MODE == 4u && uv_in_map;
     let albedo = textureSample(albedo_map, map_sampler, input.uv).rgb;
     let geo_n = normalize_or(input.frame_n, vec3<f32>(0.0, 0.0, 1.0));
     let inv_r = curvature(input.skin, input.world, geo_n);
@@ -280,7 +284,7 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
         var shadow_specular = 1.0;
         // With a light map the key light's shadow is already in it (and its specular is
         // attenuated by the light map below): no shadow-map lookups here.
-        if SHADOWS && DIFFUSE_MODE != 4u && i == key {
+        if SHADOWS && !from_map && i == key {
             if SHADOW_SCATTERING {
                 let s = disc_visibility(input.world, geo_n, light_direction(i, input.world));
                 shadow_diffuse = shadow_scattered(s, penumbra_mm());
@@ -294,21 +298,21 @@ fn fs_main(input: VertexOut) -> @location(0) vec4<f32> {
             shadow_diffuse *= through;
             shadow_specular *= luminance(through);
         }
-        if DIFFUSE_MODE == 4u {
+        if from_map {
             unshadowed += e * max(l.z, 0.0);
         } else {
             radiance += e * rho * diffuse_falloff(normals, l_ts, inv_r) * shadow_diffuse;
         }
         if globals.base.vertex_specular == 0u {
             let specular = e * lobes_sum(l, v) * max(l.z, 0.0);
-            if DIFFUSE_MODE == 4u && SHADOWS && i == key {
+            if from_map && SHADOWS && i == key {
                 key_specular = specular;
             } else {
                 radiance += specular * shadow_specular;
             }
         }
     }
-    if DIFFUSE_MODE == 4u {
+    if from_map {
         // Gosselin et al.: diffuse = light map x albedo; the key light's specular is attenuated
         // by the light map's luminance, taken relative to the unshadowed irradiance here.
         radiance += rho * light_map_e;
