@@ -202,12 +202,8 @@ fn check_face_out(dir: &Path, layout: &Layout) -> Result<()> {
             )?;
         }
     }
-    let mut files: Vec<PathBuf> = ["normal.png", "normal.exr", "labels.png", "report.json"]
-        .iter()
-        .chain(&files::HEIGHT_FILES)
-        .map(|f| dir.join(f))
-        .collect();
-    files.extend(layout.regions.iter().map(|r| dir.join("exemplars").join(format!("{}.png", r.name))));
+    let mut files: Vec<PathBuf> = files::file_names(layout).iter().map(|f| dir.join(f)).collect();
+    files.push(dir.join("report.json"));
     let outputs: Vec<(&str, &Path)> = files.iter().map(|f| ("--out", f.as_path())).collect();
     Ok(skinkit_maps::gate::not_an_input(&outputs, &layout_inputs(layout))?)
 }

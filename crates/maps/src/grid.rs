@@ -104,6 +104,10 @@ impl<T> Grid<T> {
     pub fn row(&self, y: usize) -> &[T] {
         &self.data[y * self.width..(y + 1) * self.width]
     }
+    /// Row `y` as a mutable slice.
+    pub fn row_mut(&mut self, y: usize) -> &mut [T] {
+        &mut self.data[y * self.width..(y + 1) * self.width]
+    }
     /// Iterator over rows.
     pub fn rows(&self) -> std::slice::ChunksExact<'_, T> {
         self.data.chunks_exact(self.width.max(1))

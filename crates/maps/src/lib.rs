@@ -40,6 +40,7 @@ pub mod raw;
 pub mod resample;
 mod signature;
 mod tiff_grey;
+pub mod udim;
 
 pub use encoding::{GreenAxis, NormalEncoding};
 pub use error::{Error, Result};

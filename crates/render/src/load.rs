@@ -11,6 +11,9 @@
 //!   is spread to RGB.
 //! - A map path naming a `.glb` or `.gltf` file takes the map from that file's material
 //!   ([`crate::gltf_maps`]: its `baseColorTexture` as sRGB, its green-up `normalTexture`).
+//! - A normal map path with `<UDIM>` in its file name names UDIM tiles: they are joined into one
+//!   atlas and the mesh's UVs carried into it ([`crate::udim_tiles`]). An albedo map cannot be
+//!   tiles yet, so such a scene takes a constant albedo.
 //! - A map larger than the device's `max_texture_dimension_2d` is halved (2x2 box, the mip
 //!   filter) until it fits, with a warning naming the limit.
 
@@ -26,6 +29,7 @@ use crate::gltf_maps;
 use crate::mesh::{Mesh, MeshError};
 use crate::scene::{self, Albedo, NormalMapSpec, Scene};
 use crate::shading::{self, GreenAxis, RenderInputs, Texture, ToneCurve, Vertex};
+use crate::udim_tiles;
 
 /// Errors from turning a scene into render inputs.
 #[derive(Debug, thiserror::Error)]
@@ -123,9 +127,17 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
     let loaded =
         Mesh::load(&scene.mesh).map_err(|error| LoadError::Mesh { file: scene.name(), field: "mesh".into(), error })?;
     let mut warnings = loaded.warnings;
-    let mesh = loaded.mesh;
+    let mut mesh = loaded.mesh;
     let method = scene.normal_map.as_ref().map_or(FrameMethod::Paper, |m| m.frames);
     let tangents = frames::tangents(&mesh, method);
+    let limits = Limits::default();
+    let (normals, atlas) = match &scene.normal_map {
+        None => (None, None),
+        Some(spec) => read_scene_normals(scene, spec, &limits).map(|(m, a)| (Some(m), a))?,
+    };
+    if let Some(atlas) = &atlas {
+        udim_tiles::carry_uvs(&mut mesh.uvs, atlas);
+    }
     let vertices = (0..mesh.positions.len())
         .map(|i| Vertex {
             position: mesh.positions[i].into(),
@@ -135,13 +147,9 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         })
         .collect();
 
-    let limits = Limits::default();
-    let normal_map = match &scene.normal_map {
+    let normal_map = match normals {
         None => Texture::flat_normals(),
-        Some(spec) => {
-            let map = read_normal_map(scene, spec, &limits)?;
-            fit(Texture::from_normal_map(&map), "normal map", max_texture_side, &mut warnings)
-        }
+        Some(map) => fit(Texture::from_normal_map(&map), "normal map", max_texture_side, &mut warnings),
     };
     let albedo = match &scene.albedo {
         None => Texture::solid([1.0; 4]),
@@ -173,6 +181,31 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         background: [0.0, 0.0, 0.0, 1.0],
     };
     Ok(Loaded { inputs, vertex_count: mesh.positions.len(), triangle_count: mesh.triangle_count(), warnings })
+}
+
+/// The scene's normal map, green-up in memory, and when its path names UDIM tiles the atlas they
+/// were joined into (the mesh's UVs must be carried into it: [`udim_tiles::carry_uvs`]).
+///
+/// # Errors
+/// As [`read_normal_map`]; UDIM tiles with an albedo map (which cannot be tiles yet).
+pub(crate) fn read_scene_normals(
+    scene: &Scene,
+    spec: &NormalMapSpec,
+    limits: &Limits,
+) -> Result<(NormalMap, Option<skinkit_maps::udim::Atlas>)> {
+    if !skinkit_maps::udim::is_pattern(&spec.path) {
+        return Ok((read_normal_map(scene, spec, limits)?, None));
+    }
+    if let Some(Albedo::Map(path)) = &scene.albedo {
+        let reason = format!(
+            "{}: the normal map is UDIM tiles ({}) and an albedo map cannot be tiles yet; give a constant albedo",
+            path.display(),
+            spec.path.display()
+        );
+        return Err(LoadError::Unsupported { file: scene.name(), field: "albedo".into(), reason });
+    }
+    let (map, atlas) = udim_tiles::read_tiles(scene, spec, limits)?;
+    Ok((map, Some(atlas)))
 }
 
 /// The scene's normal map, green-up in memory: from its file, or from the normal texture of a

@@ -15,7 +15,7 @@ pub mod partition;
 pub mod seam;
 pub mod spline;
 pub mod surface;
-pub mod udim;
+pub use skinkit_maps::udim;
 
 pub use compose::{ComposeOptions, Composed, compose};
 pub use error::{Error, Result};

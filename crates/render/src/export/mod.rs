@@ -211,6 +211,7 @@ fn read_inputs(
     let loaded =
         Mesh::load(&scene.mesh).map_err(|error| LoadError::Mesh { file: scene.name(), field: "mesh".into(), error })?;
     let mut warnings = loaded.warnings;
+    let mut mesh = loaded.mesh;
     let limits = Limits::default();
     progress.start("albedo", 0);
     let albedo = match &scene.albedo {
@@ -231,7 +232,11 @@ fn read_inputs(
                     scene.name()
                 ));
             }
-            let map = crate::load::read_normal_map(scene, spec, &limits)?;
+            let (map, atlas) = crate::load::read_scene_normals(scene, spec, &limits)?;
+            if let Some(atlas) = &atlas {
+                // glTF has no UDIM: the tiles are one texture, the UVs carried into it.
+                crate::udim_tiles::carry_uvs(&mut mesh.uvs, atlas);
+            }
             let (png, invalid) =
                 images::normal_png(&map, options.normal_bits).map_err(|r| encode_error("the normal texture", r))?;
             (Some(png), invalid)
@@ -243,7 +248,7 @@ fn read_inputs(
             scene.name()
         ));
     }
-    Ok(Inputs { mesh: loaded.mesh, albedo, normal, invalid_normals, warnings })
+    Ok(Inputs { mesh, albedo, normal, invalid_normals, warnings })
 }
 
 /// The files of the container: the GLB alone, or the `.gltf`, its `.bin` and its PNGs.
