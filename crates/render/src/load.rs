@@ -12,7 +12,7 @@
 //! - A map path naming a `.glb` or `.gltf` file takes the map from that file's material
 //!   ([`crate::gltf_maps`]: its `baseColorTexture` as sRGB, its green-up `normalTexture`).
 //! - A normal map path with `<UDIM>` in its file name names UDIM tiles: they are joined into one
-//!   atlas and the mesh's UVs carried into it ([`crate::udim_tiles`]). An albedo map cannot be
+//!   atlas and the mesh's UVs carried into it ([`skinkit_maps::udim`]). An albedo map cannot be
 //!   tiles yet, so such a scene takes a constant albedo.
 //! - A map larger than the device's `max_texture_dimension_2d` is halved (2x2 box, the mip
 //!   filter) until it fits, with a warning naming the limit.
