@@ -40,6 +40,25 @@ impl Stage {
     }
 }
 
+impl Stage {
+    /// Why the stage's default stays when a choice beside it scores a lower error, one line: the
+    /// error measures less than the default is chosen for. `None` where no such line is written.
+    pub fn why_default_kept(self) -> Option<&'static str> {
+        match self {
+            Stage::Synthesis => Some(
+                "the energy counts 5x5 windows only: fewer levels lose the exemplar's larger features \
+                 (lower variation, higher slope distance) and more candidates cost time, for a few per cent",
+            ),
+            Stage::Stitching => Some(
+                "a random curve is longer than a straight cut and crosses more features, so its mean jump \
+                 is higher, but a straight seam is a line the eye follows; fewer spline levels suit this \
+                 quick run's 512x256 map, where the exemplars are 64 texels wide",
+            ),
+            _ => None,
+        }
+    }
+}
+
 impl std::fmt::Display for Stage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
@@ -93,6 +112,11 @@ impl Choice {
         self.metrics.iter().find(|m| m.name == name).map(|m| m.value)
     }
 
+    /// True for a stage's default: its series or label says `default`.
+    pub fn is_default(&self) -> bool {
+        self.series.contains("default") || self.label.contains("default")
+    }
+
     /// The stage's error metric: the first one.
     pub fn error(&self) -> f64 {
         self.metrics.first().map_or(0.0, |m| m.value)
@@ -143,6 +167,25 @@ impl StageReport {
     }
 }
 
+impl StageReport {
+    /// Each default that another choice beats by more than 1 % of its error, with the best such
+    /// choice: `(winner, default)`. A default in a series of its own (`default: ...`) is compared
+    /// with every choice; one inside a series (`holes: masked-pcg (default)`) with that series.
+    pub fn defaults_beaten(&self) -> Vec<(&Choice, &Choice)> {
+        self.choices
+            .iter()
+            .filter(|d| d.is_default())
+            .filter_map(|d| {
+                let rivals = self.choices.iter().filter(|c| !c.is_default());
+                let best = rivals
+                    .filter(|c| d.series == "default" || c.series == d.series)
+                    .min_by(|a, b| a.error().total_cmp(&b.error()))?;
+                (best.error() < 0.99 * d.error()).then_some((best, d))
+            })
+            .collect()
+    }
+}
+
 /// A whole run: what `accuracy.json` holds.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Report {
@@ -158,4 +201,35 @@ pub struct Report {
     pub stages: Vec<StageReport>,
     /// Seconds of the whole run.
     pub wall_seconds: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn choice(series: &str, label: &str, error: f64) -> Choice {
+        Choice::timed(series, label, Vec::new(), metrics(&[("err", error)]), 0.1, 1)
+    }
+
+    #[test]
+    fn a_default_beaten_by_more_than_a_percent_is_named_with_its_winner() {
+        let mut stage = StageReport::new(Stage::Synthesis, String::new(), "err", "seconds");
+        stage.choices =
+            vec![choice("default", "default", 1.0), choice("levels", "L=3", 0.995), choice("k", "k=4", 0.9)];
+        let beaten = stage.defaults_beaten();
+        assert_eq!(beaten.len(), 1);
+        assert_eq!((beaten[0].0.label.as_str(), beaten[0].1.label.as_str()), ("k=4", "default"));
+        stage.choices.pop();
+        assert!(stage.defaults_beaten().is_empty(), "within 1 % is a tie");
+        // A default within a series meets only its series.
+        stage.choices = vec![
+            choice("wraps", "fft (default)", 1.0),
+            choice("wraps", "dct", 0.5),
+            choice("holes", "pcg (default)", 2.0),
+            choice("holes", "dct", 30.0),
+        ];
+        let beaten = stage.defaults_beaten();
+        assert_eq!(beaten.len(), 1);
+        assert_eq!(beaten[0].1.label, "fft (default)");
+    }
 }

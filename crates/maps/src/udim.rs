@@ -90,6 +90,15 @@ pub fn find_tiles(pattern: &Path) -> Result<Vec<(u32, PathBuf)>> {
     Ok(tiles)
 }
 
+/// The files a map path stands for: the path itself, or each tile on disk when it is a pattern
+/// (none when its folder cannot be listed).
+pub fn files(path: &Path) -> Vec<PathBuf> {
+    match is_pattern(path) {
+        true => find_tiles(path).unwrap_or_default().into_iter().map(|(_, p)| p).collect(),
+        false => vec![path.to_owned()],
+    }
+}
+
 impl Atlas {
     /// The atlas of the tiles `numbers` (each from 1001 to 1999), each `width x height`.
     ///
@@ -256,5 +265,7 @@ mod tests {
         assert_eq!(tile_path(&pattern, 1012), dir.path().join("n.1012.png"));
         let found: Vec<u32> = find_tiles(&pattern).unwrap().into_iter().map(|t| t.0).collect();
         assert_eq!(found, [1001, 1012]);
+        assert_eq!(files(&pattern), [dir.path().join("n.1001.png"), dir.path().join("n.1012.png")]);
+        assert_eq!(files(&dir.path().join("x.png")), [dir.path().join("x.png")]);
     }
 }

@@ -39,7 +39,6 @@ pub mod renderer;
 pub mod scene;
 pub mod shading;
 pub mod skin;
-mod udim_tiles;
 pub mod view;
 #[cfg(feature = "viewer")]
 pub mod viewer;

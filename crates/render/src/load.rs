@@ -19,9 +19,10 @@
 
 use std::path::Path;
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 use skinkit_maps::io::{self, Limits};
-use skinkit_maps::{Channels, NormalEncoding, NormalMap};
+use skinkit_maps::udim::{self, Atlas};
+use skinkit_maps::{Channels, Grid, NormalEncoding, NormalMap};
 
 use crate::brdf::Lafortune;
 use crate::frames::{self, FrameMethod};
@@ -29,7 +30,6 @@ use crate::gltf_maps;
 use crate::mesh::{Mesh, MeshError};
 use crate::scene::{self, Albedo, NormalMapSpec, Scene};
 use crate::shading::{self, GreenAxis, RenderInputs, Texture, ToneCurve, Vertex};
-use crate::udim_tiles;
 
 /// Errors from turning a scene into render inputs.
 #[derive(Debug, thiserror::Error)]
@@ -136,7 +136,7 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
         Some(spec) => read_scene_normals(scene, spec, &limits).map(|(m, a)| (Some(m), a))?,
     };
     if let Some(atlas) = &atlas {
-        udim_tiles::carry_uvs(&mut mesh.uvs, atlas);
+        carry_uvs(&mut mesh.uvs, atlas);
     }
     let vertices = (0..mesh.positions.len())
         .map(|i| Vertex {
@@ -184,7 +184,7 @@ pub fn load(scene: &Scene, width: u32, height: u32, max_texture_side: u32) -> Re
 }
 
 /// The scene's normal map, green-up in memory, and when its path names UDIM tiles the atlas they
-/// were joined into (the mesh's UVs must be carried into it: [`udim_tiles::carry_uvs`]).
+/// were joined into (the mesh's UVs must be carried into it: [`carry_uvs`]).
 ///
 /// # Errors
 /// As [`read_normal_map`]; UDIM tiles with an albedo map (which cannot be tiles yet).
@@ -192,8 +192,8 @@ pub(crate) fn read_scene_normals(
     scene: &Scene,
     spec: &NormalMapSpec,
     limits: &Limits,
-) -> Result<(NormalMap, Option<skinkit_maps::udim::Atlas>)> {
-    if !skinkit_maps::udim::is_pattern(&spec.path) {
+) -> Result<(NormalMap, Option<Atlas>)> {
+    if !udim::is_pattern(&spec.path) {
         return Ok((read_normal_map(scene, spec, limits)?, None));
     }
     if let Some(Albedo::Map(path)) = &scene.albedo {
@@ -204,7 +204,7 @@ pub(crate) fn read_scene_normals(
         );
         return Err(LoadError::Unsupported { file: scene.name(), field: "albedo".into(), reason });
     }
-    let (map, atlas) = udim_tiles::read_tiles(scene, spec, limits)?;
+    let (map, atlas) = read_tiles(scene, spec, limits)?;
     Ok((map, Some(atlas)))
 }
 
@@ -285,4 +285,64 @@ fn fit(mut texture: Texture, name: &str, limit: u32, warnings: &mut Vec<String>)
         ));
     }
     texture
+}
+
+// UDIM tiles (`[normal_map] path = "normal.<UDIM>.png"`, what `skinkit face` writes for a mesh
+// over several tiles): the tiles on disk joined into one atlas texture (flat normals where the
+// atlas has no tile) and the mesh's UVs carried into it, so the renderer, the texture-space
+// passes and the glTF export see one map over [0, 1]^2 and a bilinear fetch across a tile
+// boundary reads the two tiles' neighbouring texels.
+
+/// The tiles `spec.path` (a pattern with [`udim::TOKEN`]) names, joined into one map, and the
+/// atlas they make.
+///
+/// # Errors
+/// No tile on disk, an unreadable tile, or tiles of different sizes (each error names the
+/// scene's field and the tile's file).
+fn read_tiles(scene: &Scene, spec: &NormalMapSpec, limits: &Limits) -> Result<(NormalMap, Atlas)> {
+    const FIELD: &str = "normal_map.path";
+    let map_error = |error| LoadError::Map { file: scene.name(), field: FIELD, error };
+    let files = udim::find_tiles(&spec.path).map_err(map_error)?;
+    if files.is_empty() {
+        let hint = format!(
+            " (no file matches it with a tile number from 1001 to 1999 for {}){}",
+            udim::TOKEN,
+            spec.made_by.as_deref().map(|m| format!("; make it first: {m}")).unwrap_or_default()
+        );
+        return Err(LoadError::Missing {
+            file: scene.name(),
+            field: FIELD,
+            path: spec.path.display().to_string(),
+            hint,
+        });
+    }
+    let mut tiles: Vec<(u32, Grid<Vec3>)> = Vec::with_capacity(files.len());
+    for (number, path) in &files {
+        let grid =
+            io::read_normal_map(path, NormalEncoding { green: spec.green }, limits).map_err(map_error)?.into_grid();
+        let (first, first_size) = tiles.first().map_or((*number, grid.size()), |(n, g)| (*n, g.size()));
+        if grid.size() != first_size {
+            let reason = format!(
+                "{}: UDIM tile {number} is {:?} texels but tile {first} is {first_size:?}; every tile must be one size",
+                path.display(),
+                grid.size(),
+            );
+            return Err(LoadError::Unsupported { file: scene.name(), field: FIELD.into(), reason });
+        }
+        tiles.push((*number, grid));
+    }
+    let (w, h) = tiles[0].1.size();
+    let numbers: Vec<u32> = tiles.iter().map(|t| t.0).collect();
+    let atlas = Atlas::of_tiles(&numbers, w, h).map_err(map_error)?;
+    let joined = atlas.join(&tiles, Vec3::Z).map_err(map_error)?;
+    Ok((NormalMap::from_grid(joined), atlas))
+}
+
+/// The mesh's UVs carried into `atlas`'s (an affine map: the frames, computed before, keep their
+/// directions).
+pub(crate) fn carry_uvs(uvs: &mut [Vec2], atlas: &Atlas) {
+    for uv in uvs {
+        let [u, v] = atlas.to_atlas([f64::from(uv.x), f64::from(uv.y)]);
+        *uv = Vec2::new(u as f32, v as f32);
+    }
 }

@@ -160,18 +160,8 @@ impl Scene {
         if let Some(Albedo::Map(p)) = &self.albedo {
             inputs.push(("the scene's albedo".to_owned(), p.clone()));
         }
-        if let Some(n) = &self.normal_map {
-            match skinkit_maps::udim::is_pattern(&n.path) {
-                // Each tile on disk is an input (an unlistable folder has none to overwrite).
-                true => inputs.extend(
-                    skinkit_maps::udim::find_tiles(&n.path)
-                        .unwrap_or_default()
-                        .into_iter()
-                        .map(|(tile, p)| (format!("tile {tile} of the scene's normal map"), p)),
-                ),
-                false => inputs.push(("the scene's normal map".to_owned(), n.path.clone())),
-            }
-        }
+        let normals = self.normal_map.iter().flat_map(|n| skinkit_maps::udim::files(&n.path));
+        inputs.extend(normals.map(|p| ("the scene's normal map".to_owned(), p)));
         inputs.extend(self.translucent.iter().map(|t| ("a translucent mesh of the scene".to_owned(), t.mesh.clone())));
         if let Some(Environment { sky: Sky::LatLong(p), .. }) = &self.skin.environment {
             inputs.push(("the scene's environment image".to_owned(), p.clone()));

@@ -235,7 +235,7 @@ fn read_inputs(
             let (map, atlas) = crate::load::read_scene_normals(scene, spec, &limits)?;
             if let Some(atlas) = &atlas {
                 // glTF has no UDIM: the tiles are one texture, the UVs carried into it.
-                crate::udim_tiles::carry_uvs(&mut mesh.uvs, atlas);
+                crate::load::carry_uvs(&mut mesh.uvs, atlas);
             }
             let (png, invalid) =
                 images::normal_png(&map, options.normal_bits).map_err(|r| encode_error("the normal texture", r))?;

@@ -31,6 +31,8 @@ pub fn write(out: &Path, samples: &Path, report: &DemoReport) -> Result<PathBuf>
     std::fs::create_dir_all(&previews).with_context(|| format!("cannot create {}", previews.display()))?;
     let mut html = String::new();
     head(&mut html, report);
+    showcase(&mut html, out, report);
+    contents(&mut html, report);
     capture(&mut html, out, samples, report)?;
     synthesis(&mut html, out, report)?;
     face(&mut html, out, report)?;
@@ -94,7 +96,8 @@ table{border-collapse:collapse;margin:.8em 0}th,td{padding:.2em .7em;border-bott
 th:first-child,td:first-child{text-align:left}.row{display:flex;flex-wrap:wrap;gap:.6em;align-items:flex-start}\
 figure{margin:0}figure img{display:block;max-width:100%;image-rendering:auto;border:1px solid #bbb}\
 figcaption{font-size:.85em;color:#555;max-width:32em}.thumb img{width:96px}.map img{width:256px}\
-.wide img{width:100%}.native img{width:auto;max-width:100%}.machine{color:#555}";
+.wide img{width:100%}.native img{width:auto;max-width:100%}.machine{color:#555}\
+nav ol{columns:2;max-width:40em}details{margin:.4em 0 1em}summary{cursor:pointer;color:#345}.why{color:#553}";
 
 fn head(html: &mut String, report: &DemoReport) {
     let s = &report.seconds;
@@ -110,6 +113,46 @@ fn head(html: &mut String, report: &DemoReport) {
         esc(&report.machine.summary()),
         s.total
     );
+}
+
+/// The page opens with the face: figure 7, the grown skin without and with the map, and what
+/// the map does to the sheen.
+fn showcase(html: &mut String, out: &Path, report: &DemoReport) {
+    let Some(r) = &report.renders else { return };
+    let (skin, smooth) = (&r.figure7.skin, &r.figure7.smooth);
+    stage(
+        html,
+        "showcase",
+        "The grown skin",
+        None,
+        &format!(
+            "The sample head's brow, eye and nose at 0.09 mm a pixel, without (left) and with (right) the face \
+             map grown from the four molds below (the paper's figure 7). Over the brightest {:.0} % of the skin's \
+             pixels the specular lobes make {:.0} % of the light, and the map raises the sheen's local contrast \
+             from {:.3} to {:.3}.",
+            skinkit_render::highlight::HIGHLIGHT_FRACTION * 100.0,
+            skin.mean * 100.0,
+            smooth.local_contrast,
+            skin.local_contrast
+        ),
+    );
+    let p = rel(out, Path::new(&r.figure7.image));
+    figure(html, &p, "Figure 7: the head without (left) and with (right) the face map", "wide");
+    html.push_str("</section>\n");
+}
+
+/// The table of contents: the sections the page has.
+fn contents(html: &mut String, report: &DemoReport) {
+    let mut entries = vec![("capture", "Capture"), ("synthesis", "Synthesis"), ("face", "Face map")];
+    if report.renders.is_some() {
+        entries.insert(0, ("showcase", "The grown skin"));
+        entries.push(("renders", "Renders"));
+    }
+    html.push_str("<nav><h2>Contents</h2><ol>");
+    for (id, title) in entries {
+        let _ = write!(html, "<li><a href=\"#{id}\">{}</a></li>", esc(title));
+    }
+    html.push_str("</ol></nav>\n");
 }
 
 /// Photos, maps and errors of every mold.
@@ -293,7 +336,6 @@ fn renders(html: &mut String, out: &Path, report: &DemoReport) {
         &format!("The face map on the sample head, drawn by the bundled renderer on {adapter}."),
     );
     let p = |s: &str| rel(out, Path::new(s));
-    figure(html, &p(&r.figure7.image), "Figure 7: the head without (left) and with (right) the face map", "wide");
     figure(html, &p(&r.figure8), "Figure 8: a patch of the face map under four light directions", "wide");
     figure(html, &p(&r.skin.image), "Skin scattering methods against the texture-space reference", "wide");
     if let Some(t) = &r.height_round_trip {
@@ -323,11 +365,13 @@ fn renders(html: &mut String, out: &Path, report: &DemoReport) {
     html.push_str("</section>\n");
 }
 
-/// The quick accuracy run's plot and table of each of `stages` (nothing without the run).
+/// The quick accuracy run's block for each of `stages` (nothing without the run): its plot, the
+/// default's row, a line where another choice scores better and why the default stays, and the
+/// full table one click away.
 fn accuracy(html: &mut String, report: &DemoReport, stages: &[Stage]) {
     let Some(run) = &report.accuracy else { return };
     for stage in run.stages.iter().filter(|s| stages.contains(&s.stage)) {
-        let _ = write!(html, "<h3>Accuracy against time: {}</h3><p>{}</p>", esc(stage.stage.name()), esc(&stage.setup));
+        let _ = write!(html, "<h3>Accuracy against time: {}</h3>", esc(stage.stage.name()));
         if let Some(reason) = &stage.skipped {
             let _ = write!(html, "<p>Not measured: {}.</p>", esc(reason));
             continue;
@@ -335,16 +379,37 @@ fn accuracy(html: &mut String, report: &DemoReport, stages: &[Stage]) {
         let caption =
             format!("{} against {} (quick run, {:.1} s)", stage.error_metric, stage.cost_axis, stage.wall_seconds);
         figure(html, &format!("accuracy/{}", markdown::plot_name(stage)), &caption, "native");
-        let rows: Vec<Vec<String>> = stage
-            .choices
-            .iter()
-            .map(|c| vec![c.series.clone(), c.label.clone(), format!("{:.4}", c.error()), format!("{:.4}", c.cost)])
-            .collect();
-        table(html, &["series", "choice", &stage.error_metric, &stage.cost_axis], &rows);
+        let header = ["series", "choice", stage.error_metric.as_str(), stage.cost_axis.as_str()];
+        let row = |c: &skinkit_accuracy::Choice| {
+            vec![c.series.clone(), c.label.clone(), format!("{:.4}", c.error()), format!("{:.4}", c.cost)]
+        };
+        let defaults: Vec<Vec<String>> = stage.choices.iter().filter(|c| c.is_default()).map(row).collect();
+        if !defaults.is_empty() {
+            table(html, &header, &defaults);
+        }
+        for (winner, default) in stage.defaults_beaten() {
+            let why = stage.stage.why_default_kept().unwrap_or("this quick run measures it on small inputs");
+            let _ = write!(
+                html,
+                "<p class=\"why\">{} scores {:.4} against the default's {:.4}; the default stays: {}.</p>",
+                esc(&format!("{}: {}", winner.series, winner.label)),
+                winner.error(),
+                default.error(),
+                esc(why)
+            );
+        }
+        let _ = write!(
+            html,
+            "<details><summary>Every choice ({}), and the setup</summary><p>{}</p>",
+            stage.choices.len(),
+            esc(&stage.setup)
+        );
+        let rows: Vec<Vec<String>> = stage.choices.iter().map(row).collect();
+        table(html, &header, &rows);
+        html.push_str("</details>\n");
     }
 }
 
-/// A photo as a small grey picture in `page/name`; returns its link.
 fn photo_thumbnail(out: &Path, photo: &Path, name: &str) -> Result<String> {
     let read = io::read_photo(photo, &Default::default()).context("cannot read a photo")?;
     let luminance = Grid::from_vec(read.width(), read.height(), read.luminance())?;
