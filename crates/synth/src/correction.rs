@@ -7,6 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use skinkit_maps::Grid;
 
+use crate::band::Window;
 use crate::config::{CORRECTION_STRIDE, Start, SynthConfig};
 use crate::exemplar::{ExemplarLevel, better};
 use crate::interleave::sub_pass;
@@ -27,6 +28,9 @@ pub(crate) struct CorrectionLevel<'a> {
     pub(crate) nb: &'a Neighbourhood,
     pub(crate) search: &'a LevelSearch,
     pub(crate) config: &'a SynthConfig,
+    /// Where the grid lies in its level and which of its rows may change ([`Window::whole`] for
+    /// a whole level).
+    pub(crate) window: &'a Window,
 }
 
 /// The most times the copy cap's cut is repeated after the last pass ([`CorrectionLevel::run`]).
@@ -77,18 +81,20 @@ impl CorrectionLevel<'_> {
         let (s, h) = (CORRECTION_STRIDE, out.size().1);
         for pass in 0..plan.corrections {
             let last = pass + 1 == plan.corrections;
-            let breaks = plan.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed));
+            let breaks =
+                plan.copy_cap.filter(|_| last).map(|cap| cap_breaks(full, coords, cap, self.config.seed, self.window));
             let causal = if self.config.start == Start::Scanline { h } else { 0 };
             self.pass(out, coords, breaks.as_deref(), false, &|sub| {
                 report(causal + h * pass + (sub + 1) * h / (s * s))
             });
         }
         if plan.polish > 0 {
-            crate::polish::polish(full, self.config.neighbourhood, plan.copy_cap, out, coords, plan.polish);
+            let active = &self.window.active;
+            crate::polish::polish(full, self.config.neighbourhood, plan.copy_cap, (out, coords, active), plan.polish);
         }
         let Some(cap) = plan.copy_cap.filter(|_| plan.corrections > 0) else { return };
         for _ in 0..CAP_ROUNDS {
-            let breaks = cap_breaks(full, coords, cap, self.config.seed);
+            let breaks = cap_breaks(full, coords, cap, self.config.seed, self.window);
             if !breaks.contains(&true) {
                 break;
             }
@@ -112,11 +118,18 @@ impl CorrectionLevel<'_> {
         let lambda = self.plan.correction_penalty;
         for sub in 0..s * s {
             let occurrence = Occurrence::of(full, coords, lambda);
-            sub_pass(full, out, coords, sub, |x, y, read_out, read_coords, scratch: &mut Scratch| {
-                let forbid = breaks.is_some_and(|b| b[y * w + x]);
-                (forbid || !only_cut)
-                    .then(|| self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch))
-            });
+            sub_pass(
+                full,
+                out,
+                coords,
+                (sub, &self.window.active),
+                |x, y, read_out, read_coords, scratch: &mut Scratch| {
+                    let forbid = breaks.is_some_and(|b| b[y * w + x]);
+                    (forbid || !only_cut).then(|| {
+                        self.choose(x as isize, y as isize, read_out, read_coords, &occurrence, forbid, scratch)
+                    })
+                },
+            );
             report(sub);
         }
     }
@@ -261,8 +274,9 @@ fn cut_forbidden(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, x: isize, y: isi
 /// (`(p - 1)^2 <= cap`, phase drawn from `seed`, plus row and column 0). Choosing another source
 /// there cuts every such block into pieces of at most `(p - 1)^2` texels; the new source is the
 /// best match of the cut texel's whole neighbourhood, so the cut follows the texture as a seam
-/// would.
-fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u64) -> Vec<bool> {
+/// would. The lines are drawn in the level's rows (`window`), so a band's lie where the whole
+/// level's would.
+fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u64, window: &Window) -> Vec<bool> {
     let (w, h) = coords.size();
     let blocks = metrics::copy_blocks(coords, full.texels().size(), full.wraps());
     let p = ((cap as f64).sqrt() as usize + 1).max(2);
@@ -271,7 +285,7 @@ fn cap_breaks(full: &ExemplarLevel, coords: &Grid<[u32; 2]>, cap: usize, seed: u
     let (px, py) = (rng.random_range(0..p), rng.random_range(0..p));
     (0..w * h)
         .map(|i| {
-            let (x, y) = (i % w, i / w);
+            let (x, y) = (i % w, window.level_row(i / w));
             // Row and column 0 are lines too: the output wraps, and where its side is not a
             // multiple of p the cell across the wrap would be up to 2 p - 2 texels wide (a 3 %
             // cap let a 201-texel block through there).

@@ -33,6 +33,7 @@
 //! on the way (the occurrence penalty, correction passes, seams, search modes).
 
 pub mod appearance;
+pub mod band;
 mod causal;
 pub mod config;
 pub mod coords;

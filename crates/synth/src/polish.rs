@@ -10,6 +10,8 @@
 //! `t`, and `t`'s own window against `X(s)`. Its cost is
 //! `sum_{o != 0} |X(s) - X(coords(t + o) - o)|^2 + |out(t + o) - X(s + o)|^2`.
 
+use std::ops::Range;
+
 use glam::Vec3;
 use skinkit_maps::Grid;
 
@@ -19,15 +21,15 @@ use crate::interleave::sub_pass;
 use crate::metrics::{self, CopyBlocks};
 
 /// Runs `passes` polishing passes over a level with `n x n` windows, in the interleaved
-/// sub-passes of the correction passes (so the result does not depend on the thread count).
+/// sub-passes of the correction passes (so the result does not depend on the thread count), in
+/// the rows `active`.
 /// With a copy cap, a texel may not join blocks whose sizes (at the start of the pass) add up to
 /// more than `cap` texels.
 pub(crate) fn polish(
     full: &ExemplarLevel,
     n: usize,
     cap: Option<usize>,
-    out: &mut Grid<Vec3>,
-    coords: &mut Grid<[u32; 2]>,
+    (out, coords, active): (&mut Grid<Vec3>, &mut Grid<[u32; 2]>, &Range<usize>),
     passes: usize,
 ) {
     let r = (n / 2) as isize;
@@ -37,7 +39,7 @@ pub(crate) fn polish(
         let blocks = cap.map(|cap| (cap, metrics::copy_blocks(coords, full.texels().size(), full.wraps())));
         let blocks = blocks.as_ref();
         for sub in 0..CORRECTION_STRIDE * CORRECTION_STRIDE {
-            sub_pass(full, out, coords, sub, |x, y, read_out, read_coords, scratch| {
+            sub_pass(full, out, coords, (sub, active), |x, y, read_out, read_coords, scratch| {
                 choose(full, &offsets, blocks, x as isize, y as isize, read_out, read_coords, scratch)
             });
         }
@@ -253,7 +255,7 @@ mod tests {
         let run = |threads: usize, cap: Option<usize>| {
             let (mut o, mut c) = (out.clone(), coords.clone());
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| polish(&full, N, cap, &mut o, &mut c, 1));
+            pool.install(|| polish(&full, N, cap, (&mut o, &mut c, &(0..20)), 1));
             (o, c)
         };
         let (o, c) = run(1, None);

@@ -84,12 +84,15 @@ use skinkit_maps::progress::Progress;
 use skinkit_maps::pyramid::{Border, gaussian};
 use skinkit_maps::{Grid, NormalMap};
 
+use std::ops::Range;
+
+use crate::band::{self, BAND_HALO, Collect, Window};
 use crate::causal::causal_pass;
 use crate::config::{Start, SynthConfig, half};
 use crate::correction::CorrectionLevel;
 use crate::exemplar::ExemplarLevel;
 pub use crate::level::random_copies;
-use crate::level::{build_search, shape};
+use crate::level::{LevelSearch, build_search, shape};
 use crate::metrics;
 use crate::schedule::LevelPlan;
 use crate::{Error, Result};
@@ -180,6 +183,16 @@ impl Texels {
     }
 }
 
+/// Receives a level's rows band by band, top to bottom ([`crate::band`]): the band's first level
+/// row, its texels and their coordinates.
+pub(crate) type Emit<'a> = dyn FnMut(usize, Grid<Vec3>, Grid<[u32; 2]>) -> Result<()> + 'a;
+
+/// What a run tells besides its finest level's rows.
+pub(crate) struct RunNotes {
+    pub(crate) warnings: Vec<String>,
+    pub(crate) level_seconds: Vec<f64>,
+}
+
 /// [`synthesize`] without the guards (its `variation` and `histogram` are left for the caller to
 /// measure, see `guard`).
 pub(crate) fn synthesize_unguarded(
@@ -188,6 +201,25 @@ pub(crate) fn synthesize_unguarded(
     progress: &dyn Progress,
     kind: Texels,
 ) -> Result<Synthesis> {
+    let mut collect = Collect::new(config.width, config.height);
+    let grown = grow_into(exemplar, config, progress, kind, &mut |_, texels, coords| {
+        collect.push(&texels, &coords);
+        Ok(())
+    })?;
+    let (texels, coords) = collect.finish();
+    let RunNotes { warnings, level_seconds } = grown;
+    Ok(Synthesis { texels, coords, warnings, level_seconds, guards: Guards::unmeasured() })
+}
+
+/// Grows `exemplar` level by level, coarse to fine, handing the finest level's bands to `finest`
+/// as they finish; the coarser levels are held whole (each is read by the next finer one).
+pub(crate) fn grow_into(
+    exemplar: &Grid<Vec3>,
+    config: &SynthConfig,
+    progress: &dyn Progress,
+    kind: Texels,
+    finest: &mut Emit,
+) -> Result<RunNotes> {
     let (ew, eh) = exemplar.size();
     let (config, mut warnings) = config.validate(ew, eh)?;
     let bad = exemplar.as_slice().iter().filter(|v| !v.is_finite()).count();
@@ -207,25 +239,26 @@ pub(crate) fn synthesize_unguarded(
         sizes.push((half(w), half(h)));
     }
     let mut level_seconds = vec![0.0; config.levels];
-    let mut coarser: Option<Grid<Vec3>> = None;
-    let mut coarser_coords: Option<Grid<[u32; 2]>> = None;
-    let mut result = None;
+    let mut coarser: Option<(Grid<Vec3>, Grid<[u32; 2]>)> = None;
     // The validated config's levels are clamped already, so the schedule has one plan per level.
     let schedule = config.schedule(ew, eh);
     for plan in schedule.iter().rev() {
         let (level, start) = (plan.level, Instant::now());
-        let coarser_level = coarser.as_ref().zip(coarser_coords.as_ref());
-        let (texels, coords) = synthesize_level(&pyramid, plan, sizes[level], coarser_level, &config, progress);
-        level_seconds[level] = start.elapsed().as_secs_f64();
+        let coarser_level = coarser.as_ref().map(|(t, c)| (t, c));
         if level == 0 {
-            result = Some((texels, coords));
+            synthesize_level(&pyramid, plan, sizes[level], coarser_level, &config, progress, finest)?;
         } else {
-            coarser = Some(texels);
-            coarser_coords = Some(coords);
+            let (w, h) = sizes[level];
+            let mut collect = Collect::new(w, h);
+            synthesize_level(&pyramid, plan, (w, h), coarser_level, &config, progress, &mut |_, texels, coords| {
+                collect.push(&texels, &coords);
+                Ok(())
+            })?;
+            coarser = Some(collect.finish());
         }
+        level_seconds[level] = start.elapsed().as_secs_f64();
     }
-    let (texels, coords) = result.expect("level 0 is always synthesised");
-    Ok(Synthesis { texels, coords, warnings, level_seconds, guards: Guards::unmeasured() })
+    Ok(RunNotes { warnings, level_seconds })
 }
 
 /// [`synthesize`] for a normal map: unnormalised vectors through the pyramid, unit on output.
@@ -296,7 +329,8 @@ pub fn histogram_noise(exemplar: &Grid<Vec3>, width: usize, height: usize, seed:
 }
 
 /// Synthesises one output level given the finished coarser one: the causal scanline pass (or the
-/// upsampled start), then `plan.corrections` correction passes.
+/// upsampled start), then `plan.corrections` correction passes; in bands ([`crate::band`]) when
+/// the level is taller than one, handed to `emit` band by band.
 fn synthesize_level(
     pyramid: &[Grid<Vec3>],
     plan: &LevelPlan,
@@ -304,7 +338,8 @@ fn synthesize_level(
     coarser_level: Option<(&Grid<Vec3>, &Grid<[u32; 2]>)>,
     config: &SynthConfig,
     progress: &dyn Progress,
-) -> (Grid<Vec3>, Grid<[u32; 2]>) {
+    emit: &mut Emit,
+) -> Result<()> {
     let level = plan.level;
     let coarser = coarser_level.map(|(t, _)| t);
     let nb = shape(config, false, coarser.is_some());
@@ -319,51 +354,132 @@ fn synthesize_level(
     // Progress counts rows: `h` for the causal pass and `h` for each correction pass.
     let total = (h * (usize::from(config.start == Start::Scanline) + plan.corrections)).max(1);
     progress.start(&format!("level {level}"), total as u64);
+    let bands = band::bands(h);
+    if let (Start::Upsampled, Some(parent), true) = (config.start, coarser_level, bands.len() > 1) {
+        drop(ex);
+        let level = BandedLevel { search: &search, plan, config, parent, width: w, bands: &bands };
+        level.grow(progress, emit)?;
+        progress.finish();
+        return Ok(());
+    }
     // The passes count rows done so far; the stage is told what each report adds.
     let done = std::cell::Cell::new(0);
     let report = |units: usize| progress.advance(units.saturating_sub(done.replace(units)) as u64);
+    let rows: Vec<usize> = (0..h).collect();
     let (mut out, mut coords) = match (config.start, coarser_level) {
         (Start::Scanline, _) => causal_pass(plan, (w, h), coarser, &nb, &ex, &search, config, &report),
         (Start::Upsampled, None) => random_copies(ex.texels(), ex.margin(), w, h, config.seed, level),
-        (Start::Upsampled, Some((_, parent))) => upsampled(&search.full, parent, w, h, plan, config.seed),
+        (Start::Upsampled, Some((_, parent))) => upsampled(&search.full, parent, w, &rows, plan, config.seed),
     };
     drop(ex);
     if plan.corrections > 0 {
         let full_nb = shape(config, true, coarser.is_some());
-        let level = CorrectionLevel { coarser, plan, nb: &full_nb, search: &search, config };
+        let window = Window::whole(h);
+        let level = CorrectionLevel { coarser, plan, nb: &full_nb, search: &search, config, window: &window };
         level.run(&mut out, &mut coords, &report);
     }
     progress.finish();
-    (out, coords)
+    emit(0, out, coords)
+}
+
+/// A level grown in bands ([`crate::band`]): what every band reads.
+struct BandedLevel<'a> {
+    search: &'a LevelSearch,
+    plan: &'a LevelPlan,
+    config: &'a SynthConfig,
+    /// The finished coarser level's texels and coordinates.
+    parent: (&'a Grid<Vec3>, &'a Grid<[u32; 2]>),
+    width: usize,
+    bands: &'a [Range<usize>],
+}
+
+impl BandedLevel<'_> {
+    /// Grows the bands top to bottom, each in its window: upsampled, the frozen rows put back
+    /// (the band above's last rows, and for the last band the first band's first rows), then
+    /// corrected; its own rows go to `emit`.
+    fn grow(&self, progress: &dyn Progress, emit: &mut Emit) -> Result<()> {
+        let (plan, config, (coarser, parent)) = (self.plan, self.config, self.parent);
+        let h = self.bands.last().map_or(0, |b| b.end);
+        let full_nb = shape(config, true, true);
+        let mut above: Option<(Grid<Vec3>, Grid<[u32; 2]>)> = None;
+        let mut first: Option<(Grid<Vec3>, Grid<[u32; 2]>)> = None;
+        for (k, band) in self.bands.iter().enumerate() {
+            let bw = band::band_window(self.bands, k, h);
+            let rows: Vec<usize> = (0..bw.len).map(|y| bw.window.level_row(y)).collect();
+            let (mut out, mut coords) = upsampled(&self.search.full, parent, self.width, &rows, plan, config.seed);
+            if let Some((t, c)) = above.as_ref().filter(|_| bw.frozen_top) {
+                band::put_rows(&mut out, 0, t);
+                band::put_rows(&mut coords, 0, c);
+            }
+            if let Some((t, c)) = first.as_ref().filter(|_| bw.frozen_bottom > 0) {
+                band::put_rows(&mut out, bw.len - bw.frozen_bottom, t);
+                band::put_rows(&mut coords, bw.len - bw.frozen_bottom, c);
+            }
+            if plan.corrections > 0 {
+                let coarser = band::coarser_rows(coarser, &bw.window, bw.len);
+                let window = &bw.window;
+                let level = CorrectionLevel {
+                    coarser: Some(&coarser),
+                    plan,
+                    nb: &full_nb,
+                    search: self.search,
+                    config,
+                    window,
+                };
+                level.run(&mut out, &mut coords, &|_| {});
+            }
+            let own = bw.top..bw.top + band.len();
+            let (texels, coords) = (band::rows_of(&out, own.clone()), band::rows_of(&coords, own));
+            let last = band.len() - BAND_HALO..band.len();
+            above = Some((band::rows_of(&texels, last.clone()), band::rows_of(&coords, last)));
+            if k == 0 {
+                first = Some((band::rows_of(&texels, 0..BAND_HALO), band::rows_of(&coords, 0..BAND_HALO)));
+            }
+            emit(band.start, texels, coords)?;
+            progress.advance((band.len() * plan.corrections) as u64);
+        }
+        Ok(())
+    }
 }
 
 /// A level's start from its coarser level's coordinates (Lefebvre and Hoppe 2005): texel `(x, y)`
 /// copies exemplar position `2 p + (x mod 2, y mod 2)`, `p` the coarser texel's source, kept
-/// inside the candidates (clamped, or wrapped when the exemplar wraps).
+/// inside the candidates (clamped, or wrapped when the exemplar wraps). `rows` are the level rows
+/// of the grid's rows: the whole level, or a band's window. The jitter is drawn from one ChaCha
+/// stream per level in row-major order for a whole level, from one stream per level row in a
+/// band's window (so a row's jitter does not depend on the band it falls in).
 fn upsampled(
     full: &ExemplarLevel,
     parent: &Grid<[u32; 2]>,
     w: usize,
-    h: usize,
+    rows: &[usize],
     plan: &LevelPlan,
     seed: u64,
 ) -> (Grid<Vec3>, Grid<[u32; 2]>) {
     let (pw, ph, jitter, level) = (parent.width(), parent.height(), plan.jitter, plan.level);
+    let whole = rows.iter().enumerate().all(|(i, &r)| i == r) && rows.len().div_ceil(2) == ph;
+    let r = jitter as i64;
+    let draw = |rng: &mut ChaCha8Rng| [rng.random_range(-r..=r) as isize, rng.random_range(-r..=r) as isize];
     // One ChaCha stream per level, offset from random_copies' streams; drawn in row-major order.
     let offsets: Vec<[isize; 2]> = if jitter == 0 {
         Vec::new()
-    } else {
+    } else if whole {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(1 << 32 | level as u64);
-        let r = jitter as isize;
-        (0..w * h)
-            .map(|_| [rng.random_range(-r as i64..=r as i64) as isize, rng.random_range(-r as i64..=r as i64) as isize])
-            .collect()
+        (0..w * rows.len()).map(|_| draw(&mut rng)).collect()
+    } else {
+        let stream = |row: usize| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(1 << 48 | (level as u64) << 32 | row as u64);
+            rng
+        };
+        rows.iter().flat_map(|&row| (0..w).scan(stream(row), |rng, _| Some(draw(rng)))).collect()
     };
-    let coords = Grid::from_fn(w, h, |x, y| {
-        let [px, py] = *parent.get((x / 2).min(pw - 1), (y / 2).min(ph - 1));
+    let coords = Grid::from_fn(w, rows.len(), |x, y| {
+        let ly = rows[y];
+        let [px, py] = *parent.get((x / 2).min(pw - 1), (ly / 2).min(ph - 1));
         let [jx, jy] = offsets.get(y * w + x).copied().unwrap_or([0, 0]);
-        let (cx, cy) = (2 * px as isize + (x % 2) as isize + jx, 2 * py as isize + (y % 2) as isize + jy);
+        let (cx, cy) = (2 * px as isize + (x % 2) as isize + jx, 2 * py as isize + (ly % 2) as isize + jy);
         let i = full.index_of(cx, cy).unwrap_or_else(|| full.nearest_candidate(cx, cy));
         full.position(i)
     });
