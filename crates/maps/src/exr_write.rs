@@ -22,7 +22,7 @@ use rayon::prelude::*;
 /// Rows gathered per parallel batch (whole blocks; at least one block per batch).
 const BATCH_ROWS: usize = 128;
 
-/// Writes `width x height` float RGB pixels, `pixel(x, y)`, as a scanline EXR with
+/// Writes `width x height` float RGB pixels, row `y` filled by `fill_row(y, row)`, as a scanline EXR with
 /// `compression` to `out`.
 ///
 /// # Errors
@@ -32,7 +32,7 @@ pub(crate) fn write_rgb(
     width: usize,
     height: usize,
     compression: Compression,
-    pixel: &(impl Fn(usize, usize) -> [f32; 3] + Sync),
+    fill_row: &(impl Fn(usize, &mut [[f32; 3]]) + Sync),
 ) -> Result<(), String> {
     let headers = headers(width, height, compression);
     exr::block::write(out, headers, true, |meta, writer| {
@@ -44,7 +44,7 @@ pub(crate) fn write_rgb(
             let chunks: Vec<exr::error::Result<Chunk>> = batch
                 .par_iter()
                 .map(|(_, index)| {
-                    let data = block_bytes(index.pixel_position, index.pixel_size, &components, pixel);
+                    let data = block_bytes(index.pixel_position, index.pixel_size, &components, (width, fill_row));
                     UncompressedBlock { index: *index, data }.compress_to_chunk(&meta.headers)
                 })
                 .collect();
@@ -87,15 +87,15 @@ fn block_bytes(
     position: Vec2<usize>,
     size: Vec2<usize>,
     components: &[usize],
-    pixel: &impl Fn(usize, usize) -> [f32; 3],
+    (width, fill_row): (usize, &impl Fn(usize, &mut [[f32; 3]])),
 ) -> Vec<u8> {
     let (x0, y0, w) = (position.x(), position.y(), size.width());
     let mut data = Vec::with_capacity(w * size.height() * components.len() * 4);
-    let mut row = vec![[0.0f32; 3]; w];
+    let mut row = vec![[0.0f32; 3]; width];
     for y in y0..y0 + size.height() {
-        row.iter_mut().enumerate().for_each(|(i, p)| *p = pixel(x0 + i, y));
+        fill_row(y, &mut row);
         for &c in components {
-            data.extend(row.iter().flat_map(|p| p[c].to_ne_bytes()));
+            data.extend(row[x0..x0 + w].iter().flat_map(|p| p[c].to_ne_bytes()));
         }
     }
     data
@@ -185,7 +185,9 @@ mod tests {
             [Compression::Uncompressed, Compression::RLE, Compression::ZIP1, Compression::ZIP16, Compression::PIZ]
         {
             let mut ours = std::io::Cursor::new(Vec::new());
-            write_rgb(&mut ours, w, h, compression, &pattern).unwrap();
+            let fill =
+                |y: usize, row: &mut [[f32; 3]]| row.iter_mut().enumerate().for_each(|(x, p)| *p = pattern(x, y));
+            write_rgb(&mut ours, w, h, compression, &fill).unwrap();
             let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
                 let [r, g, b] = pattern(pos.x(), pos.y());
                 (r, g, b)

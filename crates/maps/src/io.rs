@@ -4,6 +4,10 @@
 //! functions, so tests can feed bytes. Every writer goes through [`write_atomic`]: the data lands in
 //! a temporary file in the destination folder and is renamed over the target only when complete,
 //! so an interrupted run never leaves a half-written output and never touches an input.
+//!
+//! (Over 600 lines: every reader and writer of the crate's formats, which share the format
+//! detection, the limits and the atomic write; the row writers next to the whole-map ones they
+//! serve.)
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -441,8 +445,24 @@ pub fn write_exr_rgb_compressed(
     compression: ExrCompression,
     pixel: impl Fn(usize, usize) -> [f32; 3] + Sync,
 ) -> Result<()> {
+    let fill = |y: usize, row: &mut [[f32; 3]]| row.iter_mut().enumerate().for_each(|(x, p)| *p = pixel(x, y));
+    write_exr_rgb_rows(path, width, height, compression, fill)
+}
+
+/// [`write_exr_rgb_compressed`] with whole rows: `fill_row(y, row)` writes row `y`'s triples (rows
+/// are asked for in order, in parallel batches).
+///
+/// # Errors
+/// When writing fails.
+pub fn write_exr_rgb_rows(
+    path: &Path,
+    width: usize,
+    height: usize,
+    compression: ExrCompression,
+    fill_row: impl Fn(usize, &mut [[f32; 3]]) + Sync,
+) -> Result<()> {
     write_atomic(path, |out| {
-        crate::exr_write::write_rgb(out, width, height, compression, &pixel)
+        crate::exr_write::write_rgb(out, width, height, compression, &fill_row)
             .map_err(|reason| Error::Encode { path: path.to_owned(), reason })
     })
 }
@@ -475,14 +495,35 @@ pub fn write_exr_channels(
 /// # Errors
 /// When the extension is not `png` or `exr`, or writing fails.
 pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, bits: u32) -> Result<()> {
-    let (w, h) = map.size();
+    let (w, texels) = (map.width(), map.as_slice());
+    write_normal_rows(path, map.size(), encoding, bits, |y, row| row.copy_from_slice(&texels[y * w..(y + 1) * w]))
+}
+
+/// [`write_normal_map`] of a `w x h` map whose row `y` `fill_row(y, row)` gives (rows are asked
+/// for in order, in parallel batches: [`crate::stream`] feeds them as they are computed).
+///
+/// # Errors
+/// When the extension is not `png` or `exr`, or writing fails.
+pub fn write_normal_rows(
+    path: &Path,
+    (w, h): (usize, usize),
+    encoding: NormalEncoding,
+    bits: u32,
+    fill_row: impl Fn(usize, &mut [Vec3]) + Sync,
+) -> Result<()> {
+    let texels = |y: usize| {
+        let mut row = vec![Vec3::ZERO; w];
+        fill_row(y, &mut row);
+        row
+    };
     match ImageFormat::of(path) {
-        Some(ImageFormat::Exr) => write_exr_rgb(path, w, h, |x, y| encoding.encode_float(map.get(x, y))),
+        Some(ImageFormat::Exr) => write_exr_rgb_rows(path, w, h, ExrCompression::Uncompressed, |y, out| {
+            out.iter_mut().zip(texels(y)).for_each(|(o, n)| *o = encoding.encode_float(n));
+        }),
         Some(ImageFormat::Png) => {
             let (max, layout) = if bits == 8 { (255, PngLayout::Rgb8) } else { (65535, PngLayout::Rgb16) };
-            let texels = map.as_slice();
             write_png_rows(path, w, h, layout, PngColour::Linear, |y, row| {
-                for (out, &n) in row.chunks_exact_mut(3).zip(&texels[y * w..(y + 1) * w]) {
+                for (out, n) in row.chunks_exact_mut(3).zip(texels(y)) {
                     out.copy_from_slice(&encoding.encode(n, max).map(|c| c as u16));
                 }
             })
@@ -501,14 +542,34 @@ pub fn write_normal_map(path: &Path, map: &NormalMap, encoding: NormalEncoding, 
 /// # Errors
 /// When writing fails or the extension is unknown.
 pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
-    let (w, h) = map.size();
+    let (w, texels) = (map.width(), map.as_slice());
+    write_color_rows(path, map.size(), bits, |y, row| row.copy_from_slice(&texels[y * w..(y + 1) * w]))
+}
+
+/// [`write_color_map`] of a `w x h` map whose row `y` `fill_row(y, row)` gives (see
+/// [`write_normal_rows`]).
+///
+/// # Errors
+/// When the extension is not `png` or `exr`, or writing fails.
+pub fn write_color_rows(
+    path: &Path,
+    (w, h): (usize, usize),
+    bits: u32,
+    fill_row: impl Fn(usize, &mut [Vec3]) + Sync,
+) -> Result<()> {
+    let texels = |y: usize| {
+        let mut row = vec![Vec3::ZERO; w];
+        fill_row(y, &mut row);
+        row
+    };
     match ImageFormat::of(path) {
-        Some(ImageFormat::Exr) => write_exr_rgb(path, w, h, |x, y| map.get(x, y).to_array()),
+        Some(ImageFormat::Exr) => write_exr_rgb_rows(path, w, h, ExrCompression::Uncompressed, |y, out| {
+            out.iter_mut().zip(texels(y)).for_each(|(o, c)| *o = c.to_array());
+        }),
         Some(ImageFormat::Png) => {
-            let texels = map.as_slice();
             let layout = if bits == 8 { PngLayout::Rgb8 } else { PngLayout::Rgb16 };
             write_png_rows(path, w, h, layout, PngColour::for_layout(layout), |y, row| {
-                for (out, c) in row.chunks_exact_mut(3).zip(&texels[y * w..(y + 1) * w]) {
+                for (out, c) in row.chunks_exact_mut(3).zip(texels(y)) {
                     out.copy_from_slice(&c.to_array().map(|v| {
                         if bits == 8 {
                             (linear_to_srgb(v) * 255.0).round() as u16

@@ -39,6 +39,7 @@ pub mod pyramid;
 pub mod raw;
 pub mod resample;
 mod signature;
+pub mod stream;
 mod tiff_grey;
 pub mod udim;
 
