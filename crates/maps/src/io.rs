@@ -511,11 +511,7 @@ pub fn write_normal_rows(
     bits: u32,
     fill_row: impl Fn(usize, &mut [Vec3]) + Sync,
 ) -> Result<()> {
-    let texels = |y: usize| {
-        let mut row = vec![Vec3::ZERO; w];
-        fill_row(y, &mut row);
-        row
-    };
+    let texels = |y: usize| filled_row(w, y, &fill_row);
     match ImageFormat::of(path) {
         Some(ImageFormat::Exr) => write_exr_rgb_rows(path, w, h, ExrCompression::Uncompressed, |y, out| {
             out.iter_mut().zip(texels(y)).for_each(|(o, n)| *o = encoding.encode_float(n));
@@ -546,6 +542,13 @@ pub fn write_color_map(path: &Path, map: &ColorMap, bits: u32) -> Result<()> {
     write_color_rows(path, map.size(), bits, |y, row| row.copy_from_slice(&texels[y * w..(y + 1) * w]))
 }
 
+/// Row `y` of `w` texels as `fill_row` gives it.
+fn filled_row(w: usize, y: usize, fill_row: &impl Fn(usize, &mut [Vec3])) -> Vec<Vec3> {
+    let mut row = vec![Vec3::ZERO; w];
+    fill_row(y, &mut row);
+    row
+}
+
 /// [`write_color_map`] of a `w x h` map whose row `y` `fill_row(y, row)` gives (see
 /// [`write_normal_rows`]).
 ///
@@ -557,11 +560,7 @@ pub fn write_color_rows(
     bits: u32,
     fill_row: impl Fn(usize, &mut [Vec3]) + Sync,
 ) -> Result<()> {
-    let texels = |y: usize| {
-        let mut row = vec![Vec3::ZERO; w];
-        fill_row(y, &mut row);
-        row
-    };
+    let texels = |y: usize| filled_row(w, y, &fill_row);
     match ImageFormat::of(path) {
         Some(ImageFormat::Exr) => write_exr_rgb_rows(path, w, h, ExrCompression::Uncompressed, |y, out| {
             out.iter_mut().zip(texels(y)).for_each(|(o, c)| *o = c.to_array());
