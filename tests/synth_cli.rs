@@ -117,6 +117,47 @@ fn same_seed_gives_same_bytes_and_another_seed_differs() {
     assert_ne!(read(&a), read(&c), "different seeds");
 }
 
+/// A map taller than a band (3 bands of the finest level, 2 of the next) is written as its bands
+/// finish: its bytes and its coordinate map's are the ones the whole-in-memory run writes (the
+/// `--height` run holds the whole map to integrate it), on 1, 2 and 8 threads; the report's
+/// quality figures are finite, and no attempt file is left beside the outputs.
+#[test]
+fn a_map_streamed_in_bands_is_the_map_grown_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exemplar = normal_exemplar(tmp.path(), "cheek", 40);
+    let run = |name: &str, extra: &[&str]| {
+        let (out, coords) = (tmp.path().join(format!("{name}.png")), tmp.path().join(format!("{name}-coords.png")));
+        let report = tmp.path().join(format!("{name}.json"));
+        let mut args = vec!["synth", s(&exemplar), "--out", s(&out), "--coords", s(&coords), "--report", s(&report)];
+        args.extend_from_slice(&["--size", "40x2100", "--seed", "3", "--quiet"]);
+        args.extend_from_slice(extra);
+        let o = skinkit(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        (std::fs::read(out).unwrap(), std::fs::read(coords).unwrap(), report)
+    };
+    let whole_height = tmp.path().join("height.exr");
+    let whole = run("whole", &["--height", s(&whole_height)]);
+    for threads in ["1", "2", "8"] {
+        let streamed = run(&format!("streamed-{threads}"), &["--threads", threads]);
+        assert!(streamed.0 == whole.0, "{threads} threads: the map differs");
+        assert!(streamed.1 == whole.1, "{threads} threads: the coordinate map differs");
+        let quality = &streamed.2["quality"];
+        for field in ["spectrum_distance", "seam_energy_ratio", "variation", "histogram_mismatch"] {
+            assert!(quality[field].as_f64().is_some_and(f64::is_finite), "{field}: {quality}");
+        }
+        // The seam and the guards are measured on the whole output either way (the rest on a crop).
+        assert_eq!(quality["seam_energy_ratio"], whole.2["quality"]["seam_energy_ratio"]);
+        assert_eq!(quality["variation"], whole.2["quality"]["variation"]);
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
 #[test]
 fn replay_of_the_coords_on_the_exemplar_reproduces_the_output() {
     let tmp = tempfile::tempdir().unwrap();

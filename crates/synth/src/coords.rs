@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use skinkit_maps::io::{self, Limits, PngColour, PngLayout};
+use skinkit_maps::stream::StreamedFile;
 use skinkit_maps::{Channels, Error, Grid, Result, Samples};
 
 /// The largest exemplar side a coordinate map can address (16-bit samples).
@@ -24,6 +25,25 @@ pub fn write(path: &Path, coords: &Grid<[u32; 2]>) -> Result<()> {
         for (px, c) in row.chunks_exact_mut(3).zip(coords.row(y)) {
             px.copy_from_slice(&[c[0] as u16, c[1] as u16, 0]);
         }
+    })
+}
+
+/// A coordinate map of a `w x h` output written as its rows come ([`skinkit_maps::stream`]), as
+/// [`write()`] writes it whole. The coordinates must be under [`MAX_COORD_SIDE`] (the exemplar's
+/// sides, checked before a run starts).
+pub fn stream(path: &Path, (w, h): (usize, usize)) -> StreamedFile<[u32; 2]> {
+    StreamedFile::spawn(path, w, move |path, feed| {
+        io::write_png_rows(path, w, h, PngLayout::Rgb16, PngColour::Linear, |y, row| {
+            let mut coords = vec![[0u32; 2]; w];
+            feed.row(y, &mut coords);
+            for (px, c) in row.chunks_exact_mut(3).zip(&coords) {
+                px.copy_from_slice(&[
+                    c[0].min(MAX_COORD_SIDE as u32) as u16,
+                    c[1].min(MAX_COORD_SIDE as u32) as u16,
+                    0,
+                ]);
+            }
+        })
     })
 }
 

@@ -38,6 +38,7 @@ mod causal;
 pub mod config;
 pub mod coords;
 mod correction;
+pub mod deliver;
 pub mod energy;
 pub mod error;
 pub mod exemplar;
@@ -58,4 +59,7 @@ pub use error::{Error, Result};
 pub use map::{Grown, Map};
 pub use report::{OptionsReport, QualityReport};
 pub use schedule::LevelPlan;
-pub use synthesis::{Guards, NormalSynthesis, Synthesis, replay, synthesize, synthesize_normals};
+pub use synthesis::{
+    BandSink, Guards, NormalSynthesis, Streamed, Synthesis, replay, synthesize, synthesize_normals,
+    synthesize_normals_streamed, synthesize_streamed,
+};

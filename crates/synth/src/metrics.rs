@@ -27,11 +27,11 @@ use rustfft::{Fft, FftPlanner};
 use skinkit_maps::{ColorMap, Grid, NormalMap};
 
 mod guard;
+pub(crate) use guard::std_dev;
 pub use guard::{
-    COLLAPSE_RATIO, HISTOGRAM_RATIO, channel_histogram_mismatch, histogram_mismatch, slope_histogram_mismatch,
-    slope_variation_ratio, variation_ratio,
+    COLLAPSE_RATIO, GuardMeter, HISTOGRAM_RATIO, channel_histogram_mismatch, histogram_mismatch,
+    slope_histogram_mismatch, slope_variation_ratio, variation_ratio,
 };
-pub(crate) use guard::{slope_histogram_mismatch_of, slope_variation_ratio_of, std_dev};
 
 /// Normals with `z` at or below this are skipped by [`slopes`]: their slope (over 1000, a surface
 /// tilted beyond 89.94 degrees) carries no usable statistics, and invalid `(0, 0, 0)` normals fall
@@ -328,30 +328,84 @@ impl PairSum {
 
 /// Seam energy over the pairs whose texels both satisfy `valid`.
 fn seam_energy_where(map: &Grid<Vec3>, valid: impl Fn(Vec3) -> bool) -> SeamEnergy {
-    let (w, h) = map.size();
-    let (mut seam, mut inner) = (PairSum::default(), PairSum::default());
-    for y in 0..h {
-        for x in 0..w {
-            let p = *map.get(x, y);
-            let right = if x + 1 < w { &mut inner } else { &mut seam };
-            if w > 1 {
-                right.add(p, *map.get((x + 1) % w, y), &valid);
+    let mut meter = SeamMeter::new(map.size(), valid);
+    meter.add(map.as_slice());
+    meter.finish()
+}
+
+/// [`seam_energy`] of a map measured as its rows come, top to bottom: the same sums in the same
+/// order (a row is counted once the row below it has come; the last row against the first at the
+/// end), so the same bits as on the whole map, holding two rows.
+pub struct SeamMeter<F> {
+    size: (usize, usize),
+    valid: F,
+    first: Vec<Vec3>,
+    last: Vec<Vec3>,
+    rows: usize,
+    seam: PairSum,
+    inner: PairSum,
+}
+
+impl<F: Fn(Vec3) -> bool> SeamMeter<F> {
+    /// A meter of a `size` map over the pairs whose texels both satisfy `valid`
+    /// (`|v| v != Vec3::ZERO` for normal maps, as [`normal_seam_energy`]).
+    pub fn new(size: (usize, usize), valid: F) -> Self {
+        SeamMeter {
+            size,
+            valid,
+            first: Vec::new(),
+            last: Vec::new(),
+            rows: 0,
+            seam: PairSum::default(),
+            inner: PairSum::default(),
+        }
+    }
+
+    /// Counts the next whole rows.
+    pub fn add(&mut self, rows: &[Vec3]) {
+        for row in rows.chunks_exact(self.size.0.max(1)) {
+            if self.rows == 0 {
+                self.first = row.to_vec();
+            } else {
+                let above = std::mem::take(&mut self.last);
+                self.count_row(self.rows - 1, &above, row);
             }
-            let down = if y + 1 < h { &mut inner } else { &mut seam };
+            self.last = row.to_vec();
+            self.rows += 1;
+        }
+    }
+
+    /// The pairs of row `y`: each texel with its right neighbour, then with the one below.
+    fn count_row(&mut self, y: usize, row: &[Vec3], below: &[Vec3]) {
+        let (w, h) = self.size;
+        for x in 0..w {
+            let right = if x + 1 < w { &mut self.inner } else { &mut self.seam };
+            if w > 1 {
+                right.add(row[x], row[(x + 1) % w], &self.valid);
+            }
+            let down = if y + 1 < h { &mut self.inner } else { &mut self.seam };
             if h > 1 {
-                down.add(p, *map.get(x, (y + 1) % h), &valid);
+                down.add(row[x], below[x], &self.valid);
             }
         }
     }
-    let (across_seam, interior) = (seam.mean(), inner.mean());
-    let ratio = if interior > 0.0 {
-        across_seam / interior
-    } else if across_seam > 0.0 {
-        across_seam / f64::MIN_POSITIVE
-    } else {
-        1.0
-    };
-    SeamEnergy { across_seam, interior, ratio }
+
+    /// The energy, once every row has come.
+    pub fn finish(mut self) -> SeamEnergy {
+        if self.rows > 0 {
+            let (last, first) = (std::mem::take(&mut self.last), std::mem::take(&mut self.first));
+            self.count_row(self.rows - 1, &last, &first);
+        }
+        let (across_seam, interior) = (self.seam.mean(), self.inner.mean());
+        let ratio = if interior > 0.0 {
+            across_seam / interior
+        } else if across_seam > 0.0 {
+            across_seam / f64::MIN_POSITIVE
+        } else {
+            1.0
+        };
+        SeamEnergy { across_seam, interior, ratio }
+    }
 }
 
 /// Copied blocks of a source-coordinate map (see [`copy_statistics`]).

@@ -35,7 +35,7 @@
 //!
 //! Copy cap ([`SynthConfig::copy_cap`]): patches carried down the pyramid can be large (a quarter
 //! of the exemplar). Before the finest level's last correction pass, the verbatim blocks of the
-//! current coordinates are found ([`metrics::copy_blocks`]); the texels of blocks over the cap that
+//! current coordinates are found ([`crate::metrics::copy_blocks`]); the texels of blocks over the cap that
 //! lie on a grid of lines (spacing from the cap, phase from the seed) may not keep their source in
 //! that pass, so each such block is cut into pieces along the best-matching seam the pass finds.
 //! A cut texel may not continue a neighbour's block either, and the cut repeats on the cut texels
@@ -93,14 +93,17 @@ use crate::correction::CorrectionLevel;
 use crate::exemplar::ExemplarLevel;
 pub use crate::level::random_copies;
 use crate::level::{LevelSearch, build_search, shape};
-use crate::metrics;
+
 use crate::schedule::LevelPlan;
 use crate::{Error, Result};
 
-// The guards are a part of synthesis: they run it (`synthesize_unguarded`) and it returns their
-// figures, so they are its child rather than a sibling that would depend on it both ways.
+// The guards and the streamed runs are parts of synthesis: they run it (`grow_into`) and it
+// returns their figures, so they are its children rather than siblings that would depend on it
+// both ways.
 mod guard;
+mod stream;
 pub use guard::Guards;
+pub use stream::{BandSink, Streamed, synthesize_normals_streamed, synthesize_streamed};
 
 /// The result of [`synthesize`].
 #[derive(Clone, Debug)]
@@ -113,8 +116,8 @@ pub struct Synthesis {
     pub warnings: Vec<String>,
     /// Wall-clock seconds per level, `[0]` the finest.
     pub level_seconds: Vec<f64>,
-    /// The guards' figures on channels ([`metrics::variation_ratio`],
-    /// [`metrics::channel_histogram_mismatch`]).
+    /// The guards' figures on channels ([`crate::metrics::variation_ratio`],
+    /// [`crate::metrics::channel_histogram_mismatch`]).
     pub guards: Guards,
 }
 
@@ -127,8 +130,8 @@ pub struct NormalSynthesis {
     pub coords: Grid<[u32; 2]>,
     pub warnings: Vec<String>,
     pub level_seconds: Vec<f64>,
-    /// The guards' figures on slopes ([`metrics::slope_variation_ratio`],
-    /// [`metrics::slope_histogram_mismatch`]).
+    /// The guards' figures on slopes ([`crate::metrics::slope_variation_ratio`],
+    /// [`crate::metrics::slope_histogram_mismatch`]).
     pub guards: Guards,
 }
 
@@ -138,11 +141,13 @@ pub struct NormalSynthesis {
 /// # Errors
 /// When [`SynthConfig::validate`] fails.
 pub fn synthesize(exemplar: &Grid<Vec3>, config: &SynthConfig, progress: &dyn Progress) -> Result<Synthesis> {
-    guard::guarded(exemplar, config, progress, Texels::Colour)
+    let s = stream::collected(exemplar, config, progress, Texels::Colour)?;
+    let (texels, coords) = s.sink.finish();
+    Ok(Synthesis { texels, coords, warnings: s.warnings, level_seconds: s.level_seconds, guards: s.guards })
 }
 
 /// What a synthesis grows: it decides the pyramid the search matches in and how an output's
-/// variation is measured.
+/// variation is measured ([`crate::metrics::GuardMeter`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Texels {
     Colour,
@@ -151,22 +156,6 @@ pub(crate) enum Texels {
 }
 
 impl Texels {
-    /// How much of the exemplar's variation `output` kept (channel or slope deviations).
-    pub(crate) fn variation(self, output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-        match self {
-            Texels::Colour => metrics::variation_ratio(output, exemplar),
-            Texels::Normals => metrics::slope_variation_ratio_of(output, exemplar),
-        }
-    }
-
-    /// How far `output`'s channel or slope histograms drifted from the exemplar's.
-    pub(crate) fn histogram_mismatch(self, output: &Grid<Vec3>, exemplar: &Grid<Vec3>) -> f64 {
-        match self {
-            Texels::Colour => metrics::channel_histogram_mismatch(output, exemplar),
-            Texels::Normals => metrics::slope_histogram_mismatch_of(output, exemplar),
-        }
-    }
-
     pub(crate) fn name(self) -> &'static str {
         match self {
             Texels::Colour => "colour",
@@ -191,24 +180,6 @@ pub(crate) type Emit<'a> = dyn FnMut(usize, Grid<Vec3>, Grid<[u32; 2]>) -> Resul
 pub(crate) struct RunNotes {
     pub(crate) warnings: Vec<String>,
     pub(crate) level_seconds: Vec<f64>,
-}
-
-/// [`synthesize`] without the guards (its `variation` and `histogram` are left for the caller to
-/// measure, see `guard`).
-pub(crate) fn synthesize_unguarded(
-    exemplar: &Grid<Vec3>,
-    config: &SynthConfig,
-    progress: &dyn Progress,
-    kind: Texels,
-) -> Result<Synthesis> {
-    let mut collect = Collect::new(config.width, config.height);
-    let grown = grow_into(exemplar, config, progress, kind, &mut |_, texels, coords| {
-        collect.push(&texels, &coords);
-        Ok(())
-    })?;
-    let (texels, coords) = collect.finish();
-    let RunNotes { warnings, level_seconds } = grown;
-    Ok(Synthesis { texels, coords, warnings, level_seconds, guards: Guards::unmeasured() })
 }
 
 /// Grows `exemplar` level by level, coarse to fine, handing the finest level's bands to `finest`
@@ -272,18 +243,13 @@ pub fn synthesize_normals(
     progress: &dyn Progress,
 ) -> Result<NormalSynthesis> {
     let exemplar_warning = crate::exemplar::check_normal_exemplar(exemplar)?;
-    let mut s = guard::guarded(exemplar.grid(), config, progress, Texels::Normals)?;
-    s.warnings.splice(0..0, exemplar_warning);
+    let s = stream::collected(exemplar.grid(), config, progress, Texels::Normals)?;
+    let ((texels, coords), mut warnings) = (s.sink.finish(), s.warnings);
+    warnings.splice(0..0, exemplar_warning);
     // The finest level copies exemplar texels, which are unit (or invalid zero) already: wrapping
     // them keeps the bits, where renormalising would perturb the last one.
-    let normals = NormalMap::from_unit_grid(s.texels)?;
-    Ok(NormalSynthesis {
-        normals,
-        coords: s.coords,
-        warnings: s.warnings,
-        level_seconds: s.level_seconds,
-        guards: s.guards,
-    })
+    let normals = NormalMap::from_unit_grid(texels)?;
+    Ok(NormalSynthesis { normals, coords, warnings, level_seconds: s.level_seconds, guards: s.guards })
 }
 
 /// Copies `map` (a map of the exemplar's size, e.g. the albedo registered with the normals) through

@@ -341,27 +341,19 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     let context = || format!("cannot synthesise from {}", exemplar_path.display());
     let (validated, adjusted) = requested.validate(ew, eh).with_context(context)?;
     let bars = out.stage_bars();
-    let Grown { map: output, coords, warnings, level_seconds, guards } =
-        exemplar.grow(&requested, &bars).with_context(context)?;
+    // One set: the map, the coordinates and the report appear together or not at all.
+    let mut set = OutputSet::files();
+    let grown = match &args.height {
+        Some(height) => grow_whole(&args, &exemplar, &requested, (&mut set, height), &bars),
+        None => grow_streamed(&args, &exemplar, &requested, &mut set, &bars),
+    }
+    .with_context(context)?;
+    let Outcome { warnings, level_seconds, quality, invalid_texels, height_map } = grown;
     // The default level count adapts to the exemplar without a word; a `--levels` the exemplar
     // cannot hold is worth a warning (the report gives the levels used either way).
     for w in warnings.iter().filter(|w| args.levels.is_some() || !adjusted.contains(w)) {
         out.warn(w);
     }
-    let quality = QualityReport::new(&exemplar, &output, &coords, validated.exemplar_wrap, guards)
-        .expect("the output has the exemplar's kind");
-    let invalid_texels = output.invalid_texels();
-    // One set: the map, the coordinates and the report appear together or not at all.
-    let mut set = OutputSet::files();
-    args.map.write(&mut set, out_path, &output)?;
-    if let Some(path) = &args.coords {
-        let context = || "cannot write the coordinate map";
-        set.write_file(path, |p| coords::write(p, &coords)).with_context(context)?;
-    }
-    let height_map = match (&args.height, &output) {
-        (Some(path), Map::Normal(normals)) => Some(pipeline::grown_height(&mut set, path, normals, args.mm_per_texel)?),
-        _ => None,
-    };
     let report = SynthReport {
         height_map,
         exemplar: exemplar_path.display().to_string(),
@@ -383,6 +375,63 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     out.swept(&set.commit().context("cannot finish writing the synthesis outputs")?);
     out.result(&report, || human(&report));
     Ok(invalid_exit(out, out_path, exemplar_path, invalid_texels, size))
+}
+
+/// What a growth gave, whichever way its outputs were written.
+struct Outcome {
+    warnings: Vec<String>,
+    level_seconds: Vec<f64>,
+    quality: QualityReport,
+    invalid_texels: usize,
+    height_map: Option<skinkit_height::HeightReport>,
+}
+
+/// Grows the map into its files as its bands finish (`skinkit_synth::deliver`): the whole output
+/// is never held, so a 16K map fits where its pyramid would not.
+fn grow_streamed(
+    args: &Args,
+    exemplar: &Map,
+    config: &SynthConfig,
+    set: &mut OutputSet,
+    bars: &dyn skinkit_maps::progress::Progress,
+) -> Result<Outcome> {
+    let out_path = args.out.as_deref().expect("checked by run_synth");
+    let files = skinkit_synth::deliver::Files {
+        map: set.file(out_path)?,
+        encoding: args.map.encoding()?,
+        coords: args.coords.as_deref().map(|p| set.file(p)).transpose()?,
+    };
+    let d = skinkit_synth::deliver::grow_into_files(exemplar, config, bars, &files)
+        .map_err(|e| anyhow::Error::new(e).context(format!("cannot write {}", out_path.display())))?;
+    let skinkit_synth::deliver::Delivered { warnings, level_seconds, quality, invalid_texels, .. } = d;
+    Ok(Outcome { warnings, level_seconds, quality, invalid_texels, height_map: None })
+}
+
+/// Grows the map whole, for `--height`: the integration of the grown normals into heights is
+/// global, so it needs the whole map.
+fn grow_whole(
+    args: &Args,
+    exemplar: &Map,
+    config: &SynthConfig,
+    (set, height): (&mut OutputSet, &Path),
+    bars: &dyn skinkit_maps::progress::Progress,
+) -> Result<Outcome> {
+    let out_path = args.out.as_deref().expect("checked by run_synth");
+    let Grown { map: output, coords, warnings, level_seconds, guards } = exemplar.grow(config, bars)?;
+    let wrap = config.exemplar_wrap;
+    let quality =
+        QualityReport::new(exemplar, &output, &coords, wrap, guards).expect("the output has the exemplar's kind");
+    let invalid_texels = output.invalid_texels();
+    args.map.write(set, out_path, &output)?;
+    if let Some(path) = &args.coords {
+        let context = || "cannot write the coordinate map";
+        set.write_file(path, |p| coords::write(p, &coords)).with_context(context)?;
+    }
+    let height_map = match &output {
+        Map::Normal(normals) => Some(pipeline::grown_height(set, height, normals, args.mm_per_texel)?),
+        Map::Color(_) => None,
+    };
+    Ok(Outcome { warnings, level_seconds, quality, invalid_texels, height_map })
 }
 
 /// The exit code of a grown map with `invalid` invalid texels: 1 with an error naming both files

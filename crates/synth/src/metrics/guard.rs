@@ -82,12 +82,25 @@ pub fn histogram_mismatch(
     value: impl Fn(&Vec3, usize) -> Option<f32>,
 ) -> f64 {
     let stride = output.len().div_ceil(HISTOGRAM_SAMPLES).max(1);
-    let ratios: Vec<f64> = (0..components)
-        .filter_map(|c| {
+    let samples: Vec<Vec<f32>> = (0..components)
+        .map(|c| output.as_slice().iter().step_by(stride).filter_map(|v| value(v, c)).collect())
+        .collect();
+    mismatch_of_samples(&samples, exemplar, value)
+}
+
+/// [`histogram_mismatch`] of the output values sampled already, one list per component.
+fn mismatch_of_samples(
+    samples: &[Vec<f32>],
+    exemplar: &Grid<Vec3>,
+    value: impl Fn(&Vec3, usize) -> Option<f32>,
+) -> f64 {
+    let ratios: Vec<f64> = samples
+        .iter()
+        .enumerate()
+        .filter_map(|(c, o)| {
             let e: Vec<f32> = exemplar.as_slice().iter().filter_map(|v| value(v, c)).collect();
-            let o: Vec<f32> = output.as_slice().iter().step_by(stride).filter_map(|v| value(v, c)).collect();
             let spread = std_dev(e.iter().copied());
-            let d = wasserstein_1d(&o, &e);
+            let d = wasserstein_1d(o, &e);
             (spread > 1e-6 && d.is_finite()).then(|| d / spread)
         })
         .collect();
@@ -118,17 +131,96 @@ fn min_ratio(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
 /// Population standard deviation of the finite values (0 for none), in one pass (f64 sums; the
 /// values are slopes or colours, far from where the shortcut loses precision).
 pub(crate) fn std_dev(values: impl Iterator<Item = f32>) -> f64 {
-    let (mut n, mut sum, mut squares) = (0u64, 0.0f64, 0.0f64);
-    for v in values.filter(|v| v.is_finite()).map(f64::from) {
-        n += 1;
-        sum += v;
-        squares += v * v;
+    let mut m = Moments::default();
+    values.for_each(|v| m.add(v));
+    m.deviation()
+}
+
+/// The running count, sum and sum of squares of [`std_dev`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Moments {
+    n: u64,
+    sum: f64,
+    squares: f64,
+}
+
+impl Moments {
+    /// Counts `v` if it is finite.
+    fn add(&mut self, v: f32) {
+        if v.is_finite() {
+            let v = f64::from(v);
+            self.n += 1;
+            self.sum += v;
+            self.squares += v * v;
+        }
     }
-    if n == 0 {
-        return 0.0;
+
+    fn deviation(&self) -> f64 {
+        if self.n == 0 {
+            return 0.0;
+        }
+        let mean = self.sum / self.n as f64;
+        (self.squares / self.n as f64 - mean * mean).max(0.0).sqrt()
     }
-    let mean = sum / n as f64;
-    (squares / n as f64 - mean * mean).max(0.0).sqrt()
+}
+
+/// The guards' figures of an output measured as its rows come, top to bottom: the same numbers,
+/// bit for bit, as [`variation_ratio`] and [`channel_histogram_mismatch`] (colours) or
+/// [`slope_variation_ratio`] and [`slope_histogram_mismatch`] (normals) of the whole output, since
+/// it sums and samples the values in the same order.
+#[derive(Clone, Debug)]
+pub struct GuardMeter {
+    normals: bool,
+    size: (usize, usize),
+    stride: usize,
+    seen: usize,
+    moments: [Moments; 3],
+    samples: [Vec<f32>; 3],
+}
+
+impl GuardMeter {
+    /// A meter of a `size` output of normals (slopes) or colours (channels).
+    pub fn new(normals: bool, size: (usize, usize)) -> Self {
+        let stride = (size.0 * size.1).div_ceil(HISTOGRAM_SAMPLES).max(1);
+        GuardMeter { normals, size, stride, seen: 0, moments: [Moments::default(); 3], samples: Default::default() }
+    }
+
+    fn components(&self) -> usize {
+        if self.normals { 2 } else { 3 }
+    }
+
+    fn value(normals: bool) -> impl Fn(&Vec3, usize) -> Option<f32> {
+        move |v, c| if normals { (v.z > MIN_NZ).then(|| -v[c] / v.z) } else { Some(v[c]) }
+    }
+
+    /// Counts the next texels, in row-major order.
+    pub fn add(&mut self, texels: &[Vec3]) {
+        let (components, value) = (self.components(), Self::value(self.normals));
+        for v in texels {
+            for c in 0..components {
+                if let Some(x) = value(v, c) {
+                    self.moments[c].add(x);
+                }
+            }
+        }
+        let first = self.seen.next_multiple_of(self.stride) - self.seen;
+        for v in texels.iter().skip(first).step_by(self.stride) {
+            for c in 0..components {
+                self.samples[c].extend(value(v, c));
+            }
+        }
+        self.seen += texels.len();
+    }
+
+    /// `(variation, histogram mismatch)` against `exemplar`.
+    pub fn figures(&self, exemplar: &Grid<Vec3>) -> (f64, f64) {
+        let (normals, components) = (self.normals, self.components());
+        let value = Self::value(normals);
+        let pairs = (0..components)
+            .map(|c| (self.moments[c].deviation(), deviation_at_scale(exemplar, self.size, |v| value(v, c))));
+        let histogram = mismatch_of_samples(&self.samples[..components], exemplar, Self::value(normals));
+        (min_ratio(pairs), histogram)
+    }
 }
 
 #[cfg(test)]
@@ -139,5 +231,34 @@ mod tests {
         let v = [1.0f32, 3.0, f32::NAN, 5.0, 7.0, f32::INFINITY];
         assert!((super::std_dev(v.iter().copied()) - 5.0f64.sqrt()).abs() < 1e-12);
         assert_eq!(super::std_dev(std::iter::empty()), 0.0);
+    }
+
+    /// The meter fed in uneven bands gives the whole-output figures bit for bit, for colours and
+    /// normals (invalid texels among them), at a size where the histogram samples a stride.
+    #[test]
+    fn the_meter_gives_the_whole_output_figures() {
+        use super::*;
+        let (w, h) = (301, 250);
+        let texel = |x: usize, y: usize| {
+            let t = (x * 7 + y * 13) as f32;
+            if (x + y).is_multiple_of(97) { Vec3::ZERO } else { Vec3::new(0.3 * t.sin(), 0.2 * (0.7 * t).cos(), 0.9) }
+        };
+        let output = Grid::from_fn(w, h, texel);
+        let exemplar = Grid::from_fn(40, 30, |x, y| texel(3 * x + 1, 2 * y));
+        for normals in [false, true] {
+            let mut meter = GuardMeter::new(normals, (w, h));
+            for rows in [0..1, 1..100, 100..101, 101..250] {
+                meter.add(&output.as_slice()[rows.start * w..rows.end * w]);
+            }
+            let whole = if normals {
+                (slope_variation_ratio_of(&output, &exemplar), slope_histogram_mismatch_of(&output, &exemplar))
+            } else {
+                (variation_ratio(&output, &exemplar), channel_histogram_mismatch(&output, &exemplar))
+            };
+            let (v, m) = meter.figures(&exemplar);
+            assert_eq!((v.to_bits(), m.to_bits()), (whole.0.to_bits(), whole.1.to_bits()), "normals {normals}");
+            assert!(v > 0.1 && m.is_finite());
+        }
+        assert!(w * h > HISTOGRAM_SAMPLES, "the histogram samples a stride");
     }
 }

@@ -14,10 +14,7 @@
 //!   its bulge's slopes (`docs/synthesis-notes.md`); the default's robust matching keeps it
 //!   under the limit (0.07-0.10, seeds 1-3).
 
-use glam::Vec3;
-use skinkit_maps::Grid;
-
-use super::{Synthesis, Texels, synthesize_unguarded};
+use super::{RunNotes, Texels};
 use crate::{Result, SynthConfig, metrics};
 
 /// What the guards measured on an output, as a synthesis returns it.
@@ -35,31 +32,32 @@ pub struct Guards {
     pub histogram_retry: bool,
 }
 
-impl Guards {
-    /// The figures of an output not yet measured (NaN, so a missed measurement shows).
-    pub(crate) fn unmeasured() -> Self {
-        Guards { variation: f64::NAN, histogram: f64::NAN, histogram_retry: false }
-    }
-}
-
 /// The histogram guard judges outputs of at least this many texels: the histogram of a random
 /// sample of `n` values lies about `1 / sqrt(n)` deviations from its population's in
 /// Wasserstein-1, so a smaller output could be regrown for its size alone.
 const HISTOGRAM_MIN_TEXELS: usize = 64 * 64;
 
-/// [`synthesize_unguarded`] behind the collapse guard, then the histogram guard (on the config
-/// that made the kept output, so a collapse retry's stronger penalty is not weakened).
-pub(crate) fn guarded(
-    exemplar: &Grid<Vec3>,
+/// One growth of an output (see [`super::attempt`]): what took its rows, its notes and the
+/// guards' figures measured on it.
+pub(crate) struct Attempt<A> {
+    pub(crate) output: A,
+    pub(crate) notes: RunNotes,
+    pub(crate) guards: Guards,
+}
+
+/// `grow` behind the collapse guard, then the histogram guard (on the config that made the kept
+/// output, so a collapse retry's stronger penalty is not weakened). `grow` grows and measures one
+/// output with the config it is given; the output not kept is dropped.
+pub(crate) fn guarded<A>(
     config: &SynthConfig,
-    progress: &dyn skinkit_maps::progress::Progress,
     kind: Texels,
-) -> Result<Synthesis> {
+    mut grow: impl FnMut(&SynthConfig) -> Result<Attempt<A>>,
+) -> Result<Attempt<A>> {
     let what = kind.name();
-    let mut s = measured(synthesize_unguarded(exemplar, config, progress, kind)?, exemplar, kind);
+    let mut s = grow(config)?;
     let mut used = config.clone();
     if let Some(retry) = config.collapse_retry().filter(|_| s.guards.variation < metrics::COLLAPSE_RATIO) {
-        let again = measured(synthesize_unguarded(exemplar, &retry, progress, kind)?, exemplar, kind);
+        let again = grow(&retry)?;
         let note = format!(
             "collapse guard: the output kept {:.0} % of the exemplar's {what} variation, so it was grown again \
              with occurrence penalty {} at the coarser levels ({:.0} %{})",
@@ -72,28 +70,21 @@ pub(crate) fn guarded(
             s = again;
             used = retry;
         }
-        s.warnings.push(note);
+        s.notes.warnings.push(note);
     }
-    s.warnings.extend(collapse_warning(s.guards.variation, what));
+    s.notes.warnings.extend(collapse_warning(s.guards.variation, what));
     let drifted = s.guards.histogram > metrics::HISTOGRAM_RATIO
         && s.guards.variation >= metrics::COLLAPSE_RATIO
-        && s.texels.len() >= HISTOGRAM_MIN_TEXELS;
+        && config.width * config.height >= HISTOGRAM_MIN_TEXELS;
     if let Some(retry) = used.histogram_retry().filter(|_| drifted) {
-        let mut again = measured(synthesize_unguarded(exemplar, &retry, progress, kind)?, exemplar, kind);
+        let mut again = grow(&retry)?;
         if again.guards.histogram < s.guards.histogram && again.guards.variation >= metrics::COLLAPSE_RATIO {
-            again.warnings = std::mem::take(&mut s.warnings);
+            again.notes.warnings = std::mem::take(&mut s.notes.warnings);
             again.guards.histogram_retry = true;
             s = again;
         }
     }
     Ok(s)
-}
-
-/// `s` with the guards' figures measured against `exemplar`.
-fn measured(mut s: Synthesis, exemplar: &Grid<Vec3>, kind: Texels) -> Synthesis {
-    s.guards.variation = kind.variation(&s.texels, exemplar);
-    s.guards.histogram = kind.histogram_mismatch(&s.texels, exemplar);
-    s
 }
 
 /// The warning of an output that kept less than [`metrics::COLLAPSE_RATIO`] of the exemplar's
