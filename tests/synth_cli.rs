@@ -158,6 +158,53 @@ fn a_map_streamed_in_bands_is_the_map_grown_whole() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
+/// Issue 43: the memory estimate a job is refused by is within 15 % of the peak resident memory
+/// the run's report gives, for a normal map, a colour image and a height image grown to a size
+/// where the maps, not the program, hold most of it (the benchmark `memory` checks 512 to 16384).
+#[test]
+fn the_memory_estimate_tracks_the_measured_peak() {
+    let tmp = tempfile::tempdir().unwrap();
+    let field = skinkit_heightfield::SkinParams::forehead(64, 64, 7).generate().unwrap();
+    let normal = tmp.path().join("normal.png");
+    io::write_normal_map(&normal, &field.normals, NormalEncoding::default(), 16).unwrap();
+    let (lo, hi) = field.heights.as_slice().iter().fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
+    let height = tmp.path().join("height.png");
+    io::write_scalar_png(&height, &field.heights.map(|h| (h - lo) / (hi - lo)), 16).unwrap();
+    let colour = tmp.path().join("colour.png");
+    let shade = field.normals.grid().map(|n| Vec3::new(n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z));
+    io::write_color_map(&colour, &shade, 8).unwrap();
+    let kinds: [(&Path, &[&str]); 3] =
+        [(&normal, &[]), (&colour, &["--kind", "color"]), (&height, &["--kind", "color", "--transfer", "linear"])];
+    for (exemplar, flags) in kinds {
+        for size in ["768x768", "1024x1536"] {
+            let (out, report) = (tmp.path().join("out.png"), tmp.path().join("r.json"));
+            let mut args = vec!["synth", s(exemplar), "--out", s(&out), "--report", s(&report), "--size", size];
+            args.extend_from_slice(flags);
+            synth_run(&args);
+            let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+            let Some(peak) = r["peak_memory_mib"].as_f64() else {
+                eprintln!("skipped: this platform does not report peak resident memory");
+                return;
+            };
+            let estimate = r["memory_estimate_mib"].as_f64().unwrap();
+            let ratio = estimate / peak;
+            assert!(
+                (0.85..=1.15).contains(&ratio),
+                "{} {size}: estimate {estimate} MiB, peak {peak:.0} MiB",
+                s(exemplar)
+            );
+        }
+    }
+}
+
+/// `skinkit` with `args`, quiet; asserts success.
+fn synth_run(args: &[&str]) {
+    let mut args = args.to_vec();
+    args.push("--quiet");
+    let o = skinkit(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 #[test]
 fn replay_of_the_coords_on_the_exemplar_reproduces_the_output() {
     let tmp = tempfile::tempdir().unwrap();

@@ -193,7 +193,9 @@ impl OutputSet {
         path.to_owned()
     }
 
-    fn unstage_error(&self, error: Error) -> Error {
+    /// `error` with a staged path it names replaced by the final path: for errors of writes the
+    /// caller ran on [`Self::file`]'s paths.
+    pub fn unstage_error(&self, error: Error) -> Error {
         match error {
             Error::Io { path, error } => Error::Io { path: self.unstage(&path), error },
             Error::Encode { path, reason } => Error::Encode { path: self.unstage(&path), reason },

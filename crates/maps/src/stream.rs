@@ -38,23 +38,39 @@ struct Feed<T> {
     closed: bool,
     /// A row was asked for that never came (the file is then incomplete and must be discarded).
     missed: bool,
+    /// The writer has ended (done, or failed): rows pushed now are dropped.
+    ended: bool,
 }
 
 impl<T: Clone + Default> RowFeed<T> {
     /// A feed of rows `width` values long.
     pub fn new(width: usize) -> Self {
-        let state = Feed { bands: VecDeque::new(), closed: false, missed: false };
+        let state = Feed { bands: VecDeque::new(), closed: false, missed: false, ended: false };
         RowFeed { width, state: Mutex::new(state), changed: Condvar::new() }
     }
 
     /// Hands over rows `first_row..` (`rows.len()` a multiple of the width), after the previous
-    /// band's; waits while [`QUEUED_BANDS`] bands are waiting already.
-    pub fn push(&self, first_row: usize, rows: Vec<T>) {
+    /// band's; waits while [`QUEUED_BANDS`] bands are waiting already. `false` when the writer
+    /// has ended (a failed write): the rows are dropped, and the producer should stop.
+    pub fn push(&self, first_row: usize, rows: Vec<T>) -> bool {
         let mut feed = self.state.lock().expect("a writer thread panicked");
-        while feed.bands.len() >= QUEUED_BANDS && !feed.closed {
+        while feed.bands.len() >= QUEUED_BANDS && !feed.closed && !feed.ended {
             feed = self.changed.wait(feed).expect("a writer thread panicked");
         }
+        if feed.ended {
+            return false;
+        }
         feed.bands.push_back((first_row, rows));
+        self.changed.notify_all();
+        true
+    }
+
+    /// The writer has ended: a producer waiting in [`Self::push`] goes on, and what it pushes is
+    /// dropped.
+    fn end(&self) {
+        let mut feed = self.state.lock().expect("the producer panicked");
+        feed.ended = true;
+        feed.bands.clear();
         self.changed.notify_all();
     }
 
@@ -121,15 +137,20 @@ impl<T: Clone + Default + Send + Sync + 'static> StreamedFile<T> {
         let (reader, target) = (Arc::clone(&feed), path.to_owned());
         let writer = std::thread::spawn(move || {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(WRITER_THREADS).build();
-            let pool = pool.map_err(|e| Error::io(&target, std::io::Error::other(e)))?;
-            pool.install(|| write(&target, &reader))
+            let written = match pool {
+                Ok(pool) => pool.install(|| write(&target, &reader)),
+                Err(e) => Err(Error::io(&target, std::io::Error::other(e))),
+            };
+            reader.end();
+            written
         });
         StreamedFile { path: path.to_owned(), feed, writer: Some(writer) }
     }
 
-    /// Hands over rows `first_row..` (see [`RowFeed::push`]).
-    pub fn push(&self, first_row: usize, rows: Vec<T>) {
-        self.feed.push(first_row, rows);
+    /// Hands over rows `first_row..` (see [`RowFeed::push`]); `false` when the writer has
+    /// ended before the file was whole: [`Self::finish`] then gives its error.
+    pub fn push(&self, first_row: usize, rows: Vec<T>) -> bool {
+        self.feed.push(first_row, rows)
     }
 
     /// Waits for the writer and gives the file's path; an error when it failed or rows were
@@ -236,7 +257,7 @@ mod tests {
             io::write_normal_map(&whole, &map, NormalEncoding::default(), 16).unwrap();
             let file = normal_map(&streamed, (w, h), NormalEncoding::default(), 16);
             for rows in [0..300, 300..301, 301..700] {
-                file.push(rows.start, map.as_slice()[rows.start * w..rows.end * w].to_vec());
+                assert!(file.push(rows.start, map.as_slice()[rows.start * w..rows.end * w].to_vec()));
             }
             assert_eq!(file.finish().unwrap(), streamed);
             assert!(std::fs::read(&whole).unwrap() == std::fs::read(&streamed).unwrap(), "{name}");
@@ -250,5 +271,20 @@ mod tests {
         file.push(0, map.as_slice()[..300 * w].to_vec());
         assert!(file.finish().unwrap_err().to_string().contains("rows missing"));
         assert!(!cut.exists());
+    }
+
+    /// A writer that fails at once (its folder is missing) does not hold the producer: more
+    /// bands than the queue takes are refused at once, and the file's error names it.
+    #[test]
+    fn a_failed_writer_refuses_rows_and_gives_its_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing").join("n.png");
+        let (w, h) = (8, 64);
+        let file = normal_map(&path, (w, h), NormalEncoding::default(), 16);
+        let taken: Vec<bool> = (0..2 * QUEUED_BANDS + 2).map(|k| file.push(4 * k, vec![Vec3::Z; 4 * w])).collect();
+        assert!(!taken.last().unwrap(), "{taken:?}");
+        let error = file.finish().unwrap_err();
+        assert!(error.to_string().contains("n.png"), "{error}");
+        assert!(!path.exists());
     }
 }

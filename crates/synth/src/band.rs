@@ -128,6 +128,7 @@ pub(crate) fn coarser_rows(coarser: &Grid<Vec3>, window: &Window, len: usize) ->
 /// Collects a level's bands, top to bottom, into whole grids.
 pub(crate) struct Collect {
     width: usize,
+    height: usize,
     texels: Vec<Vec3>,
     coords: Vec<[u32; 2]>,
 }
@@ -135,11 +136,19 @@ pub(crate) struct Collect {
 impl Collect {
     /// Room for a `width x height` level.
     pub(crate) fn new(width: usize, height: usize) -> Self {
-        Collect { width, texels: Vec::with_capacity(width * height), coords: Vec::with_capacity(width * height) }
+        Collect { width, height, texels: Vec::new(), coords: Vec::new() }
     }
 
-    /// Appends a band's rows (the bands come in order).
-    pub(crate) fn push(&mut self, texels: &Grid<Vec3>, coords: &Grid<[u32; 2]>) {
+    /// Appends a band's rows (the bands come in order); a band that is the whole level is kept
+    /// as it is, not copied.
+    pub(crate) fn push(&mut self, texels: Grid<Vec3>, coords: Grid<[u32; 2]>) {
+        if self.texels.is_empty() && texels.height() == self.height {
+            (self.texels, self.coords) = (texels.into_vec(), coords.into_vec());
+            return;
+        }
+        let texels_left = self.width * self.height - self.texels.len();
+        self.texels.reserve_exact(texels_left);
+        self.coords.reserve_exact(texels_left);
         self.texels.extend_from_slice(texels.as_slice());
         self.coords.extend_from_slice(coords.as_slice());
     }

@@ -143,6 +143,9 @@ pub struct SynthConfig {
     /// Runs whose [`SynthConfig::memory_estimate`] exceeds this many bytes are refused (default:
     /// the one budget of every stage, [`skinkit_maps::limits::default_memory_limit`]).
     pub memory_limit: u64,
+    /// How the finest level leaves the growth (what [`SynthConfig::memory_estimate`] counts):
+    /// set by [`crate::deliver`] for its streamed files.
+    pub delivery: crate::memory::Delivery,
 }
 
 impl Default for SynthConfig {
@@ -173,6 +176,7 @@ impl Default for SynthConfig {
             detail_weight: DEFAULT_DETAIL_WEIGHT,
             seed: 0,
             memory_limit: skinkit_maps::limits::default_memory_limit(),
+            delivery: crate::memory::Delivery::Whole,
         }
     }
 }
@@ -270,10 +274,6 @@ pub const MAX_RERANK: usize = 1024;
 /// a level's typical squared distance, whose useful values are under 10; far above this the
 /// weighted distances of a 16-bit exemplar overflow f32.
 pub const MAX_WEIGHT: f32 = 1000.0;
-
-/// Bytes per finest output texel the copy cap holds while it finds the verbatim blocks: the
-/// union-find's parent (then label) and size, `u32` each, and a flag.
-const CAP_BYTES_PER_TEXEL: u64 = 4 + 4 + 1;
 
 /// Side of the interleaving of a correction pass: texels with equal `(x mod s, y mod s)` form
 /// one sub-pass, chosen together from the state the previous sub-passes left.
@@ -475,50 +475,6 @@ impl SynthConfig {
             }
         }
         Ok(())
-    }
-
-    /// Bytes a run from an `ew x eh` exemplar holds at its peak, roughly: every output level's
-    /// texels, coordinates and progress flags; the exemplar pyramid; and the finest exemplar level's
-    /// features with, for approximate search, its projected points and kd-tree; with a copy cap,
-    /// the finest level's block labels and union-find (`CAP_BYTES_PER_TEXEL`).
-    pub fn memory_estimate(&self, ew: usize, eh: usize) -> u64 {
-        let (mut w, mut h) = (self.width as u64, self.height as u64);
-        let cap = if self.copy_cap.is_some() { w.saturating_mul(h).saturating_mul(CAP_BYTES_PER_TEXEL) } else { 0 };
-        let mut output = 0u64;
-        for _ in 0..self.levels.max(1) {
-            output = output.saturating_add(w.saturating_mul(h).saturating_mul(12 + 8 + 1));
-            (w, h) = (w.div_ceil(2), h.div_ceil(2));
-        }
-        let texels = (ew as u64).saturating_mul(eh as u64);
-        let dim = 3 * ((self.neighbourhood * self.neighbourhood) / 2 + self.parent * self.parent) as u64;
-        let per_candidate = match self.search {
-            Search::Exact => 4 * dim,
-            Search::Approximate { dims, .. } => {
-                4 * dim + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
-            }
-            Search::KCoherence { k, dims, .. } => {
-                // Causal and full features, the sets, and one tree at a time (full, then causal).
-                let full = 3 * (self.neighbourhood * self.neighbourhood + self.parent * self.parent) as u64;
-                4 * dim + 4 * full + 8 * k as u64 + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
-            }
-        };
-        // Full-window features (the causal pass's edge texels and the correction passes;
-        // k-coherence has them already) and, for approximate search with correction passes, a
-        // second projection and tree.
-        let full = 3 * (self.neighbourhood * self.neighbourhood + self.parent * self.parent) as u64;
-        let correction = match self.search {
-            Search::Exact => 4 * full,
-            Search::Approximate { .. } if self.corrections == 0 => 4 * full,
-            _ if self.corrections == 0 => 0,
-            Search::Approximate { dims, .. } => {
-                4 * full + 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8
-            }
-            Search::KCoherence { fallback, dims, .. } => {
-                fallback.map_or(0, |_| 4 * dims as u64 + 4 * dims.next_power_of_two().max(4) as u64 + 8)
-            }
-        };
-        let exemplar = texels.saturating_mul(12 * 4 / 3 + per_candidate + correction);
-        output.saturating_add(exemplar).saturating_add(cap)
     }
 }
 

@@ -23,6 +23,14 @@ pub enum Error {
         "coordinate map entry ({x}, {y}) at output texel ({col}, {row}) lies outside the {width}x{height} map being replayed"
     )]
     CoordsOutside { x: u32, y: u32, col: usize, row: usize, width: usize, height: usize },
+    /// A streamed output that could not be written ([`crate::deliver`]); `source` names the
+    /// file (the target, never the attempt's file beside it).
+    #[error("cannot write {output}")]
+    Write {
+        output: crate::deliver::Output,
+        #[source]
+        source: skinkit_maps::Error,
+    },
     /// An error from the `maps` crate.
     #[error(transparent)]
     Maps(#[from] skinkit_maps::Error),

@@ -45,6 +45,7 @@ pub mod exemplar;
 mod interleave;
 mod level;
 pub mod map;
+pub mod memory;
 pub mod metrics;
 pub mod neighbourhood;
 mod polish;
@@ -57,6 +58,7 @@ pub mod synthesis;
 pub use config::{Search, Start, SynthConfig};
 pub use error::{Error, Result};
 pub use map::{Grown, Map};
+pub use memory::Delivery;
 pub use report::{OptionsReport, QualityReport};
 pub use schedule::LevelPlan;
 pub use synthesis::{

@@ -222,7 +222,7 @@ pub(crate) fn grow_into(
             let (w, h) = sizes[level];
             let mut collect = Collect::new(w, h);
             synthesize_level(&pyramid, plan, (w, h), coarser_level, &config, progress, &mut |_, texels, coords| {
-                collect.push(&texels, &coords);
+                collect.push(texels, coords);
                 Ok(())
             })?;
             coarser = Some(collect.finish());

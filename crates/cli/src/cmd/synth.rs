@@ -17,7 +17,7 @@ use serde::Serialize;
 use skinkit_maps::OutputSet;
 use skinkit_maps::io::Limits;
 use skinkit_maps::{NormalEncoding, Transfer};
-use skinkit_synth::{Grown, Map, OptionsReport, QualityReport, Search, SynthConfig, coords};
+use skinkit_synth::{Delivery, Grown, Map, OptionsReport, QualityReport, Search, SynthConfig, coords};
 
 use crate::flags::{self, Green, MapKind, TransferArg};
 use crate::output::Output;
@@ -269,6 +269,10 @@ pub struct SynthReport {
     /// Output texels that are the invalid marker (a normal map's zero normals, copied from the
     /// exemplar's invalid texels); above [`MAX_INVALID_OUTPUT`] of the map the run fails.
     pub invalid_texels: usize,
+    /// What [`SynthConfig::memory_estimate`] gave for the run (the job is refused when it exceeds
+    /// `--memory-limit`), and the process's peak resident memory where the platform tells it.
+    pub memory_estimate_mib: u64,
+    pub peak_memory_mib: Option<f64>,
     /// The grown map's height (with `--height`): periodic, so it tiles.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_map: Option<skinkit_height::HeightReport>,
@@ -325,10 +329,13 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     check_outputs(&args, exemplar_path, out_path)?;
     // The synthesis estimate from the exemplar's header, before the exemplar is decoded.
     let header = skinkit_maps::limits::image_header(exemplar_path, skinkit_maps::limits::MAX_IMAGE_PIXELS)?;
-    let requested = SynthConfig { memory_limit: out.memory_limit(), ..config(&args, size) };
-    requested
-        .validate(header.width as usize, header.height as usize)
-        .with_context(|| format!("cannot synthesise from {}", exemplar_path.display()))?;
+    // `--height` grows the map whole (its integration is global); otherwise it is streamed.
+    let delivery = match args.height {
+        Some(_) => Delivery::Whole,
+        None => Delivery::Streamed { coords: args.coords.is_some() },
+    };
+    let requested = SynthConfig { memory_limit: out.memory_limit(), delivery, ..config(&args, size) };
+    requested.validate(header.width as usize, header.height as usize).with_context(|| synthesis_context(&args))?;
     let exemplar = args.map.read(exemplar_path)?;
     let (ew, eh) = exemplar.size();
     if args.coords.is_some() && (ew > coords::MAX_COORD_SIDE || eh > coords::MAX_COORD_SIDE) {
@@ -338,16 +345,14 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
             coords::MAX_COORD_SIDE
         );
     }
-    let context = || format!("cannot synthesise from {}", exemplar_path.display());
-    let (validated, adjusted) = requested.validate(ew, eh).with_context(context)?;
+    let (validated, adjusted) = requested.validate(ew, eh).with_context(|| synthesis_context(&args))?;
     let bars = out.stage_bars();
     // One set: the map, the coordinates and the report appear together or not at all.
     let mut set = OutputSet::files();
     let grown = match &args.height {
         Some(height) => grow_whole(&args, &exemplar, &requested, (&mut set, height), &bars),
         None => grow_streamed(&args, &exemplar, &requested, &mut set, &bars),
-    }
-    .with_context(context)?;
+    }?;
     let Outcome { warnings, level_seconds, quality, invalid_texels, height_map } = grown;
     // The default level count adapts to the exemplar without a word; a `--levels` the exemplar
     // cannot hold is worth a warning (the report gives the levels used either way).
@@ -368,6 +373,8 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
         warnings,
         quality,
         invalid_texels,
+        memory_estimate_mib: skinkit_maps::limits::mib(validated.memory_estimate(ew, eh)),
+        peak_memory_mib: skinkit_maps::limits::peak_resident_mib(),
     };
     if let Some(path) = &args.report {
         pipeline::write_json_file(&mut set, path, "the synthesis report", &report)?;
@@ -375,6 +382,12 @@ fn run_synth(args: Args, out: &Output) -> Result<i32> {
     out.swept(&set.commit().context("cannot finish writing the synthesis outputs")?);
     out.result(&report, || human(&report));
     Ok(invalid_exit(out, out_path, exemplar_path, invalid_texels, size))
+}
+
+/// What a failed growth's error says first.
+fn synthesis_context(args: &Args) -> String {
+    let exemplar = args.exemplar.as_deref().expect("checked by run_synth");
+    format!("cannot synthesise from {}", exemplar.display())
 }
 
 /// What a growth gave, whichever way its outputs were written.
@@ -396,13 +409,19 @@ fn grow_streamed(
     bars: &dyn skinkit_maps::progress::Progress,
 ) -> Result<Outcome> {
     let out_path = args.out.as_deref().expect("checked by run_synth");
+    let coords_role = || "cannot write the coordinate map";
     let files = skinkit_synth::deliver::Files {
-        map: set.file(out_path)?,
+        map: set.file(out_path).with_context(|| format!("cannot write {}", args.map.role()))?,
         encoding: args.map.encoding()?,
-        coords: args.coords.as_deref().map(|p| set.file(p)).transpose()?,
+        coords: args.coords.as_deref().map(|p| set.file(p)).transpose().with_context(coords_role)?,
     };
-    let d = skinkit_synth::deliver::grow_into_files(exemplar, config, bars, &files)
-        .map_err(|e| anyhow::Error::new(e).context(format!("cannot write {}", out_path.display())))?;
+    // A write's error names the output's role and its final path; any other is the growth's.
+    let d = skinkit_synth::deliver::grow_into_files(exemplar, config, bars, &files).map_err(|e| match e {
+        skinkit_synth::Error::Write { output, source } => {
+            anyhow::Error::new(skinkit_synth::Error::Write { output, source: set.unstage_error(source) })
+        }
+        other => anyhow::Error::new(other).context(synthesis_context(args)),
+    })?;
     let skinkit_synth::deliver::Delivered { warnings, level_seconds, quality, invalid_texels, .. } = d;
     Ok(Outcome { warnings, level_seconds, quality, invalid_texels, height_map: None })
 }
@@ -417,7 +436,8 @@ fn grow_whole(
     bars: &dyn skinkit_maps::progress::Progress,
 ) -> Result<Outcome> {
     let out_path = args.out.as_deref().expect("checked by run_synth");
-    let Grown { map: output, coords, warnings, level_seconds, guards } = exemplar.grow(config, bars)?;
+    let Grown { map: output, coords, warnings, level_seconds, guards } =
+        exemplar.grow(config, bars).with_context(|| synthesis_context(args))?;
     let wrap = config.exemplar_wrap;
     let quality =
         QualityReport::new(exemplar, &output, &coords, wrap, guards).expect("the output has the exemplar's kind");

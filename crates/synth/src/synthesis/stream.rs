@@ -16,11 +16,11 @@ use crate::{Result, SynthConfig};
 /// Takes the finest level's rows as the bands finish, top to bottom.
 pub trait BandSink {
     /// Rows `first_row..first_row + texels.height()` of the output: their texels and the exemplar
-    /// texels `[x, y]` they copy.
+    /// texels `[x, y]` they copy, handed over (a sink keeps them without a copy).
     ///
     /// # Errors
     /// The sink's own (a write that failed): the run stops with it.
-    fn band(&mut self, first_row: usize, texels: &Grid<Vec3>, coords: &Grid<[u32; 2]>) -> Result<()>;
+    fn band(&mut self, first_row: usize, texels: Grid<Vec3>, coords: Grid<[u32; 2]>) -> Result<()>;
 }
 
 /// A streamed run's result: the sink that took the kept output, and what the run tells.
@@ -87,14 +87,14 @@ fn attempt<S: BandSink>(
     let mut meter = GuardMeter::new(kind == Texels::Normals, (config.width, config.height));
     let notes = grow_into(exemplar, config, progress, kind, &mut |first_row, texels, coords| {
         meter.add(texels.as_slice());
-        sink.band(first_row, &texels, &coords)
+        sink.band(first_row, texels, coords)
     })?;
     let (variation, histogram) = meter.figures(exemplar);
     Ok(Attempt { output: sink, notes, guards: Guards { variation, histogram, histogram_retry: false } })
 }
 
 impl BandSink for Collect {
-    fn band(&mut self, _: usize, texels: &Grid<Vec3>, coords: &Grid<[u32; 2]>) -> Result<()> {
+    fn band(&mut self, _: usize, texels: Grid<Vec3>, coords: Grid<[u32; 2]>) -> Result<()> {
         self.push(texels, coords);
         Ok(())
     }
