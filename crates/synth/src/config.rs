@@ -145,7 +145,19 @@ pub struct SynthConfig {
     pub memory_limit: u64,
     /// How the finest level leaves the growth (what [`SynthConfig::memory_estimate`] counts):
     /// set by [`crate::deliver`] for its streamed files.
-    pub delivery: crate::memory::Delivery,
+    pub delivery: Delivery,
+}
+
+/// How a growth's finest level leaves it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Delivery {
+    /// Collected into one grid ([`crate::synthesize`]): the whole output and its coordinates
+    /// are held, and the quality figures measured on the whole of it.
+    #[default]
+    Whole,
+    /// Handed band by band to the files' writers ([`crate::deliver`]): the map, and the
+    /// coordinate map when `coords`.
+    Streamed { coords: bool },
 }
 
 impl Default for SynthConfig {
@@ -176,7 +188,7 @@ impl Default for SynthConfig {
             detail_weight: DEFAULT_DETAIL_WEIGHT,
             seed: 0,
             memory_limit: skinkit_maps::limits::default_memory_limit(),
-            delivery: crate::memory::Delivery::Whole,
+            delivery: Delivery::Whole,
         }
     }
 }

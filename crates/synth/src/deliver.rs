@@ -34,23 +34,7 @@ pub struct Files {
     pub coords: Option<PathBuf>,
 }
 
-/// Which of a growth's files a [`crate::Error::Write`] is about; shown as the output's role.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Output {
-    NormalMap,
-    ColourImage,
-    CoordinateMap,
-}
-
-impl std::fmt::Display for Output {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Output::NormalMap => "the normal map",
-            Output::ColourImage => "the colour image",
-            Output::CoordinateMap => "the coordinate map",
-        })
-    }
-}
+pub use crate::error::Output;
 
 /// What a streamed growth gives besides its files.
 #[derive(Clone, Debug)]

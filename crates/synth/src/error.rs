@@ -27,13 +27,31 @@ pub enum Error {
     /// file (the target, never the attempt's file beside it).
     #[error("cannot write {output}")]
     Write {
-        output: crate::deliver::Output,
+        output: Output,
         #[source]
         source: skinkit_maps::Error,
     },
     /// An error from the `maps` crate.
     #[error(transparent)]
     Maps(#[from] skinkit_maps::Error),
+}
+
+/// Which of a growth's files a [`Error::Write`] ([`crate::deliver`]) is about; shown as the output's role.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Output {
+    NormalMap,
+    ColourImage,
+    CoordinateMap,
+}
+
+impl std::fmt::Display for Output {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Output::NormalMap => "the normal map",
+            Output::ColourImage => "the colour image",
+            Output::CoordinateMap => "the coordinate map",
+        })
+    }
 }
 
 /// Result alias for the `synth` crate.

@@ -55,10 +55,9 @@ mod scoring;
 pub mod search;
 pub mod synthesis;
 
-pub use config::{Search, Start, SynthConfig};
+pub use config::{Delivery, Search, Start, SynthConfig};
 pub use error::{Error, Result};
 pub use map::{Grown, Map};
-pub use memory::Delivery;
 pub use report::{OptionsReport, QualityReport};
 pub use schedule::LevelPlan;
 pub use synthesis::{

@@ -15,20 +15,8 @@
 //! tests and the benchmark `memory` check them).
 
 use crate::band::{BAND_HALO, bands};
-use crate::config::{Search, Start, SynthConfig, half};
+use crate::config::{Delivery, Search, Start, SynthConfig, half};
 use crate::deliver::QUALITY_SIDE;
-
-/// How a growth's finest level leaves it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Delivery {
-    /// Collected into one grid ([`crate::synthesize`]): the whole output and its coordinates
-    /// are held, and the quality figures measured on the whole of it.
-    #[default]
-    Whole,
-    /// Handed band by band to the files' writers ([`crate::deliver`]): the map, and the
-    /// coordinate map when `coords`.
-    Streamed { coords: bool },
-}
 
 /// The program's own resident memory before any map: code, libraries, the thread pools' stacks
 /// and the allocator's arenas (10 MiB measured at the first level's start).
